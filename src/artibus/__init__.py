@@ -1,0 +1,23 @@
+"""artibus: co-simulation components for articulated and multi-axle buses.
+
+The FMUs are built from C (``src/models``); this package runs them with FMPy,
+reads parameter sets (SSP ``.ssv``), and draws the results.
+"""
+from pathlib import Path
+
+__version__ = "0.1.0"
+
+#: the repository this package was installed from (editable install)
+ROOT = Path(__file__).resolve().parents[2]
+
+
+class ArtibusError(Exception):
+    """A user error: bad file, element or value. The CLI prints it without a traceback."""
+
+
+def fmu_path(name):
+    """Path of a built FMU, ``fmus/<name>.fmu``."""
+    path = ROOT / "fmus" / f"{name}.fmu"
+    if not path.is_file():
+        raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
+    return path

@@ -1,0 +1,3 @@
+from artibus.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,89 @@
+/* The shared FMI 2.0 Co-Simulation layer: the instance every model works on,
+ * the logging helpers, and the five functions each model supplies.
+ *
+ * A model folder src/models/<Name>/ holds
+ *   config.h  ModelState: the model's own internal states that are not FMI
+ *             variables (plain data, no pointers: it is saved as FMU state);
+ *   model.c   model_init, model_outputs, model_do_step, model_free.
+ * Its variables are declared once, in modelDescription/<Name>.xml; the build
+ * generates ModelData (one field per variable) and the table the layer uses
+ * for every get/set, range check and start value.
+ */
+#ifndef ARTIBUS_FMU_H
+#define ARTIBUS_FMU_H
+
+#include <stdbool.h>
+#include "fmi2Functions.h"
+#include "vartable.h"
+#include "config.h"
+
+/* instance states of the FMI 2.0 co-simulation state machine (spec 4.2.4) */
+typedef enum {
+    S_INSTANTIATED   = 1 << 0,
+    S_INIT_MODE      = 1 << 1,
+    S_STEP_COMPLETE  = 1 << 2,
+    S_STEP_FAILED    = 1 << 3,
+    S_TERMINATED     = 1 << 4,
+    S_ERROR          = 1 << 5,
+    S_FATAL          = 1 << 6
+} InstanceState;
+
+/* log categories, in the order of <LogCategories> in every model description */
+typedef enum {
+    LOG_EVENTS = 0, LOG_WARNING, LOG_ERROR, LOG_FATAL, LOG_ALL, LOG_NCATEGORIES
+} LogCategory;
+
+typedef struct ModelInstance {
+    /* --- plain data: this block is the FMU state (fmi2GetFMUstate) --- */
+    struct {
+        InstanceState state;
+        double time;
+        ModelData d;        /* every FMI variable, by name */
+        ModelState s;       /* the model's internal states (config.h) */
+    } v;
+
+    /* --- everything else: re-created, never saved --- */
+    char *instanceName;
+    char *resourceDir;      /* file system path of the FMU's resources/, or NULL */
+    fmi2CallbackFunctions cb;
+    bool logOn[LOG_NCATEGORIES];
+    double stopTime;        /* +INFINITY unless fmi2SetupExperiment defined it */
+    double tolerance;       /* 0 unless fmi2SetupExperiment defined it */
+    bool restart;           /* a variable was set or the state restored: the
+                               integrator must restart from v.d at the next step */
+    bool dirty;             /* outputs must be recalculated before a get */
+    void *solver;           /* model-owned resources (CVODE memory, tables) */
+} ModelInstance;
+
+#define D (&comp->v.d)      /* the variables, in a model's functions */
+
+/* ---- supplied by each model (model.c) ---------------------------------- */
+
+/* Check the parameters and set the initial state in v.d / v.s from them.
+ * Called in initialization mode whenever an output is read, and at
+ * fmi2ExitInitializationMode. Must be cheap and idempotent. */
+fmi2Status model_init(ModelInstance *comp);
+
+/* Compute all outputs from the state and the current inputs. */
+void model_outputs(ModelInstance *comp);
+
+/* Advance from v.time = t by h; on success set v.time = t + h. On failure log
+ * why, leave v.d at the last good state and v.time at its time. */
+fmi2Status model_do_step(ModelInstance *comp, double t, double h);
+
+/* Release comp->solver (fmi2Reset, fmi2FreeInstance). */
+void model_free(ModelInstance *comp);
+
+/* ---- logging (messages name the variable and the value) ----------------- */
+
+/* logEvents: only when debug logging of that category is on */
+void log_event(ModelInstance *comp, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+/* warnings and errors always reach the logger */
+void log_warning(ModelInstance *comp, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+/* returns fmi2Error, so that `return log_error(comp, ...)` reads naturally */
+fmi2Status log_error(ModelInstance *comp, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+#endif

@@ -1,0 +1,134 @@
+#include <stdlib.h>
+#include <string.h>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "fmu.h"
+#include "ode.h"
+
+#if SUNDIALS_VERSION_MAJOR >= 7
+#define ARTIBUS_COMM SUN_COMM_NULL
+#else
+#define ARTIBUS_COMM NULL
+#endif
+
+struct Ode {
+    ModelInstance *comp;
+    SUNContext ctx;
+    void *mem;
+    N_Vector y;
+    SUNMatrix A;
+    SUNLinearSolver LS;
+    int n, nroots;
+    OdeRhs rhs;
+    OdeRoots roots;
+    void *user;
+    bool started;
+    long nrhs;
+};
+
+static int cv_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *p) {
+    Ode *o = p;
+    o->nrhs++;
+    return o->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), o->user);
+}
+
+static int cv_roots(sunrealtype t, N_Vector y, sunrealtype *g, void *p) {
+    Ode *o = p;
+    return o->roots(t, N_VGetArrayPointer(y), g, o->user);
+}
+
+#if SUNDIALS_VERSION_MAJOR >= 7
+static void cv_error(int line, const char *func, const char *file, const char *msg,
+                     SUNErrCode code, void *p, SUNContext ctx) {
+    (void)line; (void)file; (void)ctx;
+    Ode *o = p;
+    log_error(o->comp, "CVODE %s (flag %d): %s", func, (int)code, msg);
+}
+#else
+static void cv_error(int code, const char *module, const char *func, char *msg, void *p) {
+    Ode *o = p;
+    if (code > 0) log_warning(o->comp, "%s %s (flag %d): %s", module, func, code, msg);
+    else log_error(o->comp, "%s %s (flag %d): %s", module, func, code, msg);
+}
+#endif
+
+Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
+             void *user, OdeMethod method, double rtol, double atol) {
+    Ode *o = calloc(1, sizeof *o);
+    if (!o) return NULL;
+    o->comp = comp; o->n = n; o->rhs = rhs; o->nroots = nroots; o->roots = roots; o->user = user;
+    if (SUNContext_Create(ARTIBUS_COMM, &o->ctx)) goto fail;
+#if SUNDIALS_VERSION_MAJOR >= 7
+    SUNContext_ClearErrHandlers(o->ctx);
+    SUNContext_PushErrHandler(o->ctx, cv_error, o);
+#endif
+    o->y = N_VNew_Serial(n, o->ctx);
+    o->mem = CVodeCreate(method == ODE_ADAMS ? CV_ADAMS : CV_BDF, o->ctx);
+    if (!o->y || !o->mem) goto fail;
+#if SUNDIALS_VERSION_MAJOR < 7
+    CVodeSetErrHandlerFn(o->mem, cv_error, o);
+#endif
+    N_VConst(0.0, o->y);
+    if (CVodeInit(o->mem, cv_rhs, 0.0, o->y) != CV_SUCCESS) goto fail;
+    if (CVodeSetUserData(o->mem, o) != CV_SUCCESS) goto fail;
+    if (CVodeSStolerances(o->mem, rtol, atol) != CV_SUCCESS) goto fail;
+    CVodeSetMaxNumSteps(o->mem, 100000);
+    o->A = SUNDenseMatrix(n, n, o->ctx);
+    o->LS = SUNLinSol_Dense(o->y, o->A, o->ctx);
+    if (!o->A || !o->LS || CVodeSetLinearSolver(o->mem, o->LS, o->A) != CV_SUCCESS) goto fail;
+    if (nroots > 0) {
+        if (CVodeRootInit(o->mem, nroots, cv_roots) != CV_SUCCESS) goto fail;
+        CVodeSetNoInactiveRootWarn(o->mem);
+    }
+    return o;
+fail:
+    log_error(comp, "CVODE could not be set up for %d states (out of memory or bad tolerances "
+                    "rtol = %g, atol = %g)", n, rtol, atol);
+    ode_free(o);
+    return NULL;
+}
+
+OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
+                      double *t, int *rootsfound) {
+    double *yv = N_VGetArrayPointer(o->y);
+    if (restart || !o->started) {
+        memcpy(yv, y, sizeof(double) * (size_t)o->n);
+        if (CVodeReInit(o->mem, t0, o->y) != CV_SUCCESS) return ODE_FAILED;
+        o->started = true;
+    }
+    CVodeSetStopTime(o->mem, t1);
+    sunrealtype tret = t0;
+    int flag = CVode(o->mem, t1, o->y, &tret, CV_NORMAL);
+    *t = tret;
+    memcpy(y, yv, sizeof(double) * (size_t)o->n);
+    if (flag == CV_ROOT_RETURN) {
+        CVodeGetRootInfo(o->mem, rootsfound);
+        return ODE_ROOT;
+    }
+    if (flag < 0) {
+        char *name = CVodeGetReturnFlagName(flag);   /* allocated by CVODE */
+        log_error(o->comp, "CVODE failed with flag %d (%s) at t = %.17g while stepping to t = %.17g",
+                  flag, name ? name : "?", tret, t1);
+        free(name);
+        /* the history is unusable now: the next call must restart */
+        o->started = false;
+        return ODE_FAILED;
+    }
+    return ODE_REACHED;
+}
+
+long ode_nrhs(const Ode *o) { return o ? o->nrhs : 0; }
+
+void ode_free(Ode *o) {
+    if (!o) return;
+    if (o->mem) CVodeFree(&o->mem);
+    if (o->LS) SUNLinSolFree(o->LS);
+    if (o->A) SUNMatDestroy(o->A);
+    if (o->y) N_VDestroy(o->y);
+    if (o->ctx) SUNContext_Free(&o->ctx);
+    free(o);
+}

@@ -1,0 +1,38 @@
+/* A small CVODE wrapper shared by the models that integrate inside doStep.
+ * The ODE state lives in the model's own variables: each step packs it into
+ * y[], advances, and unpacks it. CVODE's messages go to the FMI logger with
+ * the CVODE flag and the time. */
+#ifndef ARTIBUS_ODE_H
+#define ARTIBUS_ODE_H
+
+#include <stdbool.h>
+
+struct ModelInstance;
+
+/* return 0 on success, > 0 for a recoverable failure (CVODE retries with a
+   smaller step), < 0 for an unrecoverable one */
+typedef int (*OdeRhs)(double t, const double *y, double *ydot, void *user);
+typedef int (*OdeRoots)(double t, const double *y, double *g, void *user);
+
+typedef enum { ODE_BDF, ODE_ADAMS } OdeMethod;
+
+typedef struct Ode Ode;
+
+Ode *ode_new(struct ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
+             void *user, OdeMethod method, double rtol, double atol);
+
+typedef enum { ODE_REACHED = 0, ODE_ROOT = 1, ODE_FAILED = -1 } OdeResult;
+
+/* Advance y from t0 to t1 (never beyond). With restart, or on the first call,
+   the integrator starts afresh at (t0, y); otherwise it continues its history
+   (y must then be what the last call returned). On ODE_ROOT, *t is the root's
+   time and rootsfound[i] != 0 for the functions that crossed zero. */
+OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
+                      double *t, int *rootsfound);
+
+/* right-hand-side evaluations so far (benchmarks) */
+long ode_nrhs(const Ode *o);
+
+void ode_free(Ode *o);
+
+#endif

@@ -1,0 +1,39 @@
+/* The variable table of a model, generated from its modelDescription.xml by
+ * gen_vars.py: value reference -> field of ModelData, type, causality,
+ * variability and range. The shared FMI layer reads and writes variables only
+ * through this table. */
+#ifndef VARTABLE_H
+#define VARTABLE_H
+
+#include <stddef.h>
+#include "model_vars.h"
+
+typedef enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING } VarType;
+
+typedef enum {
+    C_PARAMETER, C_CALCULATEDPARAMETER, C_INPUT, C_OUTPUT, C_LOCAL, C_INDEPENDENT
+} Causality;
+
+typedef enum {
+    V_CONSTANT, V_FIXED, V_TUNABLE, V_DISCRETE, V_CONTINUOUS
+} Variability;
+
+typedef struct {
+    const char *name;
+    unsigned vr;
+    VarType type;
+    Causality causality;
+    Variability variability;
+    size_t offset;          /* byte offset of the value in ModelData */
+    double min, max;        /* -INFINITY / INFINITY where the XML gives none */
+} VarInfo;
+
+extern const VarInfo VARS[MODEL_NVARS];
+
+/* the variable with this type and value reference, or NULL */
+const VarInfo *vars_find(VarType type, unsigned vr);
+
+/* all variables to their start values (the rest to zero) */
+void vars_set_start_values(ModelData *d);
+
+#endif

@@ -1,0 +1,177 @@
+/* BusKinematics: seed 003, steps S1-S6 as an algorithm (kinematics.c),
+ * integrated with CVODE inside doStep. The steering angles are inputs (the
+ * paper's eq. 13 integrates their rates; an FMU takes the angles). */
+#include <math.h>
+#include <stdlib.h>
+
+#include "fmu.h"
+#include "ode.h"
+#include "kinematics.h"
+
+/* The jack-knife root is placed where cos(delta_i) falls to this margin
+ * (|delta_i| = 90 deg - 0.00006 deg): the curvature (20) is still finite there. */
+#define JACKKNIFE_MARGIN 1e-6
+#define DEG (180.0 / M_PI)
+
+typedef struct {
+    ModelInstance *comp;
+    Ode *ode;
+    KinChain chain;
+} Solver;
+
+static void make_chain(ModelInstance *comp, KinChain *c) {
+    c->N = D->N;
+    c->k = D->k;
+    c->L[0] = D->L0;
+    c->Lh[0] = 0.0;
+    c->gamma[0] = 0.0;                          /* assumption A5 */
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++) {
+        c->L[i] = D->L[i];
+        c->Lh[i] = D->Lh[i];
+        c->gamma[i] = D->steerable[i] ? D->gamma[i] : 0.0;
+    }
+}
+
+/* the input plus the built-in test steering (an S-curve for running alone) */
+static double gammaF_at(ModelInstance *comp, double t) {
+    if (D->testSteerAmp != 0.0 && t < D->testSteerPeriod)
+        return D->gammaF + D->testSteerAmp * sin(2 * M_PI * t / D->testSteerPeriod);
+    return D->gammaF;
+}
+
+static fmi2Status check_inputs(ModelInstance *comp, double t) {
+    const double stim = t < D->testSteerPeriod ? fabs(D->testSteerAmp) : 0.0;
+    if (!(fabs(D->gammaF) + stim < M_PI / 2))
+        return log_error(comp, "gammaF = %.17g rad (with test steering amplitude %g) is at or "
+                               "beyond pi/2: the tractor curvature (eq. 19) is unbounded",
+                         D->gammaF, stim);
+    for (int i = 1; i <= D->N; i++)
+        if (D->steerable[i] && !(fabs(D->gamma[i]) < M_PI / 2))
+            return log_error(comp, "gamma[%d] = %.17g rad is at or beyond pi/2 (eq. 14 needs "
+                                   "cos(gamma_i) != 0)", i, D->gamma[i]);
+    return fmi2OK;
+}
+
+fmi2Status model_init(ModelInstance *comp) {
+    if (D->k > D->N)
+        return log_error(comp, "k = %d: the driving axle must be on a segment 0..N = 0..%d", D->k, D->N);
+    if (D->j > D->N)
+        return log_error(comp, "j = %d: the distinguished segment must be 0..N = 0..%d", D->j, D->N);
+    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+
+    /* the initial state: tractor pose and joint angles, then the pose of j */
+    for (int i = 0; i <= KIN_MAX_WAGONS; i++) D->theta[i] = D->x[i] = D->y[i] = 0.0;
+    D->theta[0] = D->theta_start;
+    D->x[0] = D->x_start;
+    D->y[0] = D->y_start;
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++) D->beta[i] = i <= D->N ? D->beta_start[i] : 0.0;
+    KinChain c;
+    make_chain(comp, &c);
+    kin_poses(&c, 0, D->beta, D->theta, D->x, D->y);
+
+    KinRates r;
+    const int i = kin_rates(&c, gammaF_at(comp, comp->v.time), D->beta, D->v, &r);
+    if (i)
+        return log_error(comp, "beta_start[%d] = %.4f deg is beyond betaMax[%d] = %.4f deg: the "
+                               "virtual steering angle delta_%d (eq. 17) is at or beyond 90 deg",
+                         i, D->beta_start[i] * DEG, i, r.betaMax[i] * DEG, i);
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    KinChain c;
+    make_chain(comp, &c);
+    kin_poses(&c, D->j, D->beta, D->theta, D->x, D->y);
+    KinRates r;
+    kin_rates(&c, gammaF_at(comp, comp->v.time), D->beta, D->v, &r);
+    for (int i = 0; i <= KIN_MAX_WAGONS; i++) {
+        const int on = i <= D->N;       /* segments beyond N read 0 */
+        D->omega[i] = on ? r.omega[i] : 0.0;
+        D->vel[i] = on ? r.vel[i] : 0.0;
+        D->kappa[i] = on ? r.kappa[i] : 0.0;
+        if (!on) D->theta[i] = D->x[i] = D->y[i] = 0.0;
+        if (i >= 1) {
+            D->betaDot[i] = on ? r.betaDot[i] : 0.0;
+            D->betaMax[i] = on ? r.betaMax[i] : 0.0;
+        }
+    }
+}
+
+/* ODE state y = [theta_j, x_j, y_j, beta_1 .. beta_N] */
+static int rhs(double t, const double *y, double *ydot, void *user) {
+    Solver *s = user;
+    ModelInstance *comp = s->comp;
+    double beta[KIN_MAX_WAGONS + 1] = { 0 };
+    for (int i = 1; i <= s->chain.N; i++) beta[i] = y[2 + i];
+    KinRates r;
+    if (kin_rates(&s->chain, gammaF_at(comp, t), beta, D->v, &r))
+        return 1;                       /* beyond the jack-knife bound: retry a smaller step */
+    const int j = D->j;
+    ydot[0] = r.omega[j];                                   /* eq. 22 */
+    ydot[1] = r.vel[j] * cos(y[0] + s->chain.gamma[j]);
+    ydot[2] = r.vel[j] * sin(y[0] + s->chain.gamma[j]);
+    for (int i = 1; i <= s->chain.N; i++) ydot[2 + i] = r.betaDot[i];   /* eq. 16 */
+    return 0;
+}
+
+/* g_i = cos(delta_i) - margin: crosses zero where joint i jack-knifes */
+static int roots(double t, const double *y, double *g, void *user) {
+    Solver *s = user;
+    double beta[KIN_MAX_WAGONS + 1] = { 0 };
+    for (int i = 1; i <= s->chain.N; i++) beta[i] = y[2 + i];
+    KinRates r;
+    kin_rates(&s->chain, gammaF_at(s->comp, t), beta, s->comp->v.d.v, &r);
+    for (int i = 1; i <= s->chain.N; i++) g[i - 1] = cos(r.delta[i]) - JACKKNIFE_MARGIN;
+    return 0;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    if (check_inputs(comp, t)) return fmi2Error;
+    Solver *s = comp->solver;
+    if (!s) {
+        s = comp->solver = calloc(1, sizeof(Solver));
+        if (!s) return log_error(comp, "out of memory");
+        s->comp = comp;
+        const double rtol = comp->tolerance > 0 ? comp->tolerance : D->rtol;
+        s->ode = ode_new(comp, 3 + D->N, rhs, D->N, roots, s, ODE_ADAMS, rtol, D->atol);
+        if (!s->ode) return fmi2Error;
+    }
+    make_chain(comp, &s->chain);
+
+    const int j = D->j, N = D->N;
+    double y[3 + KIN_MAX_WAGONS] = { D->theta[j], D->x[j], D->y[j] };
+    for (int i = 1; i <= N; i++) y[2 + i] = D->beta[i];
+    double tret;
+    int found[KIN_MAX_WAGONS] = { 0 };
+    const OdeResult res = ode_advance(s->ode, comp->restart, t, y, t + h, &tret, found);
+    D->theta[j] = y[0];
+    D->x[j] = y[1];
+    D->y[j] = y[2];
+    for (int i = 1; i <= N; i++) D->beta[i] = y[2 + i];
+
+    if (res == ODE_REACHED) {
+        comp->v.time = t + h;
+        return fmi2OK;
+    }
+    comp->v.time = tret;
+    if (res == ODE_ROOT) {
+        for (int i = 1; i <= N; i++) {
+            if (!found[i - 1]) continue;
+            KinRates r;
+            kin_rates(&s->chain, gammaF_at(comp, tret), D->beta, D->v, &r);
+            return log_error(comp, "jack-knife at joint %d at t = %.6f s: beta[%d] = %.4f deg reached "
+                                   "betaMax[%d] = %.4f deg (virtual steering angle delta_%d at 90 deg, "
+                                   "eq. 17); not integrated further", i, tret, i, D->beta[i] * DEG,
+                             i, r.betaMax[i] * DEG, i);
+        }
+    }
+    return fmi2Error;   /* CVODE failure, already logged with its flag and time */
+}
+
+void model_free(ModelInstance *comp) {
+    Solver *s = comp->solver;
+    if (!s) return;
+    ode_free(s->ode);
+    free(s);
+    comp->solver = NULL;
+}

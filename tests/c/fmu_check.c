@@ -1,0 +1,184 @@
+/* fmu_check: a minimal FMI 2.0 importer that loads one FMU's shared object
+ * with dlopen and drives it through normal runs and every kind of misuse the
+ * standard forbids. Built once per FMU against that FMU's generated variable
+ * table (to know its inputs and parameters); run by ctest, under AddressSanitizer
+ * and UBSan in the sanitizer build. Any crash, sanitizer finding or unexpected
+ * status fails the test.
+ *
+ * usage: fmu_check <FMU directory (unzipped)>
+ */
+#include <dlfcn.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2FunctionTypes.h"
+#include "vartable.h"
+
+static int failures = 0, checks = 0, errors_logged = 0;
+static char last_message[2048];
+
+#define CHECK(cond, ...) do { checks++; if (!(cond)) { failures++; \
+    printf("FAIL %s:%d: ", __FILE__, __LINE__); printf(__VA_ARGS__); printf("\n"); } } while (0)
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                   fmi2String category, fmi2String message, ...) {
+    (void)env; (void)name; (void)category;
+    va_list ap;
+    va_start(ap, message);
+    vsnprintf(last_message, sizeof last_message, message, ap);
+    va_end(ap);
+    if (status >= fmi2Error) errors_logged++;
+}
+
+static fmi2CallbackFunctions cb = { logger, calloc, free, NULL, NULL };
+
+#define API(name) static name##TYPE *name
+API(fmi2Instantiate); API(fmi2FreeInstance); API(fmi2SetupExperiment);
+API(fmi2EnterInitializationMode); API(fmi2ExitInitializationMode); API(fmi2Terminate);
+API(fmi2Reset); API(fmi2GetReal); API(fmi2SetReal); API(fmi2SetInteger); API(fmi2DoStep);
+API(fmi2GetFMUstate); API(fmi2SetFMUstate); API(fmi2FreeFMUstate);
+API(fmi2SerializedFMUstateSize); API(fmi2SerializeFMUstate); API(fmi2DeSerializeFMUstate);
+API(fmi2SetDebugLogging); API(fmi2GetRealStatus);
+
+static fmi2ValueReference real_vrs[MODEL_NVARS];
+static size_t n_real = 0;
+
+static fmi2Component make(const char *uri) {
+    return fmi2Instantiate("check", fmi2CoSimulation, MODEL_GUID, uri, &cb, fmi2False, fmi2False);
+}
+
+static fmi2Status start(fmi2Component c) {
+    fmi2Status s = fmi2SetupExperiment(c, fmi2False, 0, 0, fmi2False, 0);
+    if (s == fmi2OK) s = fmi2EnterInitializationMode(c);
+    if (s == fmi2OK) s = fmi2ExitInitializationMode(c);
+    return s;
+}
+
+static int run(fmi2Component c, double t0, int steps, double h, double *out) {
+    for (int k = 0; k < steps; k++)
+        if (fmi2DoStep(c, t0 + k * h, h, fmi2True) != fmi2OK) return 0;
+    return fmi2GetReal(c, real_vrs, n_real, out) == fmi2OK;
+}
+
+int main(int argc, char **argv) {
+    if (argc != 2) { fprintf(stderr, "usage: fmu_check FMUDIR\n"); return 2; }
+    char path[4096], uri[4200];
+    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", argv[1], MODEL_IDENTIFIER);
+    snprintf(uri, sizeof uri, "file://%s/resources", argv[1]);
+    void *so = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!so) { fprintf(stderr, "cannot load %s: %s\n", path, dlerror()); return 1; }
+#define LOAD(name) name = (name##TYPE *)dlsym(so, #name); if (!name) { printf("missing %s\n", #name); return 1; }
+    LOAD(fmi2Instantiate); LOAD(fmi2FreeInstance); LOAD(fmi2SetupExperiment);
+    LOAD(fmi2EnterInitializationMode); LOAD(fmi2ExitInitializationMode); LOAD(fmi2Terminate);
+    LOAD(fmi2Reset); LOAD(fmi2GetReal); LOAD(fmi2SetReal); LOAD(fmi2SetInteger); LOAD(fmi2DoStep);
+    LOAD(fmi2GetFMUstate); LOAD(fmi2SetFMUstate); LOAD(fmi2FreeFMUstate);
+    LOAD(fmi2SerializedFMUstateSize); LOAD(fmi2SerializeFMUstate); LOAD(fmi2DeSerializeFMUstate);
+    LOAD(fmi2SetDebugLogging); LOAD(fmi2GetRealStatus);
+
+    for (size_t i = 0; i < MODEL_NVARS; i++)
+        if (VARS[i].type == T_REAL) real_vrs[n_real++] = VARS[i].vr;
+
+    static double a[MODEL_NVARS], b[MODEL_NVARS];
+    const double h = 0.05;
+    const int steps = 100;
+
+    /* 1. wrong GUID, wrong type: NULL, no crash */
+    CHECK(fmi2Instantiate("x", fmi2CoSimulation, "{wrong}", uri, &cb, 0, 0) == NULL, "wrong GUID accepted");
+    CHECK(fmi2Instantiate("x", fmi2ModelExchange, MODEL_GUID, uri, &cb, 0, 0) == NULL, "ME accepted");
+
+    /* 2. normal run, debug logging on */
+    fmi2Component c = make(uri);
+    CHECK(c != NULL, "instantiate failed");
+    CHECK(fmi2SetDebugLogging(c, fmi2True, 0, NULL) == fmi2OK, "SetDebugLogging");
+    CHECK(start(c) == fmi2OK, "initialisation failed: %s", last_message);
+    CHECK(run(c, 0, steps, h, a), "normal run failed: %s", last_message);
+    for (size_t i = 0; i < n_real; i++) CHECK(isfinite(a[i]), "output vr %u not finite", real_vrs[i]);
+    CHECK(fmi2Terminate(c) == fmi2OK, "terminate");
+    CHECK(fmi2DoStep(c, steps * h, h, fmi2True) == fmi2Error, "doStep after terminate accepted");
+
+    /* 3. reset, then the same run again gives the same result */
+    CHECK(fmi2Reset(c) == fmi2OK, "reset from error state");
+    CHECK(start(c) == fmi2OK, "initialisation after reset");
+    CHECK(run(c, 0, steps, h, b), "run after reset");
+    CHECK(memcmp(a, b, n_real * sizeof(double)) == 0, "run after reset differs");
+
+    /* 4. FMU state round trip, in memory and serialized */
+    fmi2Reset(c);
+    start(c);
+    run(c, 0, steps / 2, h, a);
+    fmi2FMUstate st = NULL;
+    CHECK(fmi2GetFMUstate(c, &st) == fmi2OK, "GetFMUstate");
+    run(c, steps / 2 * h, steps / 2, h, a);
+    CHECK(fmi2SetFMUstate(c, st) == fmi2OK, "SetFMUstate");
+    run(c, steps / 2 * h, steps / 2, h, b);
+    CHECK(memcmp(a, b, n_real * sizeof(double)) == 0, "restored run differs");
+    size_t size = 0;
+    CHECK(fmi2SerializedFMUstateSize(c, st, &size) == fmi2OK && size > 0, "state size");
+    fmi2Byte *bytes = malloc(size);
+    CHECK(fmi2SerializeFMUstate(c, st, bytes, size) == fmi2OK, "serialize");
+    fmi2FMUstate st2 = NULL;
+    CHECK(fmi2DeSerializeFMUstate(c, bytes, size, &st2) == fmi2OK, "deserialize");
+    CHECK(fmi2SetFMUstate(c, st2) == fmi2OK, "SetFMUstate deserialized");
+    run(c, steps / 2 * h, steps / 2, h, b);
+    CHECK(memcmp(a, b, n_real * sizeof(double)) == 0, "deserialized run differs");
+    CHECK(fmi2DeSerializeFMUstate(c, bytes, size - 1, &st2) == fmi2Error, "short state accepted");
+    free(bytes);
+    fmi2Reset(c);
+    fmi2FreeFMUstate(c, &st);
+    fmi2FreeFMUstate(c, &st2);
+
+    /* 5. call order: each misuse is fmi2Error with a message, then reset recovers */
+    fmi2Reset(c);
+    errors_logged = 0;
+    CHECK(fmi2DoStep(c, 0, h, fmi2True) == fmi2Error, "doStep before initialisation accepted");
+    CHECK(errors_logged == 1 && strstr(last_message, "fmi2DoStep"), "no message naming fmi2DoStep: %s", last_message);
+    fmi2Reset(c);
+    CHECK(fmi2GetReal(c, real_vrs, 1, a) == fmi2Error, "getReal in instantiated accepted");
+    fmi2Reset(c);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2Error, "exitInit before enterInit accepted");
+    fmi2Reset(c);
+    start(c);
+    CHECK(fmi2DoStep(c, 1.0, h, fmi2True) == fmi2Error, "wrong communication point accepted");
+    fmi2Reset(c);
+    start(c);
+    CHECK(fmi2DoStep(c, 0.0, -h, fmi2True) == fmi2Error, "negative step accepted");
+    fmi2Reset(c);
+    CHECK(fmi2GetReal(c, NULL, 3, a) == fmi2Error, "NULL vr array accepted");
+    fmi2Reset(c);
+    start(c);
+    fmi2ValueReference bad = 999999;
+    double one = 1.0;
+    CHECK(fmi2SetReal(c, &bad, 1, &one) == fmi2Error, "unknown value reference accepted");
+
+    /* 6. NaN and Inf on every real input and parameter: fmi2Error naming it */
+    for (size_t i = 0; i < MODEL_NVARS; i++) {
+        const VarInfo *v = &VARS[i];
+        if (v->type != T_REAL || (v->causality != C_INPUT && v->causality != C_PARAMETER)) continue;
+        const double bads[2] = { NAN, INFINITY };
+        for (int k = 0; k < 2; k++) {
+            fmi2Reset(c);
+            start(c);
+            if (v->causality == C_PARAMETER) { fmi2Reset(c); fmi2SetupExperiment(c, 0, 0, 0, 0, 0); fmi2EnterInitializationMode(c); }
+            last_message[0] = 0;
+            CHECK(fmi2SetReal(c, &v->vr, 1, &bads[k]) == fmi2Error, "%s = %g accepted", v->name, bads[k]);
+            CHECK(strstr(last_message, v->name) != NULL, "message does not name %s: %s", v->name, last_message);
+            /* the instance is now in the error state: stepping is refused */
+            CHECK(fmi2DoStep(c, 0, h, fmi2True) == fmi2Error, "doStep in error state accepted");
+            double t;
+            CHECK(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t) == fmi2OK, "GetRealStatus in error state");
+        }
+    }
+
+    /* 7. free in the error state, and one never initialised */
+    fmi2FreeInstance(c);
+    fmi2Component d = make(uri);
+    fmi2FreeInstance(d);
+    fmi2FreeInstance(NULL);
+
+    dlclose(so);
+    printf("%d passed, %d failed\n", checks - failures, failures);
+    return failures ? 1 : 0;
+}

@@ -1,0 +1,42 @@
+import math
+from pathlib import Path
+
+import pytest
+
+from artibus.simulation import Fmu
+
+ROOT = Path(__file__).resolve().parents[1]
+#: every FMU the repository declares (one modelDescription/<Name>.xml each)
+FMU_NAMES = sorted(p.stem for p in (ROOT / "modelDescription").glob("*.xml"))
+
+
+def fmu_file(name):
+    path = ROOT / "fmus" / f"{name}.fmu"
+    assert path.is_file(), f"{path} not built: run the set-up command of the README"
+    return path
+
+
+@pytest.fixture
+def open_fmu():
+    """open_fmu(name) -> artibus.simulation.Fmu, freed after the test."""
+    opened = []
+
+    def make(name):
+        f = Fmu(fmu_file(name))
+        opened.append(f)
+        return f
+
+    yield make
+    for f in opened:
+        f.close()
+
+
+def init(fmu, **values):
+    """setupExperiment + initialization mode with the given values set."""
+    fmu.slave.setupExperiment(startTime=0.0)
+    fmu.slave.enterInitializationMode()
+    fmu.set_values(values)
+    fmu.slave.exitInitializationMode()
+
+
+DEG = math.pi / 180

@@ -1,0 +1,186 @@
+"""What every artibus FMU must satisfy, whatever its physics: FMI 2.0 schema
+and FMPy's validation, a self-contained binary, the variable table generated
+from the XML agreeing with the XML, declared dependencies that hold, state
+round trips, and misuse answered with fmi2Error and a message."""
+import math
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from conftest import FMU_NAMES, ROOT, fmu_file, init
+
+SYSTEM_LIBS = {"linux-vdso.so.1", "libc.so.6", "libm.so.6", "libstdc++.so.6",
+               "libgcc_s.so.1", "ld-linux-x86-64.so.2", "libdl.so.2", "libpthread.so.0"}
+
+
+def so_path(name):
+    return ROOT / "build" / "fmu" / name / "binaries" / "linux64" / f"{name}.so"
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_fmpy_validate_and_xsd(name):
+    """fmpy validate: the FMI 2.0 XSD, variable names, ModelStructure, start values, units."""
+    assert validate_fmu(str(fmu_file(name))) == []
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_archive_layout(name):
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        names = set(z.namelist())
+    assert "modelDescription.xml" in names
+    assert f"binaries/linux64/{name}.so" in names
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_binary_depends_only_on_system_libraries(name):
+    """SUNDIALS is linked statically: ldd lists nothing but libc/libm/libstdc++/libgcc."""
+    out = subprocess.run(["ldd", str(so_path(name))], capture_output=True, text=True, check=True).stdout
+    libs = {line.split()[0].rsplit("/", 1)[-1] for line in out.splitlines() if line.strip()}
+    assert libs <= SYSTEM_LIBS, f"non-system libraries: {libs - SYSTEM_LIBS}"
+    assert "sundials" not in out
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_only_fmi_symbols_exported(name):
+    out = subprocess.run(["nm", "-D", "--defined-only", str(so_path(name))],
+                         capture_output=True, text=True, check=True).stdout
+    symbols = [line.split()[-1] for line in out.splitlines() if line.strip()]
+    assert symbols and all(s.startswith("fmi2") for s in symbols), \
+        [s for s in symbols if not s.startswith("fmi2")]
+
+
+def _get(fmu, v):
+    vr = [v.valueReference]
+    if v.type == "Real":
+        return fmu.slave.getReal(vr)[0]
+    if v.type in ("Integer", "Enumeration"):
+        return fmu.slave.getInteger(vr)[0]
+    if v.type == "Boolean":
+        return bool(fmu.slave.getBoolean(vr)[0])
+    return fmu.slave.getString(vr)[0].decode()
+
+
+def _start(v):
+    if v.type == "Real":
+        return float(v.start)
+    if v.type in ("Integer", "Enumeration"):
+        return int(v.start)
+    if v.type == "Boolean":
+        return v.start in ("true", "1", True)
+    return v.start
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_generated_table_agrees_with_xml(name, open_fmu):
+    """Every parameter and input reads back its XML start value by its XML value
+    reference: the C table generated at build time matches the XML."""
+    fmu = open_fmu(name)
+    fmu.slave.setupExperiment(startTime=0.0)
+    fmu.slave.enterInitializationMode()
+    for v in fmu.md.modelVariables:
+        if v.causality in ("parameter", "input"):
+            assert _get(fmu, v) == _start(v), v.name
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_declared_dependencies_hold(name, open_fmu):
+    """An output whose value moves when an input moves (no step in between)
+    must list that input in ModelStructure/Outputs dependencies."""
+    fmu = open_fmu(name)
+    md = fmu.md
+    init(fmu, **{v.name: 0.0 for v in md.modelVariables if v.name == "testSteerAmp"})
+    outputs = {u.variable.name: u for u in md.outputs}
+    out_vrs = [fmu.var(n).valueReference for n in outputs]
+    base = np.array(fmu.slave.getReal(out_vrs))
+    for v in md.modelVariables:
+        if v.causality != "input" or v.type != "Real":
+            continue
+        x0 = float(v.start)
+        fmu.set_values({v.name: x0 + 0.05})
+        moved = np.array(fmu.slave.getReal(out_vrs))
+        fmu.set_values({v.name: x0})
+        for (oname, u), a, b in zip(outputs.items(), base, moved):
+            if abs(a - b) > 1e-12 * (1 + abs(a)):
+                deps = u.dependencies
+                assert deps is None or v in deps, f"{oname} depends on {v.name} but does not declare it"
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_default_experiment_runs_in_fmpy(name):
+    """`fmpy simulate fmus/<Name>.fmu` on its default experiment."""
+    result = simulate_fmu(str(fmu_file(name)))
+    md = read_model_description(str(fmu_file(name)))
+    assert result["time"][-1] == pytest.approx(float(md.defaultExperiment.stopTime))
+    for n in result.dtype.names:
+        assert np.all(np.isfinite(result[n])), n
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+@pytest.mark.parametrize("serialize", [False, True])
+def test_fmu_state_round_trip(name, serialize, open_fmu):
+    """simulate, save, continue, restore, continue again: identical outputs."""
+    fmu = open_fmu(name)
+    init(fmu)
+    outs = [v.valueReference for v in fmu.md.modelVariables if v.causality == "output" and v.type == "Real"]
+    h, t = 0.05, 0.0
+    for _ in range(40):
+        fmu.slave.doStep(t, h)
+        t += h
+    state = fmu.slave.getFMUstate()
+    if serialize:
+        state = fmu.slave.deSerializeFMUstate(fmu.slave.serializeFMUstate(state))
+    t_saved = t
+    first = []
+    for _ in range(40):
+        fmu.slave.doStep(t, h)
+        t += h
+        first.append(fmu.slave.getReal(outs))
+    fmu.slave.setFMUstate(state)
+    t = t_saved
+    second = []
+    for _ in range(40):
+        fmu.slave.doStep(t, h)
+        t += h
+        second.append(fmu.slave.getReal(outs))
+    fmu.slave.freeFMUstate(state)
+    assert np.array_equal(np.array(first), np.array(second))
+    assert not np.array_equal(np.array(first[0]), np.array(first[-1])), "nothing moved: the test cannot fail"
+
+
+def _expect_error(fmu, call, *words):
+    fmu.log.clear()
+    with pytest.raises(FMICallException):
+        call()
+    text = " ".join(fmu.log)
+    for w in words:
+        assert w in text, f"{w!r} not in log: {text}"
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_misuse_is_an_error_with_a_message(name, open_fmu):
+    fmu = open_fmu(name)
+    md = fmu.md
+    _expect_error(fmu, lambda: fmu.slave.doStep(0.0, 0.1), "fmi2DoStep", "illegal call sequence")
+    fmu.slave.reset()
+    out = next(v for v in md.modelVariables if v.causality == "output")
+    init(fmu)
+    _expect_error(fmu, lambda: fmu.slave.setReal([out.valueReference], [1.0]), out.name, "cannot be set")
+    fmu.slave.reset()
+    fixed = next(v for v in md.modelVariables if v.causality == "parameter" and v.variability == "fixed")
+    init(fmu)
+    _expect_error(fmu, lambda: fmu.set_values({fixed.name: _start(fixed)}), fixed.name, "step complete")
+    fmu.slave.reset()
+    init(fmu)
+    _expect_error(fmu, lambda: fmu.slave.doStep(1.0, 0.1), "currentCommunicationPoint")
+    fmu.slave.reset()
+    for v in md.modelVariables:
+        if v.causality == "input" and v.type == "Real":
+            for bad in (math.nan, math.inf, -math.inf):
+                init(fmu)
+                _expect_error(fmu, lambda: fmu.set_values({v.name: bad}), v.name, str(bad))
+                fmu.slave.reset()
