@@ -12,14 +12,21 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from conftest import FMU_NAMES, ROOT, fmu_file, init
+from conftest import FMU_NAMES, fmu_file, init
 
 SYSTEM_LIBS = {"linux-vdso.so.1", "libc.so.6", "libm.so.6", "libstdc++.so.6",
                "libgcc_s.so.1", "ld-linux-x86-64.so.2", "libdl.so.2", "libpthread.so.0"}
 
 
-def so_path(name):
-    return ROOT / "build" / "fmu" / name / "binaries" / "linux64" / f"{name}.so"
+@pytest.fixture
+def so_path(tmp_path):
+    """the shared object as shipped inside fmus/<name>.fmu"""
+    def extract(name):
+        member = f"binaries/linux64/{name}.so"
+        with zipfile.ZipFile(fmu_file(name)) as z:
+            z.extract(member, tmp_path)
+        return tmp_path / member
+    return extract
 
 
 @pytest.mark.parametrize("name", FMU_NAMES)
@@ -37,7 +44,7 @@ def test_archive_layout(name):
 
 
 @pytest.mark.parametrize("name", FMU_NAMES)
-def test_binary_depends_only_on_system_libraries(name):
+def test_binary_depends_only_on_system_libraries(name, so_path):
     """SUNDIALS is linked statically: ldd lists nothing but libc/libm/libstdc++/libgcc."""
     out = subprocess.run(["ldd", str(so_path(name))], capture_output=True, text=True, check=True).stdout
     libs = {line.split()[0].rsplit("/", 1)[-1] for line in out.splitlines() if line.strip()}
@@ -46,7 +53,7 @@ def test_binary_depends_only_on_system_libraries(name):
 
 
 @pytest.mark.parametrize("name", FMU_NAMES)
-def test_only_fmi_symbols_exported(name):
+def test_only_fmi_symbols_exported(name, so_path):
     out = subprocess.run(["nm", "-D", "--defined-only", str(so_path(name))],
                          capture_output=True, text=True, check=True).stdout
     symbols = [line.split()[-1] for line in out.splitlines() if line.strip()]

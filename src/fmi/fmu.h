@@ -17,6 +17,10 @@
 #include "vartable.h"
 #include "config.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* instance states of the FMI 2.0 co-simulation state machine (spec 4.2.4) */
 typedef enum {
     S_INSTANTIATED   = 1 << 0,
@@ -85,5 +89,9 @@ void log_warning(ModelInstance *comp, const char *fmt, ...)
 /* returns fmi2Error, so that `return log_error(comp, ...)` reads naturally */
 fmi2Status log_error(ModelInstance *comp, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

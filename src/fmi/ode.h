@@ -7,6 +7,10 @@
 
 #include <stdbool.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct ModelInstance;
 
 /* return 0 on success, > 0 for a recoverable failure (CVODE retries with a
@@ -34,5 +38,9 @@ OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
 long ode_nrhs(const Ode *o);
 
 void ode_free(Ode *o);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -8,6 +8,10 @@
 #include <stddef.h>
 #include "model_vars.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING } VarType;
 
 typedef enum {
@@ -35,5 +39,9 @@ const VarInfo *vars_find(VarType type, unsigned vr);
 
 /* all variables to their start values (the rest to zero) */
 void vars_set_start_values(ModelData *d);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif
