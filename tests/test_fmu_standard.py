@@ -134,26 +134,22 @@ def test_fmu_state_round_trip(name, serialize, open_fmu):
     fmu = open_fmu(name)
     init(fmu)
     outs = [v.valueReference for v in fmu.md.modelVariables if v.causality == "output" and v.type == "Real"]
-    h, t = 0.05, 0.0
-    for _ in range(40):
-        fmu.slave.doStep(t, h)
-        t += h
+    h = 0.05
+
+    def advance(t0, n=40):
+        rows = []
+        for i in range(n):
+            fmu.slave.doStep(t0 + i * h, h)
+            rows.append(fmu.slave.getReal(outs))
+        return rows
+
+    advance(0.0)
     state = fmu.slave.getFMUstate()
     if serialize:
         state = fmu.slave.deSerializeFMUstate(fmu.slave.serializeFMUstate(state))
-    t_saved = t
-    first = []
-    for _ in range(40):
-        fmu.slave.doStep(t, h)
-        t += h
-        first.append(fmu.slave.getReal(outs))
+    first = advance(40 * h)
     fmu.slave.setFMUstate(state)
-    t = t_saved
-    second = []
-    for _ in range(40):
-        fmu.slave.doStep(t, h)
-        t += h
-        second.append(fmu.slave.getReal(outs))
+    second = advance(40 * h)
     fmu.slave.freeFMUstate(state)
     assert np.array_equal(np.array(first), np.array(second))
     assert not np.array_equal(np.array(first[0]), np.array(first[-1])), "nothing moved: the test cannot fail"

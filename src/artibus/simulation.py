@@ -79,16 +79,18 @@ class Fmu:
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=instance_name)
         self._callbacks = _callbacks(self.log)
-        self.slave.instantiate(loggingOn=logging, callbacks=self._callbacks)
+        try:
+            self.slave.instantiate(loggingOn=logging, callbacks=self._callbacks)
+        except Exception:
+            shutil.rmtree(self._dir, ignore_errors=True)
+            raise ArtibusError(f"{self.path}: {self.md.modelName} could not be instantiated: "
+                               f"{' '.join(self.log) or 'no message'}") from None
 
     def var(self, name):
         try:
             return self.vars[name]
         except KeyError:
             raise ArtibusError(f"{self.path}: {self.md.modelName} has no variable '{name}'") from None
-
-    def set(self, **values):
-        self.set_values(values)
 
     def set_values(self, values):
         for name, value in values.items():
