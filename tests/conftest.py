@@ -3,6 +3,7 @@ from pathlib import Path
 
 import pytest
 
+from artibus import fmu_dir
 from artibus.simulation import Fmu
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -11,7 +12,7 @@ FMU_NAMES = sorted(p.stem for p in (ROOT / "modelDescription").glob("*.xml"))
 
 
 def fmu_file(name):
-    path = ROOT / "fmus" / f"{name}.fmu"
+    path = fmu_dir() / f"{name}.fmu"
     assert path.is_file(), f"{path} not built: run the set-up command of the README"
     return path
 

@@ -36,7 +36,9 @@ import fmpy  # noqa: F401
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi2 import FMU2Slave  # noqa: E402
 
-FMU_PATH = Path(__file__).resolve().parents[1] / "fmus" / "BusKinematics.fmu"
+from artibus import fmu_dir  # noqa: E402
+
+FMU_PATH = fmu_dir() / "BusKinematics.fmu"
 NMAX = 4  # size of the FMU's arrays L[1..4], Lh[1..4], gamma[1..4], ...
 DEG = math.pi / 180.0
 

@@ -3,6 +3,7 @@
 The FMUs are built from C (``src/models``); this package runs them with FMPy,
 reads parameter sets (SSP ``.ssv``), and draws the results.
 """
+import os
 from pathlib import Path
 
 __version__ = "0.1.0"
@@ -15,9 +16,15 @@ class ArtibusError(Exception):
     """A user error: bad file, element or value. The CLI prints it without a traceback."""
 
 
+def fmu_dir():
+    """Where the built FMUs are: ``fmus/``, or $ARTIBUS_FMU_DIR (the test suite
+    points it at the sanitizer build to run the same tests under ASan)."""
+    return Path(os.environ.get("ARTIBUS_FMU_DIR", ROOT / "fmus"))
+
+
 def fmu_path(name):
-    """Path of a built FMU, ``fmus/<name>.fmu``."""
-    path = ROOT / "fmus" / f"{name}.fmu"
+    """Path of a built FMU, ``<fmu_dir>/<name>.fmu``."""
+    path = fmu_dir() / f"{name}.fmu"
     if not path.is_file():
         raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
     return path
