@@ -1,7 +1,10 @@
 """The artibus command line: verbs in the user's words.
 
-  artibus info FMU                     variables, defaults and the default experiment
-  artibus simulate FMU [options]       run one FMU alone, write CSV (and a plot)
+  artibus run BENCH [options]          run an SSP bench (a name from `artibus list`, or an .ssp)
+  artibus list                         the benches and their parameters
+  artibus info FMU|SSP                 an FMU's variables, or a bench's components and connections
+  artibus simulate FMU [options]       run one FMU alone, write CSV
+  artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp
   artibus demo [-o DIR]                the main job (for now): the Urbino 18 pusher on an S-curve
 """
 import argparse
@@ -29,6 +32,8 @@ def _parse_set(items):
 
 def cmd_info(args):
     from fmpy import read_model_description
+    if str(args.fmu).endswith(".ssp"):
+        return _info_ssp(args.fmu)
     md = read_model_description(str(_fmu_arg(args.fmu)))
     print(f"{md.modelName}: {md.description}")
     de = md.defaultExperiment
@@ -40,6 +45,65 @@ def cmd_info(args):
         for v in vs:
             start = f" = {v.start}" if v.start is not None else ""
             print(f"  {v.name:18s} {v.type:8s}{start:>12s}  {v.description or ''}")
+    return 0
+
+
+def _info_ssp(path):
+    from artibus import ssp
+    bench = ssp.read(ssp.ssp_path(path))
+    print(f"{bench.name}: {bench.file}")
+    print(f"default experiment: {bench.start_time} .. {bench.stop_time} s")
+    print("\ncomponents:")
+    for c in bench.components.values():
+        step = f", step {c.step} s" if c.step else ""
+        print(f"  {c.path}: {c.source}{step}, {len(c.parameters)} parameters bound")
+    print("\nconnections:")
+    for c in bench.connections:
+        tr = f"  (x {c.factor:g} + {c.offset:g})" if (c.factor, c.offset) != (1.0, 0.0) else ""
+        print(f"  {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}{tr}")
+    return 0
+
+
+def cmd_list(args):
+    from artibus import ssp
+    names = ssp.bench_names()
+    if not names:
+        print("no benches in ssp/benches/")
+    for name in names:
+        try:
+            bench = ssp.read(ssp.ssp_path(name))
+        except Exception as e:  # an unpacked or broken bench is still listed
+            print(f"{name}: ({e})")
+            continue
+        print(f"{name}: {', '.join(bench.components)}; stop time {bench.stop_time} s")
+        for c in bench.components.values():
+            for k, v in sorted(c.parameters.items()):
+                print(f"    {c.path}.{k} = {v}")
+    return 0
+
+
+def cmd_pack(args):
+    from artibus import ssp
+    for name in args.bench or ssp.bench_names():
+        print(ssp.pack(name))
+    return 0
+
+
+def cmd_run(args):
+    from artibus import runner
+    from artibus.parameters import read_parameters
+    overrides = {}
+    for f in args.ssv or []:
+        overrides.update(read_parameters(f))
+    overrides.update(_parse_set(args.set))
+    with runner.Simulation(args.bench, step=args.step, overrides=overrides, record=args.record,
+                           algorithm=args.algorithm) as sim:
+        result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
+        out = Path(args.output or f"{sim.bench.name}.csv")
+        runner.save(result, out)
+        span = result.time[-1] - result.time[0]
+        print(f"{out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
+              f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
     return 0
 
 
@@ -90,8 +154,24 @@ def build_parser():
     p = argparse.ArgumentParser(prog="artibus", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="verb", required=True)
-    s = sub.add_parser("info", help="show an FMU's variables")
-    s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU")
+    s = sub.add_parser("run", help="run an SSP bench")
+    s.add_argument("bench", help="a bench name (see `artibus list`) or the path of an .ssp")
+    s.add_argument("--stop-time", type=float, help="default: the bench's DefaultExperiment")
+    s.add_argument("--step", type=float, help="base communication step, s")
+    s.add_argument("--ssv", action="append", help="parameter file with names COMPONENT.VARIABLE")
+    s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE", help="set a parameter")
+    s.add_argument("--record", action="append", metavar="COMP.VAR",
+                   help="record this variable (default: every connected output)")
+    s.add_argument("--algorithm", default="gauss-seidel", choices=["gauss-seidel", "jacobi"])
+    s.add_argument("-o", "--output", help="results: .csv or .mat (default: <bench>.csv)")
+    s.set_defaults(func=cmd_run)
+    s = sub.add_parser("list", help="the benches and their parameters")
+    s.set_defaults(func=cmd_list)
+    s = sub.add_parser("pack", help="pack benches into self-contained .ssp files")
+    s.add_argument("bench", nargs="*", help="default: every bench in ssp/benches")
+    s.set_defaults(func=cmd_pack)
+    s = sub.add_parser("info", help="show an FMU's variables or a bench's structure")
+    s.add_argument("fmu", help="path of an .fmu or .ssp, or the name of a built FMU")
     s.set_defaults(func=cmd_info)
     s = sub.add_parser("simulate", help="run one FMU alone")
     s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU")

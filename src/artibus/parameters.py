@@ -36,7 +36,7 @@ def read_parameters(ssv, fmu=None):
     values = {}
     for p in pset.parameters:
         try:
-            values[p.name] = _typed(p.type, p.value)
+            values[p.name] = typed(p.type, p.value)
         except ValueError:
             raise ArtibusError(f"{path}: Parameter '{p.name}': {p.type} value "
                                f"{p.value!r} is not a {p.type}") from None
@@ -45,7 +45,7 @@ def read_parameters(ssv, fmu=None):
     return values
 
 
-def _typed(type_, text):
+def typed(type_, text):
     if type_ == "Real":
         return float(text)
     if type_ in ("Integer", "Enumeration"):

@@ -1,0 +1,393 @@
+"""The co-simulation master: runs an SSP bench of FMI 2.0 co-simulation FMUs.
+
+- parameters from the bench's bindings (.ssv inside the .ssp), then from
+  ``--ssv`` files and ``--set comp.var=value`` given by the user;
+- connections between component variables, through nested systems, with SSP
+  linear transformations; without one, values are converted between the
+  connected variables' units (FMI unit definitions, base units and factor/offset);
+- initialisation: every FMU in initialization mode, connected inputs set from
+  the outputs they are connected to, repeated to a fixed point (bounded);
+- stepping: Gauss-Seidel in an order derived from the connection graph (an
+  algebraic loop of direct feedthrough is an error naming it), or Jacobi;
+  multi-rate: each component has its own communication step, a multiple of the
+  base step; slower components hold their inputs;
+- one batched getReal/setReal per component per step;
+- recording of every connection (or a chosen list) at every base step;
+- on a failure midway, the results so far are kept with the failing time and
+  the FMU's log.
+"""
+import shutil
+import sys
+import tempfile
+import time as _time
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from fmpy.fmi1 import FMICallException
+
+from artibus import ArtibusError
+from artibus.simulation import Fmu, Result, SimulationError
+from artibus import ssp as ssp_mod
+
+MAX_INIT_ITERATIONS = 50
+
+
+@dataclass
+class Link:
+    """One connection, resolved to value references."""
+    src: "Unit"
+    src_index: int          # index into src.out_vrs
+    dst: "Unit"
+    dst_index: int          # index into dst.in_vrs
+    factor: float
+    offset: float
+    name: str
+
+
+@dataclass
+class Unit:
+    """A component while it runs."""
+    path: str
+    fmu: Fmu
+    step: float
+    ratio: int = 1                               # step / base step
+    in_vrs: list = field(default_factory=list)   # Real inputs that are connected
+    in_names: list = field(default_factory=list)
+    out_vrs: list = field(default_factory=list)  # Real outputs that are read
+    out_names: list = field(default_factory=list)
+    out_values: list = field(default_factory=list)
+    in_values: list = field(default_factory=list)
+    feeds: set = field(default_factory=set)      # (input name, output name) direct feedthrough
+    wall: float = 0.0
+
+
+def _unit_conversion(md_a, var_a, md_b, var_b, where):
+    """factor, offset taking a value in var_a's unit to var_b's unit."""
+    ua, ub = _unit_of(md_a, var_a), _unit_of(md_b, var_b)
+    if ua is None or ub is None or ua == ub:
+        return 1.0, 0.0
+    da = {u.name: u for u in md_a.unitDefinitions}.get(ua)
+    db = {u.name: u for u in md_b.unitDefinitions}.get(ub)
+    if da is None or db is None or da.baseUnit is None or db.baseUnit is None:
+        raise ArtibusError(f"{where}: units '{ua}' and '{ub}' differ and one has no base-unit definition")
+    dims = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+    if any(getattr(da.baseUnit, d) != getattr(db.baseUnit, d) for d in dims):
+        raise ArtibusError(f"{where}: cannot convert '{ua}' to '{ub}': different dimensions")
+    fa, oa = da.baseUnit.factor, da.baseUnit.offset
+    fb, ob = db.baseUnit.factor, db.baseUnit.offset
+    # base = fa*x + oa ; y = (base - ob) / fb
+    return fa / fb, (oa - ob) / fb
+
+
+def _unit_of(md, var):
+    if var.unit:
+        return var.unit
+    if var.declaredType is not None and getattr(var.declaredType, "unit", None):
+        return var.declaredType.unit
+    return None
+
+
+def _order(units, links, where):
+    """Gauss-Seidel order: a component whose outputs feed another's inputs
+    directly (through feedthrough) goes first. A cycle made only of direct
+    feedthrough is an algebraic loop."""
+    # graph on (unit, output) -> (unit, input) -> (unit, output via feedthrough)
+    feed_edges = {}
+    for l in links:
+        src_out = l.src.out_names[l.src_index]
+        dst_in = l.dst.in_names[l.dst_index]
+        for (i, o) in l.dst.feeds:
+            if i == dst_in:
+                feed_edges.setdefault((l.src.path, src_out), []).append(
+                    ((l.dst.path, o), f"{l.src.path}.{src_out} -> {l.dst.path}.{dst_in}"))
+    # cycle detection on the feedthrough graph
+    state, stack = {}, []
+
+    def visit(n):
+        state[n] = 1
+        stack.append(n)
+        for m, label in feed_edges.get(n, []):
+            if state.get(m) == 1:
+                cycle = stack[stack.index(m):] + [m]
+                raise ArtibusError(f"{where}: algebraic loop (direct feedthrough all around): "
+                                   + " -> ".join(f"{c}.{v}" for c, v in cycle))
+            if state.get(m) is None:
+                visit(m)
+        stack.pop()
+        state[n] = 2
+
+    for n in list(feed_edges):
+        if state.get(n) is None:
+            visit(n)
+    # order components: Kahn on "A feeds B through B's feedthrough", then the rest
+    deps = {u.path: set() for u in units}
+    for l in links:
+        dst_in = l.dst.in_names[l.dst_index]
+        if any(i == dst_in for i, _ in l.dst.feeds) and l.src is not l.dst:
+            deps[l.dst.path].add(l.src.path)
+    ordered, done = [], set()
+    while len(ordered) < len(units):
+        ready = [u for u in units if u.path not in done and deps[u.path] <= done]
+        if not ready:  # cannot happen without an algebraic loop
+            ready = [next(u for u in units if u.path not in done)]
+        for u in ready:
+            ordered.append(u)
+            done.add(u.path)
+    return ordered
+
+
+class Simulation:
+    """A bench, set up and ready to run."""
+
+    def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel"):
+        if algorithm not in ("gauss-seidel", "jacobi"):
+            raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
+        self.algorithm = algorithm
+        self.ssp = ssp_mod.ssp_path(ssp)
+        self.bench = ssp_mod.read(self.ssp)
+        where = self.bench.file
+        if step is not None and not step > 0:
+            raise ArtibusError(f"--step {step}: the communication step must be > 0")
+        self._tmp = tempfile.mkdtemp(prefix="artibus-")
+        try:
+            with zipfile.ZipFile(self.ssp) as z:
+                z.extractall(self._tmp)
+            self._setup(step, overrides or {}, record, where)
+        except BaseException:
+            self.close()
+            raise
+
+    def _setup(self, step, overrides, record, where):
+        units = {}
+        for path, c in self.bench.components.items():
+            fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
+            de = fmu.md.defaultExperiment
+            h = c.step or (step if step is not None else
+                           float(de.stepSize) if de is not None and de.stepSize else None)
+            if h is None:
+                raise ArtibusError(f"{where}:{c.line}: Component '{path}': no communication step "
+                                   f"(give --step or a stepSize annotation)")
+            units[path] = Unit(path=path, fmu=fmu, step=h)
+        self.units = list(units.values())
+        self.base_step = step if step is not None else min(u.step for u in self.units)
+        for u in self.units:
+            r = u.step / self.base_step
+            if abs(r - round(r)) > 1e-9 or round(r) < 1:
+                raise ArtibusError(f"{where}: Component '{u.path}': step {u.step} s is not a "
+                                   f"multiple of the base step {self.base_step} s")
+            u.ratio = int(round(r))
+
+        # parameters: bindings, then the user's overrides ("comp.var" -> value)
+        self.parameters = {p: dict(c.parameters) for p, c in self.bench.components.items()}
+        for full, value in overrides.items():
+            comp, _, var = full.rpartition(".")
+            if comp not in self.parameters:
+                raise ArtibusError(f"--set {full}={value}: no component '{comp}' in {where} "
+                                   f"(components: {', '.join(self.parameters)})")
+            self.parameters[comp][var] = value
+        for path, values in self.parameters.items():
+            fmu = units[path].fmu
+            for var, value in values.items():
+                v = fmu.vars.get(var)
+                if v is None:
+                    raise ArtibusError(f"{where}: parameter '{path}.{var}' = {value!r}: "
+                                       f"{fmu.md.modelName} has no variable '{var}'")
+                if v.causality not in ("parameter", "input"):
+                    raise ArtibusError(f"{where}: parameter '{path}.{var}' = {value!r}: it is an "
+                                       f"{v.causality} and cannot be set")
+
+        # connections
+        self.links = []
+        for c in self.bench.connections:
+            label = f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}"
+            a, b = units[c.start[0]], units[c.end[0]]
+            va, vb = a.fmu.vars.get(c.start[1]), b.fmu.vars.get(c.end[1])
+            if va is None or vb is None:
+                missing = f"{c.start[0]}.{c.start[1]}" if va is None else f"{c.end[0]}.{c.end[1]}"
+                raise ArtibusError(f"{label}: no variable '{missing}'")
+            if va.type != vb.type or va.type != "Real":
+                raise ArtibusError(f"{label}: types {va.type} -> {vb.type} (Real -> Real supported)")
+            if va.causality not in ("output", "parameter", "calculatedParameter") or vb.causality != "input":
+                raise ArtibusError(f"{label}: connects a {va.causality} to a {vb.causality} "
+                                   f"(expected output -> input)")
+            if c.factor != 1.0 or c.offset != 0.0:
+                f, o = c.factor, c.offset
+            else:
+                f, o = _unit_conversion(a.fmu.md, va, b.fmu.md, vb, label)
+            if c.start[1] not in a.out_names:
+                a.out_names.append(c.start[1])
+                a.out_vrs.append(va.valueReference)
+            if c.end[1] in b.in_names:
+                raise ArtibusError(f"{label}: input {c.end[0]}.{c.end[1]} is connected twice")
+            b.in_names.append(c.end[1])
+            b.in_vrs.append(vb.valueReference)
+            self.links.append(Link(a, a.out_names.index(c.start[1]), b, len(b.in_names) - 1,
+                                   f, o, f"{c.end[0]}.{c.end[1]}"))
+        # direct feedthrough from the model descriptions
+        for u in self.units:
+            inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
+            for o in u.fmu.md.outputs:
+                deps = o.dependencies if o.dependencies is not None else inputs
+                for d in deps:
+                    if d.causality == "input":
+                        u.feeds.add((d.name, o.variable.name))
+        self.order = _order(self.units, self.links, where)
+
+        # recording: every connection's source, plus what was asked for
+        self.record = []
+        for name in record or []:
+            comp, _, var = name.rpartition(".")
+            if comp not in units or var not in units[comp].fmu.vars:
+                raise ArtibusError(f"--record {name}: no such variable in {where}")
+            self.record.append((units[comp], var))
+        if not record:   # every output connector the bench declares, and every connected output
+            for u in self.units:
+                for n in dict.fromkeys(self.bench.components[u.path].outputs + u.out_names):
+                    if n not in u.fmu.vars:
+                        raise ArtibusError(f"{where}: Component '{u.path}': connector '{n}' is "
+                                           f"not a variable of {u.fmu.md.modelName}")
+                    self.record.append((u, n))
+        for u, n in self.record:
+            if n not in u.out_names:
+                u.out_names.append(n)
+                u.out_vrs.append(u.fmu.var(n).valueReference)
+        for u in self.units:
+            u.out_values = [0.0] * len(u.out_vrs)
+            u.in_values = [0.0] * len(u.in_vrs)
+        self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
+        self._rec_index = [(u, u.out_names.index(n)) for u, n in self.record]
+
+    # --- the algorithm ---------------------------------------------------------------
+
+    def _read(self, u):
+        if u.out_vrs:
+            u.out_values = u.fmu.slave.getReal(u.out_vrs)
+
+    def _write(self, u):
+        if u.in_vrs:
+            u.fmu.slave.setReal(u.in_vrs, u.in_values)
+
+    def _step(self, u, t0):
+        w = _time.perf_counter()
+        u.fmu.slave.doStep(t0, u.step)
+        self._read(u)
+        u.wall += _time.perf_counter() - w
+
+    def _propagate(self, to=None):
+        for l in self.links:
+            if to is None or l.dst is to:
+                l.dst.in_values[l.dst_index] = l.factor * l.src.out_values[l.src_index] + l.offset
+
+    def _initialize(self, start):
+        for u in self.units:
+            s = u.fmu.slave
+            s.setupExperiment(startTime=start)
+            s.enterInitializationMode()
+            u.fmu.set_values(self.parameters[u.path])
+        for _ in range(MAX_INIT_ITERATIONS):
+            before = [list(u.in_values) for u in self.units]
+            for u in self.order:
+                self._read(u)
+                self._propagate(u if self.algorithm == "gauss-seidel" else None)
+            for u in self.order:
+                self._propagate(u)
+                self._write(u)
+            for u in self.units:
+                self._read(u)
+            if all(np.allclose(b, u.in_values, rtol=1e-12, atol=1e-12)
+                   for b, u in zip(before, self.units)):
+                break
+        else:
+            raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
+                               f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
+        for u in self.units:
+            u.fmu.slave.exitInitializationMode()
+            self._read(u)
+
+    def run(self, stop_time=None, start_time=None, progress=False):
+        start = self.bench.start_time if start_time is None else start_time
+        stop = stop_time if stop_time is not None else self.bench.stop_time
+        if stop is None:
+            raise ArtibusError(f"{self.bench.file}: no DefaultExperiment stopTime; give --stop-time")
+        if not stop > start:
+            raise ArtibusError(f"stop time {stop} must be after the start time {start}")
+        result = Result(list(self.names))
+        n = int(round((stop - start) / self.base_step))
+        t = start
+        current = None
+        wall0 = _time.perf_counter()
+        try:
+            self._initialize(start)
+            result.rows.append([t] + [u.out_values[i] for u, i in self._rec_index])
+            for k in range(n):
+                t = start + k * self.base_step
+                # a component with step H = ratio * h takes its inputs at the start of
+                # its interval and publishes its outputs at the end, when the others get there
+                starting = [u for u in self.order if k % u.ratio == 0]
+                ending = [u for u in self.order if (k + 1) % u.ratio == 0]
+                if self.algorithm == "jacobi":
+                    for u in starting:
+                        self._propagate(u)
+                    for u in starting:
+                        self._write(u)
+                    for u in ending:
+                        current = u
+                        self._step(u, t + self.base_step - u.step)
+                else:
+                    for u in self.order:
+                        if u in starting:
+                            self._propagate(u)
+                            self._write(u)
+                        if u in ending:
+                            current = u
+                            self._step(u, t + self.base_step - u.step)
+                current = None
+                t = start + (k + 1) * self.base_step
+                result.rows.append([t] + [u.out_values[i] for u, i in self._rec_index])
+                if progress and k % max(1, n // 50) == 0:
+                    sys.stderr.write(f"\r{self.bench.name}: t = {t:8.2f} s  [{'#' * (50 * (k + 1) // n):50s}]")
+            if progress:
+                sys.stderr.write("\n")
+        except FMICallException:
+            who = current.path if current else "?"
+            log = current.fmu.log if current else [m for u in self.units for m in u.fmu.log]
+            raise SimulationError(f"{self.ssp}: component '{who}' failed at t = {t:g} s: "
+                                  f"{log[-1] if log else 'no message'}", result, list(log)) from None
+        self.wall = _time.perf_counter() - wall0
+        return result
+
+    def close(self):
+        for u in getattr(self, "units", []):
+            u.fmu.close()
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def run(ssp, stop_time=None, step=None, overrides=None, record=None,
+        algorithm="gauss-seidel", progress=False):
+    """Run a bench (name or .ssp path); returns the Result."""
+    with Simulation(ssp, step=step, overrides=overrides, record=record, algorithm=algorithm) as sim:
+        return sim.run(stop_time=stop_time, progress=progress)
+
+
+def save(result, path):
+    """CSV, or MATLAB .mat (one variable per signal, names made MATLAB-safe)."""
+    path = Path(path)
+    if path.suffix == ".mat":
+        from scipy.io import savemat
+        data = result.array()
+        safe = {}
+        for i, n in enumerate(result.names):
+            key = "".join(ch if ch.isalnum() else "_" for ch in n).strip("_")[:63] or f"v{i}"
+            safe[key] = data[:, i]
+        savemat(str(path), safe)
+    else:
+        result.to_csv(path)
+    return path

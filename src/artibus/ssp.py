@@ -1,0 +1,253 @@
+"""SSP 1.0 benches: packing a bench folder into a self-contained .ssp, and
+reading a .ssp into a flat list of components and resolved connections.
+
+A bench lives in ``ssp/benches/<Bench>/SystemStructure.ssd``; its components
+refer to ``resources/<Name>.fmu`` and its parameter bindings to
+``resources/<Set>.ssv``. ``pack`` copies the FMUs from ``fmus/`` and the
+parameter sets from ``ssp/parameters/`` into ``fmus/<Bench>.ssp``.
+
+Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships);
+what it leaves out (default experiment, per-component step sizes in our
+annotation, connector units) is read here with lxml from the same file.
+"""
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+from artibus import ROOT, ArtibusError, fmu_dir
+
+BENCH_DIR = ROOT / "ssp" / "benches"
+NS = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+    "artibus": "urn:artibus",
+}
+#: annotation type holding artibus-specific simulation settings of a component
+ANNOTATION = "org.artibus.simulation"
+
+
+def bench_names():
+    return sorted(p.parent.name for p in BENCH_DIR.glob("*/SystemStructure.ssd"))
+
+
+def ssp_path(bench):
+    """A bench by name (``Urbino18_Circle``) or the path of an .ssp file."""
+    p = Path(bench)
+    if p.suffix == ".ssp":
+        if not p.is_file():
+            raise ArtibusError(f"{p}: no such file")
+        return p
+    q = fmu_dir() / f"{bench}.ssp"
+    if not q.is_file():
+        if bench in bench_names():
+            raise ArtibusError(f"{q}: bench not packed (run the set-up command of the README)")
+        raise ArtibusError(f"{bench}: no such bench (known: {', '.join(bench_names()) or 'none'})")
+    return q
+
+
+def pack(bench, out_dir=None):
+    """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every referenced file inside."""
+    src = BENCH_DIR / bench
+    ssd_file = src / "SystemStructure.ssd"
+    tree = etree.parse(str(ssd_file))
+    out = Path(out_dir or fmu_dir()) / f"{bench}.ssp"
+    files = {}
+    for el in tree.iter():
+        ref = el.get("source")
+        if ref is None or not ref.startswith("resources/"):
+            continue
+        name = ref[len("resources/"):]
+        candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name]
+        found = next((c for c in candidates if c.is_file()), None)
+        if found is None:
+            raise ArtibusError(f"{ssd_file}:{el.sourceline}: <{etree.QName(el).localname} "
+                               f"source=\"{ref}\">: no such file (looked in "
+                               f"{', '.join(str(c.parent) for c in candidates)})")
+        files[ref] = found
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(ssd_file, "SystemStructure.ssd")
+        for ref, path in sorted(files.items()):
+            z.write(path, ref)
+    return out
+
+
+@dataclass
+class Component:
+    path: str                      # e.g. "Bus" or "Sub.Bus"
+    source: str                    # resources/X.fmu inside the .ssp
+    element: object                # fmpy.ssp.ssd.Component
+    line: int                      # line in SystemStructure.ssd
+    step: float | None = None      # communication step from our annotation
+    parameters: dict = field(default_factory=dict)  # name -> value from bindings
+    outputs: list = field(default_factory=list)     # names of its declared output connectors
+    connectors: list = field(default_factory=list)  # names of all its declared connectors
+
+
+@dataclass
+class Connection:
+    start: tuple                   # (component path, variable name)
+    end: tuple
+    factor: float = 1.0
+    offset: float = 0.0
+    line: int = 0
+
+
+@dataclass
+class Bench:
+    name: str
+    file: str
+    components: dict               # path -> Component
+    connections: list              # Connection, component to component
+    start_time: float = 0.0
+    stop_time: float | None = None
+
+
+def read(ssp):
+    """A .ssp as components (with their bound parameters) and connections
+    resolved through nested systems to component variables."""
+    from fmpy.ssp.ssd import Component as SsdComponent, System, read_ssd
+    from artibus.parameters import typed
+
+    ssp = str(ssp)
+    where = f"{ssp}/SystemStructure.ssd"
+    try:
+        ssd = read_ssd(ssp, validate=True)
+    except Exception as e:
+        raise ArtibusError(f"{where}: not a valid SSP 1.0 system structure: {e}") from None
+    with zipfile.ZipFile(ssp) as z:
+        names = set(z.namelist())
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+
+    bench = Bench(name=ssd.name, file=where, components={}, connections=[])
+    de = root.find("ssd:DefaultExperiment", NS)
+    if de is not None:
+        bench.start_time = float(de.get("startTime", 0.0))
+        bench.stop_time = float(de.get("stopTime")) if de.get("stopTime") else None
+
+    xml_systems = {}
+
+    def index_xml(el, prefix):
+        xml_systems[prefix] = el
+        for sub in el.findall("ssd:Elements/ssd:System", NS):
+            index_xml(sub, f"{prefix}.{sub.get('name')}" if prefix else sub.get("name"))
+
+    index_xml(root.find("ssd:System", NS), "")
+
+    def bound_values(element, what):
+        values = {}
+        for b in element.parameterBindings:
+            prefix = b.prefix or ""
+            for pset in b.parameterValues:
+                for p in pset.parameters:
+                    try:
+                        values[prefix + p.name] = typed(p.type, p.value)
+                    except ValueError:
+                        raise ArtibusError(f"{where}: {what}: parameter '{p.name}' = {p.value!r} "
+                                           f"is not a {p.type}") from None
+        return values
+
+    # system-level bindings, with names relative to that system: "Comp.var"
+    inherited = []
+
+    def walk(system, prefix):
+        xml = xml_systems[prefix]
+        inherited.append((prefix, bound_values(system, f"System '{system.name}'")))
+        for el in system.elements:
+            path = f"{prefix}.{el.name}" if prefix else el.name
+            if isinstance(el, SsdComponent):
+                xml_el = xml.find(f"ssd:Elements/ssd:Component[@name='{el.name}']", NS)
+                if el.source not in names:
+                    raise ArtibusError(f"{where}:{xml_el.sourceline}: Component '{path}': source "
+                                       f"\"{el.source}\" is not in the .ssp")
+                c = Component(path=path, source=el.source, element=el, line=xml_el.sourceline)
+                c.parameters = bound_values(el, f"Component '{path}'")
+                c.outputs = [k.name for k in el.connectors if k.kind == "output"]
+                c.connectors = [k.name for k in el.connectors]
+                ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
+                if ann is not None and ann.get("stepSize"):
+                    c.step = float(ann.get("stepSize"))
+                    if not c.step > 0:
+                        raise ArtibusError(f"{where}:{ann.sourceline}: Component '{path}': "
+                                           f"stepSize = {ann.get('stepSize')} must be > 0")
+                bench.components[path] = c
+            elif isinstance(el, System):
+                walk(el, path)
+
+    walk(ssd.system, "")
+
+    for prefix, values in inherited:
+        for name, value in values.items():
+            full = f"{prefix}.{name}" if prefix else name
+            comp_path, _, var = full.rpartition(".")
+            if comp_path not in bench.components:
+                raise ArtibusError(f"{where}: parameter '{name}' = {value!r} bound at system "
+                                   f"'{prefix or ssd.system.name}': no component '{comp_path}'")
+            bench.components[comp_path].parameters.setdefault(var, value)
+
+    # connections: resolve system connectors so each ends at a component variable
+    raw = []  # (system prefix, Connection element, xml line)
+
+    def collect(system, prefix):
+        xml = xml_systems[prefix]
+        xml_conns = xml.findall("ssd:Connections/ssd:Connection", NS)
+        for conn, xc in zip(system.connections, xml_conns):
+            raw.append((prefix, conn, xc))
+        for el in system.elements:
+            if isinstance(el, System):
+                collect(el, f"{prefix}.{el.name}" if prefix else el.name)
+
+    collect(ssd.system, "")
+
+    def node(prefix, element, connector):
+        if element is None:            # a connector of the system itself
+            return ("sys", prefix, connector)
+        path = f"{prefix}.{element}" if prefix else element
+        if path in bench.components:
+            return ("comp", path, connector)
+        return ("sys", path, connector)
+
+    edges = []
+    for prefix, conn, xc in raw:
+        line = xc.sourceline
+        a = node(prefix, conn.startElement, conn.startConnector)
+        b = node(prefix, conn.endElement, conn.endConnector)
+        label = (f"{where}:{line}: Connection {conn.startElement}.{conn.startConnector}"
+                 f" -> {conn.endElement}.{conn.endConnector}")
+        for n in (a, b):
+            if n[0] == "sys" and n[1] not in xml_systems:
+                raise ArtibusError(f"{label}: no element '{n[1]}'")
+            declared = (bench.components[n[1]].connectors if n[0] == "comp"
+                        else [k.get("name") for k in xml_systems[n[1]].findall("ssd:Connectors/ssd:Connector", NS)])
+            if n[2] not in declared:
+                raise ArtibusError(f"{label}: '{n[1] or 'the system'}' declares no connector '{n[2]}'")
+        # (FMPy's reader looks for the transformation in the wrong namespace: read it here)
+        lt = xc.find("ssc:LinearTransformation", NS)
+        factor = float(lt.get("factor", 1.0)) if lt is not None else 1.0
+        offset = float(lt.get("offset", 0.0)) if lt is not None else 0.0
+        edges.append((a, b, factor, offset, line))
+
+    # follow chains through system connectors: comp -> sys ... -> comp
+    outgoing = {}
+    for a, b, f, o, line in edges:
+        outgoing.setdefault(a, []).append((b, f, o, line))
+
+    def ends(n, f, o, line, seen):
+        if n[0] == "comp":
+            yield n, f, o, line
+            return
+        if n in seen:
+            return
+        for m, f2, o2, l2 in outgoing.get(n, []):
+            yield from ends(m, f2 * f, f2 * o + o2, line, seen | {n})
+
+    for a, b, f, o, line in edges:
+        if a[0] != "comp":
+            continue
+        for end, f2, o2, l2 in ends(b, f, o, line, frozenset()):
+            bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
+                                                factor=f2, offset=o2, line=l2))
+    return bench

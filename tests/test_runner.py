@@ -1,0 +1,212 @@
+"""The SSP runner on small benches built here from two BusKinematics FMUs:
+Gauss-Seidel and Jacobi semantics checked through the FMUs' own kinematics,
+equality with fmpy.ssp.simulate_ssp, nested systems, transformations,
+multi-rate, and bad benches reported by file, element and value."""
+import math
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy.ssp.simulation import simulate_ssp
+
+from artibus import ArtibusError, fmu_path
+from artibus.runner import Simulation, run, save
+
+NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+      'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
+      'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"')
+
+
+def component(name, connectors, extra=""):
+    conns = "".join(f'<ssd:Connector name="{n}" kind="{k}"><ssc:Real/></ssd:Connector>' for n, k in connectors)
+    return (f'<ssd:Component name="{name}" source="resources/BusKinematics.fmu" type="application/x-fmu-sharedlibrary">'
+            f'<ssd:Connectors>{conns}</ssd:Connectors>{extra}</ssd:Component>')
+
+
+def connection(a, ca, b, cb, tr=""):
+    sa = f'startElement="{a}" ' if a else ""
+    eb = f'endElement="{b}" ' if b else ""
+    body = f'<ssc:LinearTransformation {tr}/>' if tr else ""
+    return f'<ssd:Connection {sa}startConnector="{ca}" {eb}endConnector="{cb}">{body}</ssd:Connection>'
+
+
+def make_ssp(tmp_path, elements, connections, stop=10.0, ssv=None, name="bench", fmu=True):
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
+           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements>'
+           f'<ssd:Connections>{connections}</ssd:Connections></ssd:System>'
+           f'<ssd:DefaultExperiment startTime="0" stopTime="{stop}"/></ssd:SystemStructureDescription>')
+    path = tmp_path / f"{name}.ssp"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        if fmu:
+            z.write(fmu_path("BusKinematics"), "resources/BusKinematics.fmu")
+        for fname, text in (ssv or {}).items():
+            z.writestr(f"resources/{fname}", text)
+    return path
+
+
+LEAD_FOLLOW = dict(
+    elements=component("Lead", [("beta[1]", "output")]) + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")]),
+    connections=connection("Lead", "beta[1]", "Follow", "gammaF", 'factor="2.0" offset="0.01"'),
+)
+L0 = 5.9  # BusKinematics default
+QUIET = {"Follow.testSteerAmp": 0.0}  # the follower steers only by its input
+
+
+def test_gauss_seidel_follower_sees_the_leader_at_the_end_of_the_step(tmp_path):
+    """GS: the follower's input over [t, t+h] is the leader's output at t+h;
+    BusKinematics' own eq. 19 (kappa0 = tan(gammaF)/L0) shows it at each point."""
+    r = run(make_ssp(tmp_path, **LEAD_FOLLOW), step=0.05, overrides=QUIET)
+    om, ka = r["Lead.beta[1]"], r["Follow.kappa[0]"]
+    assert np.max(np.abs(om)) > 0.05
+    np.testing.assert_allclose(ka, np.tan(2.0 * om + 0.01) / L0, rtol=1e-12, atol=1e-15)
+
+
+def test_jacobi_follower_sees_the_leader_one_step_late(tmp_path):
+    r = run(make_ssp(tmp_path, **LEAD_FOLLOW), step=0.05, algorithm="jacobi", overrides=QUIET)
+    om, ka = r["Lead.beta[1]"], r["Follow.kappa[0]"]
+    np.testing.assert_allclose(ka[1:], np.tan(2.0 * om[:-1] + 0.01) / L0, rtol=1e-12, atol=1e-15)
+
+
+def test_jacobi_equals_fmpy_simulate_ssp(tmp_path):
+    """fmpy.ssp.simulate_ssp: Jacobi, no transformations, row k labelled t_k holds
+    the values after the step to t_k+1. Ours: the same numbers one row later."""
+    outs = [(f"{n}[{i}]", "output") for n in ("theta", "x", "y", "omega", "vel", "kappa", "beta") for i in (0, 1)
+            if (n, i) != ("beta", 0)]
+    elements = component("Lead", outs) + component("Follow", [("gammaF", "input")] + outs)
+    ssp = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"))
+    h, stop = 0.05, 5.0
+    ref = simulate_ssp(str(ssp), stop_time=stop, step_size=h)
+    with Simulation(ssp, step=h, algorithm="jacobi",
+                    record=[f"{c}.{n}" for c in ("Lead", "Follow") for n, _ in outs]) as sim:
+        ours = sim.run(stop_time=stop)
+    for c in ("Lead", "Follow"):
+        for n, _ in outs:
+            a = ours[f"{c}.{n}"][1:]
+            b = ref[f"{c}.{n}"][: len(a)]
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=f"{c}.{n}")
+
+
+def test_nested_system_and_composed_transformations(tmp_path):
+    """Lead -> (x2 +0.01) -> system connector -> (x0.5) -> Follow inside a sub-system."""
+    inner = (f'<ssd:System name="Sub"><ssd:Connectors><ssd:Connector name="steer" kind="input"><ssc:Real/>'
+             f'</ssd:Connector></ssd:Connectors><ssd:Elements>'
+             + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")])
+             + '</ssd:Elements><ssd:Connections>'
+             + connection(None, "steer", "Follow", "gammaF", 'factor="0.5"')
+             + '</ssd:Connections></ssd:System>')
+    elements = component("Lead", [("beta[1]", "output")]) + inner
+    ssp = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Sub", "steer", 'factor="2.0" offset="0.01"'))
+    r = run(ssp, step=0.05, overrides={"Sub.Follow.testSteerAmp": 0.0})
+    np.testing.assert_allclose(r["Sub.Follow.kappa[0]"], np.tan(r["Lead.beta[1]"] + 0.005) / L0, rtol=1e-12)
+
+
+def test_multi_rate_holds_the_slow_component(tmp_path):
+    """Follow at 0.1 s under a 0.05 s base step (GS, Lead first)."""
+    ann = ('<ssd:Annotations><ssc:Annotation type="org.artibus.simulation">'
+           '<Simulation xmlns="urn:artibus" stepSize="0.1"/></ssc:Annotation></ssd:Annotations>')
+    elements = (component("Lead", [("beta[1]", "output")])
+                + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")], ann))
+    ssp = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"))
+    r = run(ssp, step=0.05, overrides=QUIET)
+    ka, om = r["Follow.kappa[0]"], r["Lead.beta[1]"]
+    # it takes its input at the start of its 0.1 s interval and publishes its
+    # output at the end: odd rows repeat the row before, even rows show
+    # kappa = tan(gammaF)/L0 with gammaF the leader's output 0.1 s earlier
+    np.testing.assert_array_equal(ka[1::2], ka[0:-1:2])
+    np.testing.assert_allclose(ka[2::2], np.tan(om[1:-1:2]) / L0, rtol=1e-12)
+
+
+def test_parameters_from_bindings_and_overrides(tmp_path):
+    ssv = ('<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet ' + NS + ' version="1.0" name="p">'
+           '<ssv:Parameters><ssv:Parameter name="L0"><ssv:Real value="4.0"/></ssv:Parameter>'
+           '</ssv:Parameters></ssv:ParameterSet>')
+    binding = ('<ssd:ParameterBindings><ssd:ParameterBinding source="resources/p.ssv"/>'
+               '</ssd:ParameterBindings>')
+    elements = (component("Lead", [("beta[1]", "output")])
+                + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")], binding))
+    ssp = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"), ssv={"p.ssv": ssv})
+    r = run(ssp, step=0.05, overrides=QUIET)
+    np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(r["Lead.beta[1]"]) / 4.0, rtol=1e-12)
+    r = run(ssp, step=0.05, overrides={"Follow.L0": 8.0, "Lead.testSteerAmp": 0.0, **QUIET})
+    np.testing.assert_allclose(r["Follow.kappa[0]"], 0.0, atol=1e-15)   # no steering at all now
+
+
+def test_mat_output(tmp_path):
+    from scipy.io import loadmat
+    r = run(make_ssp(tmp_path, **LEAD_FOLLOW), step=0.1, stop_time=1.0)
+    m = loadmat(str(save(r, tmp_path / "r.mat")))
+    np.testing.assert_array_equal(m["Follow_kappa_0"].ravel(), r["Follow.kappa[0]"])
+
+
+@pytest.mark.parametrize("case, words", [
+    ("missing_fmu", ["Component 'Lead'", "resources/BusKinematics.fmu", "not in the .ssp"]),
+    ("dangling", ["Connection Lead.omega[9] -> Follow.gammaF", "'Lead' declares no connector 'omega[9]'"]),
+    ("undeclared", ["Connection Lead.omega[9] -> Follow.gammaF", "no variable 'Lead.omega[9]'"]),
+    ("type", ["Lead.x[0] -> Follow.N", "Real -> Integer"]),
+    ("units", ["Lead.omega[0] -> Follow.v", "'rad/s' to 'm/s'"]),
+    ("loop", ["algebraic loop", "Lead.omega[0]", "Follow.omega[0]"]),
+    ("ssv", ["'Follow.Lzero' = 4.0", "no variable 'Lzero'"]),
+    ("step", ["--step 0", "must be > 0"]),
+])
+def test_bad_benches_name_file_element_value(tmp_path, case, words):
+    kw = dict(LEAD_FOLLOW)
+    step = 0.05
+    if case == "missing_fmu":
+        kw["fmu"] = False
+    elif case == "dangling":
+        kw["connections"] = connection("Lead", "omega[9]", "Follow", "gammaF")
+    elif case == "undeclared":
+        kw["elements"] = (component("Lead", [("omega[9]", "output")])
+                          + component("Follow", [("gammaF", "input")]))
+        kw["connections"] = connection("Lead", "omega[9]", "Follow", "gammaF")
+    elif case == "type":
+        kw["elements"] = component("Lead", [("x[0]", "output")]) + component("Follow", [("N", "input")])
+        kw["connections"] = connection("Lead", "x[0]", "Follow", "N")
+    elif case == "units":
+        kw["elements"] = component("Lead", [("omega[0]", "output")]) + component("Follow", [("v", "input")])
+        kw["connections"] = connection("Lead", "omega[0]", "Follow", "v")
+    elif case == "loop":
+        kw["elements"] = (component("Lead", [("omega[0]", "output"), ("gammaF", "input")])
+                          + component("Follow", [("gammaF", "input"), ("omega[0]", "output")]))
+        kw["connections"] = (connection("Lead", "omega[0]", "Follow", "gammaF", 'factor="0.5"')
+                             + connection("Follow", "omega[0]", "Lead", "gammaF", 'factor="0.5"'))
+    elif case == "ssv":
+        ssv = ('<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet ' + NS + ' version="1.0" name="p">'
+               '<ssv:Parameters><ssv:Parameter name="Lzero"><ssv:Real value="4.0"/></ssv:Parameter>'
+               '</ssv:Parameters></ssv:ParameterSet>')
+        kw["ssv"] = {"p.ssv": ssv}
+        kw["elements"] = (component("Lead", [("beta[1]", "output")])
+                          + component("Follow", [("gammaF", "input")],
+                                      '<ssd:ParameterBindings><ssd:ParameterBinding source="resources/p.ssv"/>'
+                                      '</ssd:ParameterBindings>'))
+    elif case == "step":
+        step = 0.0
+    ssp = make_ssp(tmp_path, **kw)
+    with pytest.raises(ArtibusError) as e:
+        run(ssp, step=step)
+    msg = str(e.value)
+    for w in words:
+        assert w in msg, (w, msg)
+    if case not in ("step",):
+        assert str(ssp) in msg
+
+
+def test_cli_run_errors_exit_nonzero_without_traceback(tmp_path):
+    ssp = make_ssp(tmp_path, LEAD_FOLLOW["elements"], connection("Lead", "omega[9]", "Follow", "gammaF"))
+    r = subprocess.run([sys.executable, "-m", "artibus", "run", str(ssp), "--step", "0.1"],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 1 and "Traceback" not in r.stderr and "omega[9]" in r.stderr
+
+
+def test_cli_run_writes_results(tmp_path):
+    ssp = make_ssp(tmp_path, **LEAD_FOLLOW)
+    out = tmp_path / "r.csv"
+    r = subprocess.run([sys.executable, "-m", "artibus", "run", str(ssp), "--step", "0.1",
+                        "--set", "Lead.testSteerAmp=0.3", "-o", str(out)],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    header = out.read_text().splitlines()[0]
+    assert '"Follow.kappa[0]"' in header and len(out.read_text().splitlines()) == 102
