@@ -1,0 +1,160 @@
+"""Key performance indicators of a manoeuvre, computed from recorded signals.
+
+Each function takes plain arrays, so it works on any bench's results:
+
+- trace_deviation: how far an axle's trace strays from a reference axle's trace
+  (seed 000, Fig. 9: max lateral distance of A4/A6 from the A2 trace);
+- swept_path_width: the width of the ground swept by the body outlines;
+- overshoot: how far a trace goes beyond its final lateral offset after a lane
+  change (seed 001, "initial overshoot" of the rear section);
+- oscillation: frequency and damping ratio of a decaying oscillation
+  (articulation angle after a manoeuvre), from its successive peaks;
+- peak, energy: the largest magnitude of a signal; the work of a torque.
+"""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def _polyline(x, y):
+    p = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+    keep = np.concatenate([[True], np.any(np.diff(p, axis=0) != 0, axis=1)])
+    return p[keep]
+
+
+def _project(ref, pts, chunk=2000):
+    """For each point: arc length of its foot on the polyline ``ref``, signed
+    lateral offset (left positive), and whether the foot lies within the ends."""
+    a, d = ref[:-1], np.diff(ref, axis=0)
+    seg = np.hypot(d[:, 0], d[:, 1])
+    s0 = np.concatenate([[0.0], np.cumsum(seg)])[:-1]
+    seg_len2 = seg ** 2
+    s_out, off_out, in_out = [], [], []
+    for k in range(0, len(pts), chunk):
+        p = pts[k:k + chunk]
+        rel = p[:, None, :] - a[None, :, :]                       # [n, m, 2]
+        u = np.einsum("nmk,mk->nm", rel, d) / seg_len2
+        uc = np.clip(u, 0.0, 1.0)
+        e = rel - uc[..., None] * d[None]
+        dist2 = np.einsum("nmk,nmk->nm", e, e)
+        i = np.argmin(dist2, axis=1)
+        n = np.arange(len(p))
+        cross = d[i, 0] * rel[n, i, 1] - d[i, 1] * rel[n, i, 0]
+        s_out.append(s0[i] + uc[n, i] * seg[i])
+        off_out.append(np.copysign(np.sqrt(dist2[n, i]), cross))
+        in_out.append(~(((i == 0) & (u[n, i] < 0)) | ((i == len(d) - 1) & (u[n, i] > 1))))
+    return np.concatenate(s_out), np.concatenate(off_out), np.concatenate(in_out)
+
+
+def lateral_distance(ref_x, ref_y, x, y):
+    """Signed distance of each point (x, y) from the reference polyline (left of
+    the reference's direction of travel positive), and a mask that is True
+    where the point's foot lies on the reference, not beyond its ends."""
+    ref = _polyline(ref_x, ref_y)
+    if len(ref) < 2:
+        raise ValueError("the reference trace needs at least 2 distinct points")
+    pts = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+    _, dist, inside = _project(ref, pts)
+    return dist, inside
+
+
+def trace_deviation(ref_x, ref_y, x, y):
+    """Largest lateral distance of a trace from a reference trace, counting only
+    the part of the trace that lies where the reference has been (the rear axles
+    start behind the reference's first point)."""
+    dist, inside = lateral_distance(ref_x, ref_y, x, y)
+    if not inside.any():
+        return float("nan")
+    return float(np.max(np.abs(dist[inside])))
+
+
+def swept_path_width(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8):
+    """Width of the swept path: the body outlines (an array [time, corner, 2] of
+    polygon corners, any number of modules stacked along the corner axis in
+    groups of 4) are sampled along their edges, each sample is located along the
+    reference path (arc length) and across it (signed lateral offset); per
+    ``bin_length`` of arc length the width is the spread of the offsets; the
+    result is the largest width over the path."""
+    ref = _polyline(ref_x, ref_y)
+    out = np.asarray(outlines, float)
+    pts = []
+    for m in range(0, out.shape[1], 4):
+        quad = out[:, m:m + 4]
+        for c in range(4):
+            p0, p1 = quad[:, c], quad[:, (c + 1) % 4]
+            for f in np.linspace(0, 1, samples_per_edge, endpoint=False):
+                pts.append(p0 + f * (p1 - p0))
+    s_all, off_all, _ = _project(ref, np.concatenate(pts))
+    bins = np.floor(s_all / bin_length).astype(int)
+    order = np.argsort(bins)
+    bins, off_all = bins[order], off_all[order]
+    edges = np.flatnonzero(np.diff(bins)) + 1
+    width = 0.0
+    for o in np.split(off_all, edges):
+        width = max(width, float(o.max() - o.min()))
+    return width
+
+
+def overshoot(y, y_final=None):
+    """How far a lateral trace goes beyond its final value, in the direction it
+    moved (a lane change to the left: the largest y above the final y)."""
+    y = np.asarray(y, float)
+    y_final = y[-1] if y_final is None else y_final
+    direction = math.copysign(1.0, y_final - y[0]) if y_final != y[0] else 1.0
+    return float(max(0.0, np.max(direction * (y - y_final))))
+
+
+@dataclass
+class Oscillation:
+    frequency: float          # damped (observed) frequency, Hz
+    damping_ratio: float      # -
+    natural_frequency: float  # undamped, Hz: frequency / sqrt(1 - zeta^2)
+    periods: int              # periods the estimate used
+
+
+def oscillation(t, x, t_from=None):
+    """Frequency and damping ratio of a decaying oscillation about its final
+    value, from successive extrema after ``t_from``: the period from the
+    spacing of the extrema, the damping from the logarithmic decrement of
+    successive peak-to-peak swings (delta per half period):
+    zeta = delta / sqrt(pi^2 + delta^2)."""
+    t = np.asarray(t, float)
+    x = np.asarray(x, float)
+    if t_from is not None:
+        keep = t >= t_from
+        t, x = t[keep], x[keep]
+    x = x - x[-1]
+    dx = np.diff(x)
+    idx = np.where(np.sign(dx[1:]) != np.sign(dx[:-1]))[0] + 1
+    idx = [i for i in idx if 0 < i < len(x) - 1 and abs(x[i]) > 1e-3 * np.max(np.abs(x))]
+    if len(idx) < 3:
+        return Oscillation(float("nan"), float("nan"), float("nan"), 0)
+    # refine each extremum with a parabola through its neighbours
+    te, xe = [], []
+    for i in idx:
+        y0, y1, y2 = x[i - 1], x[i], x[i + 1]
+        den = y0 - 2 * y1 + y2
+        off = 0.5 * (y0 - y2) / den if den != 0 else 0.0
+        h = t[i + 1] - t[i]
+        te.append(t[i] + off * h)
+        xe.append(y1 - 0.25 * (y0 - y2) * off)
+    te, xe = np.array(te), np.array(xe)
+    period = 2 * float(np.median(np.diff(te)))
+    # successive peak-to-peak swings decay like the amplitude and do not depend
+    # on where the oscillation settles
+    pp = np.abs(np.diff(xe))
+    delta = float(np.median(np.log(pp[:-1] / pp[1:])))
+    zeta = delta / math.sqrt(math.pi ** 2 + delta ** 2)
+    # the extrema of a damped sinusoid are exactly half a damped period apart
+    return Oscillation(1 / period, zeta, 1 / period / math.sqrt(1 - zeta ** 2), len(te) // 2)
+
+
+def peak(x):
+    return float(np.max(np.abs(np.asarray(x, float))))
+
+
+def energy(t, torque, rate):
+    """Work done by a torque against a rotation rate, J (trapezoidal rule)."""
+    p = np.asarray(torque, float) * np.asarray(rate, float)
+    return float(np.trapezoid(p, np.asarray(t, float)))

@@ -1,0 +1,70 @@
+"""KPIs against closed forms on synthetic traces."""
+import math
+
+import numpy as np
+import pytest
+
+from artibus import kpi
+
+
+def circle(R, a0=0.0, a1=2 * math.pi, n=2000, cx=0.0, cy=0.0):
+    a = np.linspace(a0, a1, n)
+    return cx + R * np.sin(a), cy + R - R * np.cos(a)   # starts at (cx, cy) heading +x, turns left
+
+
+def test_deviation_of_concentric_circles_is_the_radius_difference():
+    rx, ry = circle(17.5)
+    x, y = circle(16.2)
+    assert kpi.trace_deviation(rx, ry, x, y + 1.3) == pytest.approx(1.3, abs=1e-3)
+    d, inside = kpi.lateral_distance(rx, ry, x, y + 1.3)
+    assert np.all(d[inside] > 0)   # the inner circle is left of a left turn
+
+
+def test_deviation_counts_only_where_the_reference_has_been():
+    """A trace starting 5 m behind the reference's start (on the same line)
+    and 2 m to the side: points before the reference's first point are not counted."""
+    rx, ry = np.linspace(0, 50, 200), np.zeros(200)
+    x = np.linspace(-5, 45, 200)
+    y = np.where(x < 0, 10.0, 2.0)           # far away only where the reference has not been
+    assert kpi.trace_deviation(rx, ry, x, y) == pytest.approx(2.0)
+
+
+def test_swept_path_of_a_rigid_body_on_a_circle():
+    """Rear axle on a circle of radius R about the turn centre, body width W,
+    front overhang a ahead of the rear axle, rear overhang b behind it:
+    outer radius sqrt((R + W/2)^2 + a^2), inner radius R - W/2."""
+    R, W, a, b = 10.0, 2.55, 9.0, 3.0
+    ang = np.linspace(0, 2 * math.pi, 721)
+    # rear axle mid-point on the circle (centre at origin), heading tangent
+    px, py = R * np.cos(ang), R * np.sin(ang)
+    hx, hy = -np.sin(ang), np.cos(ang)            # heading (counter-clockwise)
+    nx, ny = np.cos(ang), np.sin(ang)             # outward normal
+    corners = np.stack([
+        np.column_stack([px + a * hx + W / 2 * nx, py + a * hy + W / 2 * ny]),
+        np.column_stack([px + a * hx - W / 2 * nx, py + a * hy - W / 2 * ny]),
+        np.column_stack([px - b * hx - W / 2 * nx, py - b * hy - W / 2 * ny]),
+        np.column_stack([px - b * hx + W / 2 * nx, py - b * hy + W / 2 * ny]),
+    ], axis=1)
+    expected = math.hypot(R + W / 2, a) - (R - W / 2)
+    width = kpi.swept_path_width(px, py, corners, bin_length=0.5, samples_per_edge=40)
+    assert width == pytest.approx(expected, abs=0.03)
+
+
+@pytest.mark.parametrize("f, zeta", [(0.7, 0.2), (0.4, 0.05), (1.0, 0.35)])
+def test_oscillation_recovers_frequency_and_damping(f, zeta):
+    wn = 2 * math.pi * f / math.sqrt(1 - zeta ** 2)  # f is the damped frequency
+    t = np.arange(0, 20, 0.01)
+    x = 0.1 + 0.05 * np.exp(-zeta * wn * t) * np.cos(2 * math.pi * f * t + 0.3)
+    o = kpi.oscillation(t, x)
+    assert o.frequency == pytest.approx(f, rel=1e-3)
+    assert o.damping_ratio == pytest.approx(zeta, rel=1e-2)
+    assert o.natural_frequency == pytest.approx(wn / (2 * math.pi), rel=1e-2)
+
+
+def test_overshoot_peak_energy():
+    y = np.array([0, 1, 2, 3.4, 3.6, 3.3, 3.25, 3.25])
+    assert kpi.overshoot(y) == pytest.approx(0.35)
+    assert kpi.overshoot(-y) == pytest.approx(0.35)
+    assert kpi.peak([-3, 2]) == 3
+    t = np.linspace(0, 2, 201)
+    assert kpi.energy(t, 2 * np.ones_like(t), 0.5 * np.ones_like(t)) == pytest.approx(2.0)
