@@ -12,9 +12,9 @@ missing=""
 for p in $APT_PACKAGES; do
   dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"
 done
+SUDO=""
+[ "$(id -u)" -ne 0 ] && SUDO="sudo"
 if [ -n "$missing" ]; then
-  SUDO=""
-  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   echo "setup: installing$missing"
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends $missing >/dev/null
@@ -33,3 +33,17 @@ fi
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)"
+.venv/bin/artibus pack >/dev/null
+
+# fmi-sim (crates.io), a second importer the tests run every FMU in. It needs a
+# recent Rust toolchain (rustup's, not Debian 12's) and libclang; without them
+# the tests that use it say so and are skipped.
+FMI_SIM_VERSION=0.7.0
+if [ ! -x .tools/bin/fmi-sim ] && command -v cargo >/dev/null 2>&1; then
+  if ! dpkg -s libclang-dev >/dev/null 2>&1; then
+    $SUDO apt-get install -y -qq --no-install-recommends libclang-dev >/dev/null || true
+  fi
+  echo "setup: building fmi-sim $FMI_SIM_VERSION from crates.io into .tools/ (a few minutes, once)"
+  cargo install -q fmi-sim --version "$FMI_SIM_VERSION" --locked --root .tools \
+    || echo "setup: fmi-sim could not be built; its tests will be skipped"
+fi

@@ -12,7 +12,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from conftest import FMU_NAMES, fmu_file, init
+from conftest import FMU_NAMES, ROOT, fmu_file, init
 
 SYSTEM_LIBS = {"linux-vdso.so.1", "libc.so.6", "libm.so.6", "libstdc++.so.6",
                "libgcc_s.so.1", "ld-linux-x86-64.so.2", "libdl.so.2", "libpthread.so.0"}
@@ -187,3 +187,33 @@ def test_misuse_is_an_error_with_a_message(name, open_fmu):
                 init(fmu)
                 _expect_error(fmu, lambda: fmu.set_values({v.name: bad}), v.name, str(bad))
                 fmu.slave.reset()
+
+
+def _fmi_sim():
+    import shutil
+    local = ROOT / ".tools" / "bin" / "fmi-sim"
+    return str(local) if local.is_file() else shutil.which("fmi-sim")
+
+
+@pytest.mark.skipif(_fmi_sim() is None, reason="fmi-sim (crates.io) not installed: scripts/setup.sh builds it when cargo is present")
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_runs_in_fmi_sim_like_in_fmpy(name, tmp_path):
+    """A second importer (fmi-sim, Rust) on the default experiment gives FMPy's results."""
+    out = tmp_path / "fmi-sim.csv"
+    md = read_model_description(str(fmu_file(name)))
+    step = float(md.defaultExperiment.stepSize)
+    r = subprocess.run([_fmi_sim(), "-q", "--model", str(fmu_file(name)), "-o", str(out),
+                        "co-simulation", "--step", repr(step), "-n", "0"],
+                       capture_output=True, text=True, env={"RUST_BACKTRACE": "0", "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 0, r.stderr[-2000:]
+    import csv
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    last = {k: {"true": 1.0, "false": 0.0}.get(v, None) if v in ("true", "false") else float(v)
+            for k, v in rows[-1].items()}
+    ours = simulate_fmu(str(fmu_file(name)), step_size=step, output_interval=step)
+    assert len(rows) == len(ours)
+    assert last["time"] == pytest.approx(ours["time"][-1])
+    for n in ours.dtype.names[1:]:   # to the integrators' tolerance, on the signal's scale
+        scale = float(np.max(np.abs(ours[n].astype(float))))
+        assert last[n] == pytest.approx(float(ours[n][-1]), rel=1e-5, abs=1e-6 * scale + 1e-9), n
