@@ -1,0 +1,168 @@
+/* RoadFollowDriver: the road-follow driver of seed 001, ch. 3.2 (driver.c) on
+ * the test roads (roads.c), as a discrete controller: its outputs change at
+ * the sample instants t0 + k Ts only, from the inputs held over the step, so
+ * no output depends directly on an input (ModelStructure dependencies ""). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmu.h"
+#include "driver.h"
+#include "roads.h"
+
+typedef struct {
+    Road road;              /* built once per initialisation, never in a step */
+} Work;
+
+static void params(ModelInstance *comp, DriverParams *p) {
+    p->L0 = D->L0;
+    p->refX = D->refX;
+    p->refY = D->refY;
+    p->lookNear0 = D->lookNear0;
+    p->tNear = D->tNear;
+    p->lookFar0 = D->lookFar0;
+    p->tFar = D->tFar;
+    p->kUS = D->kUS;
+    p->deltaMax = D->deltaMax;
+    p->deltaRateMax = D->deltaRateMax;
+    p->vSet = D->vSet;
+    p->Kp = D->Kp;
+    p->Ki = D->Ki;
+    p->FxMin = D->FxMin;
+    p->FxMax = D->FxMax;
+    p->Ts = D->Ts;
+}
+
+/* the file: an absolute path as given, else a file name in resources/ */
+static void road_path(ModelInstance *comp, char *path, size_t len) {
+    const char *f = D->roadFile;
+    if (f[0] == '/' || !comp->resourceDir) snprintf(path, len, "%s", f);
+    else snprintf(path, len, "%s/%s", comp->resourceDir, f);
+}
+
+static fmi2Status build_road(ModelInstance *comp, Road *road) {
+    double *x = malloc(ROAD_RAW_MAX * sizeof *x), *y = malloc(ROAD_RAW_MAX * sizeof *y);
+    if (!x || !y) {
+        free(x);
+        free(y);
+        return log_error(comp, "out of memory for the road");
+    }
+    char err[ROAD_ERRLEN] = "";
+    int n;
+    if (D->road == ROAD_CSV) {
+        if (!D->roadFile[0]) {
+            free(x);
+            free(y);
+            return log_error(comp, "road = 0 (CSV) but roadFile = '' names no file");
+        }
+        char path[ARTIBUS_STRLEN + 1200];
+        road_path(comp, path, sizeof path);
+        n = road_read_csv(path, x, y, ROAD_RAW_MAX, err, sizeof err);
+    } else {
+        const RoadParams q = { D->roadBefore, D->roadAfter, D->laneLength, D->laneOffset,
+                               D->R, D->isoWidth, D->roadStep };
+        n = road_generate(D->road, &q, x, y, ROAD_RAW_MAX, err, sizeof err);
+    }
+    if (n >= 0 && road_resample(x, y, n, D->ds, road, err, sizeof err) == 0) n = 0;
+    else n = -1;
+    free(x);
+    free(y);
+    if (n < 0) return log_error(comp, "road = %d: %s", D->road, err);
+    log_event(comp, "road = %d: %.3f m, %d points at ds = %g m", D->road, road->length, road->n, D->ds);
+    return fmi2OK;
+}
+
+static void input(ModelInstance *comp, DriverInput *in) {
+    const ModelState *s = &comp->v.s;
+    if (D->testVehicle) {
+        *in = (DriverInput){ s->xv, s->yv, s->psiv, s->vv, s->mem.delta };
+    } else {
+        *in = (DriverInput){ D->x, D->y, D->psi, D->v, D->chiF };
+    }
+}
+
+/* one sample, then the test vehicle (if used) moves on by Ts with the new
+ * steering angle and speed vRef */
+static void sample(ModelInstance *comp, const Road *road, const DriverParams *p) {
+    ModelState *s = &comp->v.s;
+    DriverInput in;
+    input(comp, &in);
+    const int was = s->out.finished;
+    driver_sample(road, p, &in, &s->mem, &s->out);
+    if (s->out.finished && !was) log_event(comp, "end of road reached at s = %.3f m", s->out.s);
+    s->kNext++;
+    if (D->testVehicle) {
+        const double v = s->out.vRef, h = p->Ts;
+        s->xv += v * cos(s->psiv) * h;
+        s->yv += v * sin(s->psiv) * h;
+        s->psiv += v * tan(s->out.delta) / p->L0 * h;
+        s->vv = v;
+    }
+}
+
+fmi2Status model_init(ModelInstance *comp) {
+    if (!(D->lookNear0 > 0))
+        return log_error(comp, "lookNear0 = %g m: the near look-ahead distance must be > 0", D->lookNear0);
+    if (!(D->lookFar0 > D->lookNear0) || !(D->tFar >= D->tNear))
+        return log_error(comp, "lookFar0 = %g m, tFar = %g s: the far look-ahead point must lie beyond "
+                               "the near one (lookNear0 = %g m, tNear = %g s) at every speed",
+                         D->lookFar0, D->tFar, D->lookNear0, D->tNear);
+    if (!(D->FxMin <= D->FxMax))
+        return log_error(comp, "FxMin = %g N is above FxMax = %g N", D->FxMin, D->FxMax);
+
+    Work *w = comp->solver;
+    if (!w) {
+        w = comp->solver = malloc(sizeof(Work));
+        if (!w) return log_error(comp, "out of memory");
+    }
+    if (build_road(comp, &w->road)) return fmi2Error;
+
+    DriverParams p;
+    params(comp, &p);
+    ModelState *s = &comp->v.s;
+    memset(s, 0, sizeof *s);
+    s->t0 = comp->v.time;
+    if (D->testVehicle) {       /* the reference point at the road's start, on its tangent */
+        const Road *r = &w->road;
+        s->psiv = r->psi[0];
+        s->xv = r->x[0] - D->refX * cos(s->psiv) + D->refY * sin(s->psiv);
+        s->yv = r->y[0] - D->refX * sin(s->psiv) - D->refY * cos(s->psiv);
+        s->vv = 0.0;
+    }
+    DriverInput in;
+    input(comp, &in);
+    driver_start(&w->road, &p, &in, &s->mem);
+    sample(comp, &w->road, &p);       /* sample 0, at t0 */
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    const DriverOutput *o = &comp->v.s.out;
+    D->delta = o->delta;
+    D->Fx = o->Fx;
+    D->vRef = o->vRef;
+    D->s = o->s;
+    D->eLat = o->eLat;
+    D->ePsi = o->ePsi;
+    D->finished = o->finished;
+    D->method = o->method;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    Work *w = comp->solver;
+    if (!w) return log_error(comp, "fmi2DoStep: the road was not built (model not initialised)");
+    DriverParams p;
+    params(comp, &p);
+    ModelState *s = &comp->v.s;
+    /* every sample instant in (t, t + h], from the inputs held over the step */
+    const double end = t + h + 1e-9 * p.Ts;
+    while (s->t0 + s->kNext * p.Ts <= end) sample(comp, &w->road, &p);
+    comp->v.time = t + h;
+    return fmi2OK;
+}
+
+void model_free(ModelInstance *comp) {
+    free(comp->solver);
+    comp->solver = NULL;
+}
