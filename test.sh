@@ -24,4 +24,4 @@ ARTIBUS_FMU_DIR="$PWD/build-asan/fmus" \
 LD_PRELOAD="$(gcc -print-file-name=libasan.so) $(gcc -print-file-name=libubsan.so)" \
 ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   .venv/bin/python -m pytest -q -p no:cacheprovider --capture=sys \
-  -k "not binary_depends_only_on_system_libraries and not only_fmi_symbols_exported" "$@"
+  -k "not binary_depends_only_on_system_libraries and not only_fmi_symbols_exported and not fmi_sim" "$@"

@@ -1,0 +1,228 @@
+/* BusDynamics: seed 000, section II as an FMU. The mechanics and the tyre
+ * models are in dynamics.cpp (Eigen, no FMI types); this file is the FMI glue:
+ * parameter checks, the initial state, outputs and CVODE inside doStep. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmu.h"
+#include "ode.h"
+#include "dynamics.h"
+
+#define GRAVITY 9.81
+
+typedef struct {
+    ModelInstance *comp;
+    Ode *ode;
+    DynParams p;
+} Solver;
+
+static void make_params(ModelInstance *comp, DynParams *p) {
+    memset(p, 0, sizeof *p);
+    p->nMod = D->nModules;
+    p->nAxle = D->nAxles;
+    for (int m = 1; m <= DYN_MAX_MODULES; m++) {
+        p->m[m] = D->m[m];
+        p->J[m] = D->Jz[m];
+    }
+    for (int k = 1; k <= DYN_MAX_HINGES; k++) {
+        p->lHf[k] = D->lHf[k];
+        p->lHr[k] = D->lHr[k];
+    }
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) {
+        p->axleModule[a] = D->axleModule[a];
+        p->xA[a] = D->xA[a];
+        p->C[a] = D->C[a];
+        p->mu[a] = D->mu[a];
+        p->Fz[a] = D->FzFromMasses ? 0.0 : D->Fz0[a];
+    }
+    p->tyreModel = D->tyreModel;
+    p->vSlip = D->vSlip;
+}
+
+/* the inputs plus the built-in test steering (a lane change for running alone) */
+static void make_inputs(ModelInstance *comp, double t, DynInputs *u) {
+    memset(u, 0, sizeof *u);
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) {
+        u->delta[a] = D->delta[a];
+        u->Fx[a] = D->Fx[a];
+    }
+    for (int k = 1; k <= DYN_MAX_HINGES; k++) u->Mjoint[k] = D->Mjoint[k];
+    if (D->testSteerAmp != 0.0 && t < D->testSteerPeriod)
+        u->delta[1] += D->testSteerAmp * sin(2 * M_PI * t / D->testSteerPeriod);
+}
+
+static fmi2Status check_inputs(ModelInstance *comp, double t) {
+    const double stim = t < D->testSteerPeriod ? fabs(D->testSteerAmp) : 0.0;
+    for (int a = 1; a <= D->nAxles; a++) {
+        const double s = a == 1 ? stim : 0.0;
+        if (!(fabs(D->delta[a]) + s < M_PI / 2))
+            return log_error(comp, "delta[%d] = %.12g rad (with test steering amplitude %g) is at or "
+                                   "beyond pi/2: the wheel would stand across its module", a, D->delta[a], s);
+    }
+    return fmi2OK;
+}
+
+static fmi2Status check_parameters(ModelInstance *comp) {
+    const int N = D->nModules;
+    for (int m = 1; m <= N; m++) {
+        if (!(D->m[m] > 0)) return log_error(comp, "m[%d] = %.12g kg: a module mass must be > 0", m, D->m[m]);
+        if (!(D->Jz[m] > 0)) return log_error(comp, "Jz[%d] = %.12g kg.m2: a yaw inertia must be > 0", m, D->Jz[m]);
+        if (!(D->lFront[m] >= 0)) return log_error(comp, "lFront[%d] = %.12g m: a length must be >= 0", m, D->lFront[m]);
+        if (!(D->lRear[m] >= 0)) return log_error(comp, "lRear[%d] = %.12g m: a length must be >= 0", m, D->lRear[m]);
+        if (!(D->width[m] >= 0)) return log_error(comp, "width[%d] = %.12g m: a length must be >= 0", m, D->width[m]);
+    }
+    for (int k = 1; k < N; k++) {
+        if (!(D->lHf[k] >= 0)) return log_error(comp, "lHf[%d] = %.12g m: a length must be >= 0", k, D->lHf[k]);
+        if (!(D->lHr[k] >= 0)) return log_error(comp, "lHr[%d] = %.12g m: a length must be >= 0", k, D->lHr[k]);
+    }
+    for (int a = 1; a <= D->nAxles; a++) {
+        if (D->axleModule[a] > N)
+            return log_error(comp, "axleModule[%d] = %d: axle %d is on a module that does not exist "
+                                   "(nModules = %d)", a, D->axleModule[a], a, N);
+        if (!(D->C[a] >= 0)) return log_error(comp, "C[%d] = %.12g N/rad: a cornering stiffness must be >= 0", a, D->C[a]);
+        if (!(D->mu[a] > 0)) return log_error(comp, "mu[%d] = %.12g: a friction coefficient must be > 0", a, D->mu[a]);
+        if (!D->FzFromMasses && !(D->Fz0[a] >= 0))
+            return log_error(comp, "Fz0[%d] = %.12g N: an axle load must be >= 0", a, D->Fz0[a]);
+    }
+    if (!(D->vSlip > 0)) return log_error(comp, "vSlip = %.12g m/s: must be > 0", D->vSlip);
+    return fmi2OK;
+}
+
+/* static axle loads into D->Fz */
+static fmi2Status static_loads(ModelInstance *comp, DynParams *p) {
+    if (D->FzFromMasses) {
+        const int m = dyn_static_loads(p, GRAVITY);
+        if (m)
+            return log_error(comp, "module %d: static axle loads cannot be found from masses and "
+                                   "geometry (fewer than two supports, supports at one point, or a "
+                                   "negative load); set FzFromMasses = false and give Fz0[]", m);
+    }
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) D->Fz[a] = a <= p->nAxle ? p->Fz[a] : 0.0;
+    return fmi2OK;
+}
+
+fmi2Status model_init(ModelInstance *comp) {
+    if (check_parameters(comp) || check_inputs(comp, comp->v.time)) return fmi2Error;
+    DynParams p;
+    make_params(comp, &p);
+    if (static_loads(comp, &p)) return fmi2Error;
+
+    /* the initial state: pose of module 1 and the yaw angles, velocity of the
+       CG of module 1 given in its own frame */
+    ModelState *s = &comp->v.s;
+    memset(s, 0, sizeof *s);
+    D->nRhs = 0.0;
+    s->z[0] = D->x_start;
+    s->z[1] = D->y_start;
+    for (int m = 1; m <= D->nModules; m++) {
+        s->z[1 + m] = D->psi_start[m];
+        s->zd[1 + m] = D->r_start[m];
+    }
+    const double c = cos(D->psi_start[1]), sn = sin(D->psi_start[1]);
+    s->zd[0] = c * D->vx_start - sn * D->vy_start;
+    s->zd[1] = sn * D->vx_start + c * D->vy_start;
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    const ModelState *s = &comp->v.s;
+    DynParams p;
+    make_params(comp, &p);
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) p.Fz[a] = D->Fz[a];
+    DynInputs u;
+    make_inputs(comp, comp->v.time, &u);
+    DynOut o;
+    memset(&o, 0, sizeof o);
+    double zdd[DYN_MAX_Q];
+    dyn_eval(&p, &u, s->z, s->zd, zdd, &o);
+
+    const int N = p.nMod;
+    for (int m = 1; m <= DYN_MAX_MODULES; m++) {
+        const int on = m <= N;          /* modules beyond nModules read 0 */
+        D->x[m] = on ? o.xCG[m] : 0.0;
+        D->y[m] = on ? o.yCG[m] : 0.0;
+        D->psi[m] = on ? s->z[1 + m] : 0.0;
+        D->vx[m] = on ? o.vx[m] : 0.0;
+        D->vy[m] = on ? o.vy[m] : 0.0;
+        D->r[m] = on ? s->zd[1 + m] : 0.0;
+        D->ay[m] = on ? o.ay[m] : 0.0;
+        /* body outline: front left, front right, rear right, rear left */
+        const double lon[4] = { D->lFront[m], D->lFront[m], -D->lRear[m], -D->lRear[m] };
+        const double lat[4] = { 0.5, -0.5, -0.5, 0.5 };
+        for (int c = 0; c < 4; c++) {
+            const int i = 4 * (m - 1) + c + 1;
+            if (!on) { D->xCorner[i] = D->yCorner[i] = 0.0; continue; }
+            const double ps = s->z[1 + m], w = lat[c] * D->width[m];
+            D->xCorner[i] = o.xCG[m] + lon[c] * cos(ps) - w * sin(ps);
+            D->yCorner[i] = o.yCG[m] + lon[c] * sin(ps) + w * cos(ps);
+        }
+    }
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) {
+        const int on = a <= p.nAxle;
+        D->xAxle[a] = on ? o.xAxle[a] : 0.0;
+        D->yAxle[a] = on ? o.yAxle[a] : 0.0;
+        D->alpha[a] = on ? o.alpha[a] : 0.0;
+        D->Fy[a] = on ? o.Fy[a] : 0.0;
+    }
+    for (int k = 1; k <= DYN_MAX_HINGES; k++) {
+        const int on = k < N;
+        D->artAngle[k] = on ? s->z[1 + k] - s->z[2 + k] : 0.0;
+        D->artRate[k] = on ? s->zd[1 + k] - s->zd[2 + k] : 0.0;
+        D->FjointX[k] = on ? o.FjX[k] : 0.0;
+        D->FjointY[k] = on ? o.FjY[k] : 0.0;
+    }
+    D->v = hypot(s->zd[0], s->zd[1]);
+}
+
+/* ODE state y = [z, z'] */
+static int rhs(double t, const double *y, double *ydot, void *user) {
+    Solver *sv = user;
+    const int nq = dyn_nq(&sv->p);
+    DynInputs u;
+    make_inputs(sv->comp, t, &u);
+    memcpy(ydot, y + nq, sizeof(double) * (size_t)nq);
+    return dyn_eval(&sv->p, &u, y, y + nq, ydot + nq, NULL) ? -1 : 0;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    if (check_inputs(comp, t)) return fmi2Error;
+    Solver *sv = comp->solver;
+    if (!sv) {
+        sv = comp->solver = calloc(1, sizeof(Solver));
+        if (!sv) return log_error(comp, "out of memory");
+        sv->comp = comp;
+        const double rtol = comp->tolerance > 0 ? comp->tolerance : D->rtol;
+        sv->ode = ode_new(comp, 2 * (2 + D->nModules), rhs, 0, NULL, sv,
+                          D->solver == 1 ? ODE_ADAMS : ODE_BDF, rtol, D->atol);
+        if (!sv->ode) return fmi2Error;
+    }
+    make_params(comp, &sv->p);
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) sv->p.Fz[a] = D->Fz[a];
+
+    ModelState *s = &comp->v.s;
+    const int nq = dyn_nq(&sv->p);
+    double y[2 * DYN_MAX_Q];
+    memcpy(y, s->z, sizeof(double) * (size_t)nq);
+    memcpy(y + nq, s->zd, sizeof(double) * (size_t)nq);
+    const long n0 = ode_nrhs(sv->ode);
+    double tret;
+    const OdeResult res = ode_advance(sv->ode, comp->restart, t, y, t + h, &tret, NULL);
+    D->nRhs += (double)(ode_nrhs(sv->ode) - n0);
+    memcpy(s->z, y, sizeof(double) * (size_t)nq);
+    memcpy(s->zd, y + nq, sizeof(double) * (size_t)nq);
+    if (res == ODE_REACHED) {
+        comp->v.time = t + h;
+        return fmi2OK;
+    }
+    comp->v.time = tret;
+    return fmi2Error;   /* CVODE failure, already logged with its flag and time */
+}
+
+void model_free(ModelInstance *comp) {
+    Solver *sv = comp->solver;
+    if (!sv) return;
+    ode_free(sv->ode);
+    free(sv);
+    comp->solver = NULL;
+}
