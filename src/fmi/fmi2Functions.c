@@ -517,11 +517,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
     if (now + h > comp->stopTime * (1 + 1e-12) + 1e-12)
         return leave(comp, log_error(comp, "fmi2DoStep: step to t = %.17g goes beyond stopTime = %.17g",
                                      now + h, comp->stopTime));
-    if (refresh(comp) > fmi2Warning) return leave(comp, fmi2Error);
     fmi2Status status = model_do_step(comp, now, h);
     comp->restart = false;
-    model_outputs(comp);
-    comp->dirty = false;
+    if (status <= fmi2Warning) {
+        comp->dirty = true;         /* outputs are computed when they are read */
+    } else {
+        model_outputs(comp);        /* the state it stopped in, readable in the error state */
+        comp->dirty = false;
+    }
     if (status == fmi2Discard) comp->v.state = S_STEP_FAILED;
     return leave(comp, status);
 }

@@ -100,7 +100,9 @@ OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
         if (CVodeReInit(o->mem, t0, o->y) != CV_SUCCESS) return ODE_FAILED;
         o->started = true;
     }
-    CVodeSetStopTime(o->mem, t1);
+    /* no stop time: with the inputs held, CVODE may step past t1 and
+       interpolate back to it, so a long steady run costs a few internal steps
+       instead of one per communication point; a changed input restarts it */
     sunrealtype tret = t0;
     int flag = CVode(o->mem, t1, o->y, &tret, CV_NORMAL);
     *t = tret;
