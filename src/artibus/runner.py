@@ -18,6 +18,7 @@
 """
 import shutil
 import sys
+from ctypes import POINTER, c_double, c_int, c_size_t, c_uint, c_void_p
 import tempfile
 import time as _time
 import zipfile
@@ -61,6 +62,43 @@ class Unit:
     in_values: list = field(default_factory=list)
     feeds: set = field(default_factory=set)      # (input name, output name) direct feedthrough
     wall: float = 0.0
+    raw: object = None                           # _RawCalls, once the variables are known
+
+
+class _RawCalls:
+    """fmi2GetReal/SetReal/DoStep called through ctypes directly, with the value
+    references and value buffers allocated once: one call per component and
+    step, without FMPy's per-call wrapper (it logs and converts lists)."""
+
+    def __init__(self, unit):
+        dll, self.comp = unit.fmu.slave.dll, unit.fmu.slave.component
+        self._get, self._set, self._do = dll.fmi2GetReal, dll.fmi2SetReal, dll.fmi2DoStep
+        for f in (self._get, self._set):
+            f.argtypes = [c_void_p, POINTER(c_uint), c_size_t, POINTER(c_double)]
+            f.restype = c_int
+        self._do.argtypes = [c_void_p, c_double, c_double, c_int]
+        self._do.restype = c_int
+        self.n_out, self.n_in = len(unit.out_vrs), len(unit.in_vrs)
+        self.out_vrs = (c_uint * self.n_out)(*unit.out_vrs)
+        self.out = (c_double * self.n_out)()
+        self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
+        self.inp = (c_double * self.n_in)()
+
+    @staticmethod
+    def _check(name, status):
+        if status > 1:  # fmi2Discard or worse
+            raise FMICallException(function=name, status=status)
+
+    def read(self):
+        if self.n_out:
+            self._check("fmi2GetReal", self._get(self.comp, self.out_vrs, self.n_out, self.out))
+
+    def write(self):
+        if self.n_in:
+            self._check("fmi2SetReal", self._set(self.comp, self.in_vrs, self.n_in, self.inp))
+
+    def step(self, t, h):
+        self._check("fmi2DoStep", self._do(self.comp, t, h, 1))
 
 
 def _unit_conversion(md_a, var_a, md_b, var_b, where):
@@ -254,25 +292,31 @@ class Simulation:
                 u.out_names.append(n)
                 u.out_vrs.append(u.fmu.var(n).valueReference)
         for u in self.units:
-            u.out_values = [0.0] * len(u.out_vrs)
-            u.in_values = [0.0] * len(u.in_vrs)
+            u.raw = _RawCalls(u)
+            u.out_values = u.raw.out      # read and written in place
+            u.in_values = u.raw.inp
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
-        self._rec_index = [(u, u.out_names.index(n)) for u, n in self.record]
+        # recording: per component, numpy views of its output buffer and the
+        # columns its recorded outputs go to
+        self._rec = []
+        for u in self.units:
+            cols = [k + 1 for k, (v, _) in enumerate(self.record) if v is u]
+            idx = [u.out_names.index(n) for v, n in self.record if v is u]
+            if cols:
+                self._rec.append((np.frombuffer(u.raw.out, dtype=np.float64), np.array(idx), np.array(cols)))
 
     # --- the algorithm ---------------------------------------------------------------
 
     def _read(self, u):
-        if u.out_vrs:
-            u.out_values = u.fmu.slave.getReal(u.out_vrs)
+        u.raw.read()
 
     def _write(self, u):
-        if u.in_vrs:
-            u.fmu.slave.setReal(u.in_vrs, u.in_values)
+        u.raw.write()
 
     def _step(self, u, t0):
         w = _time.perf_counter()
-        u.fmu.slave.doStep(t0, u.step)
-        self._read(u)
+        u.raw.step(t0, u.step)
+        u.raw.read()
         u.wall += _time.perf_counter() - w
 
     def _propagate(self, to=None):
@@ -296,7 +340,7 @@ class Simulation:
                 self._write(u)
             for u in self.units:
                 self._read(u)
-            if all(np.allclose(b, u.in_values, rtol=1e-12, atol=1e-12)
+            if all(np.allclose(b, list(u.in_values), rtol=1e-12, atol=1e-12)
                    for b, u in zip(before, self.units)):
                 break
         else:
@@ -305,6 +349,13 @@ class Simulation:
         for u in self.units:
             u.fmu.slave.exitInitializationMode()
             self._read(u)
+
+    def _record(self, result, t):
+        row = np.empty(len(self.names))
+        row[0] = t
+        for view, idx, cols in self._rec:
+            row[cols] = view[idx]
+        result.rows.append(row)
 
     def run(self, stop_time=None, start_time=None, progress=False):
         start = self.bench.start_time if start_time is None else start_time
@@ -320,7 +371,7 @@ class Simulation:
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
-            result.rows.append([t] + [u.out_values[i] for u, i in self._rec_index])
+            self._record(result, t)
             for k in range(n):
                 t = start + k * self.base_step
                 # a component with step H = ratio * h takes its inputs at the start of
@@ -345,7 +396,7 @@ class Simulation:
                             self._step(u, t + self.base_step - u.step)
                 current = None
                 t = start + (k + 1) * self.base_step
-                result.rows.append([t] + [u.out_values[i] for u, i in self._rec_index])
+                self._record(result, t)
                 if progress and k % max(1, n // 50) == 0:
                     sys.stderr.write(f"\r{self.bench.name}: t = {t:8.2f} s  [{'#' * (50 * (k + 1) // n):50s}]")
             if progress:

@@ -35,7 +35,10 @@ class Result:
         return self["time"]
 
     def array(self):
-        return np.array(self.rows, dtype=float).reshape(-1, len(self.names))
+        cached = getattr(self, "_array", None)
+        if cached is None or len(cached) != len(self.rows):
+            cached = self._array = np.array(self.rows, dtype=float).reshape(-1, len(self.names))
+        return cached
 
     def to_csv(self, path):
         header = ",".join(f'"{n}"' for n in self.names)
