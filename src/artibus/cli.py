@@ -90,20 +90,42 @@ def cmd_pack(args):
 
 
 def cmd_run(args):
-    from artibus import runner
+    from artibus import runner, ssp
     from artibus.parameters import read_parameters
     overrides = {}
     for f in args.ssv or []:
         overrides.update(read_parameters(f))
     overrides.update(_parse_set(args.set))
-    with runner.Simulation(args.bench, step=args.step, overrides=overrides, record=args.record,
-                           algorithm=args.algorithm) as sim:
-        result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
-        out = Path(args.output or f"{sim.bench.name}.csv")
-        runner.save(result, out)
-        span = result.time[-1] - result.time[0]
-        print(f"{out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
-              f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
+    if args.all == bool(args.bench):
+        raise ArtibusError("give one BENCH or --all")
+    benches = ssp.bench_names() if args.all else [args.bench]
+    summary = []
+    for bench in benches:
+        with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
+                               algorithm=args.algorithm) as sim:
+            result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
+            name = sim.bench.name
+            if args.report:
+                out_dir = Path(args.report) / name if args.all else Path(args.report)
+                out = Path(args.output) if args.output and not args.all else out_dir / "results.csv"
+            else:
+                out_dir = None
+                out = Path(args.output or f"{name}.csv")
+            out.parent.mkdir(parents=True, exist_ok=True)
+            runner.save(result, out)
+            span = result.time[-1] - result.time[0]
+            print(f"{name}: {out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
+                  f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
+            if out_dir is not None:
+                from artibus.benches import write_report
+                kpis = write_report(name, result, out_dir, sim.wall)
+                print(f"{name}: report {out_dir / 'index.html'}")
+                for k in kpis:
+                    print(f"    {k.name}: {k.cell()} {k.unit}" + (f"   (paper: {k.paper})" if k.paper else ""))
+                summary.append((name, out_dir, kpis))
+    if args.all and args.report:
+        from artibus.report import write_index
+        print(write_index(Path(args.report), summary))
     return 0
 
 
@@ -155,7 +177,9 @@ def build_parser():
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="verb", required=True)
     s = sub.add_parser("run", help="run an SSP bench")
-    s.add_argument("bench", help="a bench name (see `artibus list`) or the path of an .ssp")
+    s.add_argument("bench", nargs="?", help="a bench name (see `artibus list`) or the path of an .ssp")
+    s.add_argument("--all", action="store_true", help="run every bench")
+    s.add_argument("--report", metavar="DIR", help="write plots and an HTML page with the KPIs to DIR")
     s.add_argument("--stop-time", type=float, help="default: the bench's DefaultExperiment")
     s.add_argument("--step", type=float, help="base communication step, s")
     s.add_argument("--ssv", action="append", help="parameter file with names COMPONENT.VARIABLE")

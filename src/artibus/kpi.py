@@ -85,7 +85,8 @@ def swept_path_width(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8
             p0, p1 = quad[:, c], quad[:, (c + 1) % 4]
             for f in np.linspace(0, 1, samples_per_edge, endpoint=False):
                 pts.append(p0 + f * (p1 - p0))
-    s_all, off_all, _ = _project(ref, np.concatenate(pts))
+    s_all, off_all, inside = _project(ref, np.concatenate(pts))
+    s_all, off_all = s_all[inside], off_all[inside]   # only beside the reference path
     bins = np.floor(s_all / bin_length).astype(int)
     order = np.argsort(bins)
     bins, off_all = bins[order], off_all[order]
