@@ -293,3 +293,48 @@ def test_under_steer_compensation_restores_the_ideal_path():
     compensated = radius_error(0.8, 1.0)
     assert abs(compensated - ideal) < 0.01, (compensated, ideal)
     assert abs(plain - ideal) > 0.03, (plain, ideal)
+
+
+def test_speed_profile_against_distance():
+    """vRef follows the profile (linear between points, held beyond them) at
+    the driver's own progress s; here the car drives at vRef (pass-through
+    mode for a kinematic plant)."""
+    S, V = [10.0, 40.0, 80.0], [5.0, 12.0, 3.0]
+    prof = {"nSpeed": 3, **{f"speedS[{k + 1}]": s for k, s in enumerate(S)},
+            **{f"speedV[{k + 1}]": v for k, v in enumerate(V)}}
+    x = y = psi = 0.0
+    v, h, rows = 0.0, TS, []
+    with Fmu(fmu_path("RoadFollowDriver")) as d:
+        d.slave.setupExperiment(startTime=0.0)
+        d.slave.enterInitializationMode()
+        d.set_values({"road": 1, "testVehicle": False, **CAR, **prof, "x": 0.0, "y": 0.0, "psi": 0.0, "v": 0.0})
+        d.slave.exitInitializationMode()
+        t = 0.0
+        while t < 40.0:
+            delta, s, vRef = d.get("delta", "s", "vRef")
+            rows.append((s, vRef))
+            if d.slave.getBoolean([d.var("finished").valueReference])[0]:
+                break
+            x, y, psi = car_step(x, y, psi, vRef, delta, CAR["L0"], h)
+            d.set_values({"x": x, "y": y, "psi": psi, "v": vRef})
+            d.slave.doStep(t, h)
+            t += h
+    s, vRef = np.array(rows).T
+    running = s < s.max() - 1e-9
+    assert s.max() > 85.0, "the profile's last segment was never reached: the test cannot fail"
+    np.testing.assert_allclose(vRef[running], np.interp(s[running], S, V), rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("prof, words", [
+    ({"nSpeed": 1}, ["nSpeed = 1"]),
+    ({"nSpeed": 3, "speedS[1]": 0.0, "speedS[2]": 50.0, "speedS[3]": 50.0}, ["speedS[3] = 50", "speedS[2] = 50"]),
+])
+def test_bad_speed_profile(prof, words):
+    with Fmu(fmu_path("RoadFollowDriver")) as d:
+        d.slave.setupExperiment(startTime=0.0)
+        d.slave.enterInitializationMode()
+        d.set_values({"testVehicle": False, **prof})
+        with pytest.raises(FMICallException):
+            d.slave.exitInitializationMode()
+        for w in words:
+            assert w in " ".join(d.log), d.log

@@ -22,6 +22,17 @@ static void reference_point(const DriverParams *p, const DriverInput *in, double
     *py = in->y + p->refX * s + p->refY * c;
 }
 
+double driver_speed_set_point(const DriverParams *p, double s) {
+    if (p->nSpeed < 2) return p->vSet;
+    if (s <= p->speedS[0]) return p->speedV[0];
+    for (int k = 1; k < p->nSpeed; k++)
+        if (s <= p->speedS[k]) {
+            const double w = (s - p->speedS[k - 1]) / (p->speedS[k] - p->speedS[k - 1]);
+            return p->speedV[k - 1] + w * (p->speedV[k] - p->speedV[k - 1]);
+        }
+    return p->speedV[p->nSpeed - 1];
+}
+
 void driver_start(const Road *r, const DriverParams *p, const DriverInput *in, DriverMemory *m) {
     double px, py;
     reference_point(p, in, &px, &py);
@@ -84,7 +95,7 @@ void driver_sample(const Road *r, const DriverParams *p, const DriverInput *in,
 
     /* speed: the set point until the end of the road, then stop; PI on the
      * drive force with conditional integration (no wind-up in saturation) */
-    out->vRef = out->finished ? 0.0 : p->vSet;
+    out->vRef = out->finished ? 0.0 : driver_speed_set_point(p, f0.s);
     const double e = out->vRef - in->v;
     const double I = m->integral + p->Ki * e * p->Ts;
     const double u = p->Kp * e + I;

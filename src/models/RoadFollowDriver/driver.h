@@ -14,6 +14,8 @@
 
 #include "roads.h"
 
+#define DRIVER_MAX_SPEED_POINTS 10
+
 typedef struct {
     double L0;                   /* wheelbase of module 1 [m] */
     double refX, refY;           /* reference point in module 1's frame [m] */
@@ -22,7 +24,10 @@ typedef struct {
     double kUS;                  /* under-steer compensation gain [-] */
     double deltaMax;             /* steering angle limit [rad] */
     double deltaRateMax;         /* steering rate limit [rad/s] */
-    double vSet;                 /* speed set point [m/s] */
+    double vSet;                 /* speed set point [m/s], when there is no profile */
+    int nSpeed;                  /* points of the speed profile against distance (0: vSet) */
+    double speedS[DRIVER_MAX_SPEED_POINTS];   /* road distance of each point, increasing [m] */
+    double speedV[DRIVER_MAX_SPEED_POINTS];   /* speed set point there [m/s] */
     double Kp, Ki;               /* PI on the drive force [N/(m/s)], [N/m] */
     double FxMin, FxMax;         /* drive force limits [N] */
     double Ts;                   /* sample time [s] */
@@ -54,6 +59,10 @@ double driver_delta_for_direction(const DriverParams *p, double chi);
 /* Put the memory at the start: wheels straight, integral 0, and the reference
  * point's foot searched on the whole road (the only full scan). */
 void driver_start(const Road *r, const DriverParams *p, const DriverInput *in, DriverMemory *m);
+
+/* The speed set point at road distance s: vSet, or the profile, linear
+ * between its points and held beyond its ends. */
+double driver_speed_set_point(const DriverParams *p, double s);
 
 /* One sample: outputs from the inputs; updates the memory. */
 void driver_sample(const Road *r, const DriverParams *p, const DriverInput *in,

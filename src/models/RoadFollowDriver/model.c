@@ -27,6 +27,11 @@ static void params(ModelInstance *comp, DriverParams *p) {
     p->deltaMax = D->deltaMax;
     p->deltaRateMax = D->deltaRateMax;
     p->vSet = D->vSet;
+    p->nSpeed = D->nSpeed;
+    for (int k = 0; k < DRIVER_MAX_SPEED_POINTS; k++) {   /* speedS[1..10] -> speedS[0..9] */
+        p->speedS[k] = D->speedS[k + 1];
+        p->speedV[k] = D->speedV[k + 1];
+    }
     p->Kp = D->Kp;
     p->Ki = D->Ki;
     p->FxMin = D->FxMin;
@@ -102,6 +107,12 @@ static void sample(ModelInstance *comp, const Road *road, const DriverParams *p)
 }
 
 fmi2Status model_init(ModelInstance *comp) {
+    if (D->nSpeed == 1)
+        return log_error(comp, "nSpeed = 1: a speed profile needs 2..10 points (0: constant vSet)");
+    for (int k = 2; k <= D->nSpeed; k++)
+        if (!(D->speedS[k] > D->speedS[k - 1]))
+            return log_error(comp, "speedS[%d] = %g m is not beyond speedS[%d] = %g m: the speed profile's "
+                                   "distances must increase", k, D->speedS[k], k - 1, D->speedS[k - 1]);
     if (!(D->lookNear0 > 0))
         return log_error(comp, "lookNear0 = %g m: the near look-ahead distance must be > 0", D->lookNear0);
     if (!(D->lookFar0 > D->lookNear0) || !(D->tFar >= D->tNear))
