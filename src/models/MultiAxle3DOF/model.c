@@ -1,0 +1,167 @@
+/* MultiAxle3DOF: seed 004, eqs. 1-5 (lateral3dof.c), integrated with CVODE
+ * inside doStep, plus the heading and the path of the origin. */
+#include <math.h>
+#include <stdlib.h>
+
+#include "fmu.h"
+#include "ode.h"
+#include "lateral3dof.h"
+
+typedef struct {
+    ModelInstance *comp;
+    Ode *ode;
+    MaVehicle veh;
+    MaMass mm;
+    double u;                           /* speed used in the equations, >= uMin */
+    double delta[MA_MAX_AXLES + 1];     /* steering angles over the current segment */
+    double Md;
+} Solver;
+
+static void make_vehicle(ModelInstance *comp, MaVehicle *veh) {
+    veh->n = D->n;
+    for (int i = 1; i <= MA_MAX_AXLES; i++) {
+        veh->l[i] = D->l[i];
+        veh->k[i] = D->k[i];
+        veh->m[i] = D->m[i];
+        veh->d[i] = D->d[i];
+    }
+    veh->m_b = D->m_b;
+    veh->h_b = D->h_b;
+    veh->I_ZZb = D->I_ZZb;
+    veh->I_XXb = D->I_XXb;
+    veh->I_XZb = D->I_XZb;
+    veh->C_phi = D->C_phi;
+    veh->K_phi = D->K_phi;
+}
+
+/* below uMin the linear model is not defined (it divides by u) */
+static double speed(ModelInstance *comp) {
+    return D->u >= D->uMin ? D->u : D->uMin;
+}
+
+/* communication points this close to testSteerTime count as on it */
+static double step_tol(ModelInstance *comp) {
+    return 1e-9 * fmax(1.0, fabs(D->testSteerTime));
+}
+
+/* the steering angles acting from time t on: fixed axles 0, plus the test step */
+static void steering(ModelInstance *comp, double t, double delta[]) {
+    for (int i = 1; i <= MA_MAX_AXLES; i++) delta[i] = D->steerable[i] ? D->delta[i] : 0.0;
+    if (D->testSteerAmp != 0.0 && t >= D->testSteerTime - step_tol(comp))
+        delta[1] += D->testSteerAmp;
+}
+
+fmi2Status model_init(ModelInstance *comp) {
+    MaVehicle veh;
+    MaMass mm;
+    make_vehicle(comp, &veh);
+    if (ma_prepare(&veh, &mm))
+        return log_error(comp, "the mass matrix of eq. 2 (m_b = %g kg, I_ZZb = %g, I_XXb = %g, "
+                               "I_XZb = %g kg m2, h_b = %g m) is not positive definite",
+                         D->m_b, D->I_ZZb, D->I_XXb, D->I_XZb, D->h_b);
+    if (!(D->K_phi > D->m_b * MA_G * D->h_b))
+        return log_error(comp, "K_phi = %g N m/rad must exceed m_b g h_b = %g N m/rad, or the body "
+                               "rolls over under its own weight (eq. 2, third row)",
+                         D->K_phi, D->m_b * MA_G * D->h_b);
+    D->w_r = D->v = D->p = D->phi = D->psi = D->x = D->y = 0.0;
+    comp->v.s.warnedSpeed = 0;
+    log_event(comp, "n = %d axles, M = %g kg, sum m_i l_i = %g kg m, I_ZZ = %g kg m2, I_XX = %g kg m2",
+              D->n, mm.M, mm.sum_ml, mm.I_ZZ, mm.I_XX);
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    MaVehicle veh;
+    MaMass mm;
+    make_vehicle(comp, &veh);
+    ma_prepare(&veh, &mm);
+    const double u = speed(comp);
+    double delta[MA_MAX_AXLES + 1];
+    steering(comp, comp->v.time, delta);
+    const double x[4] = { D->w_r, D->v, D->p, D->phi };
+    double xdot[4], alpha[MA_MAX_AXLES + 1], FY[MA_MAX_AXLES + 1];
+    ma_derivatives(&veh, &mm, u, delta, D->M_d, x, xdot, &D->a_y);
+    ma_forces(&veh, u, x, delta, alpha, FY);
+    D->beta = D->v / u;
+    for (int i = 1; i <= MA_MAX_AXLES; i++) {
+        D->alpha[i] = i <= D->n ? alpha[i] : 0.0;
+        D->F_Y[i] = i <= D->n ? FY[i] : 0.0;
+    }
+}
+
+/* y = [w_r, v, p, phi, psi, x, y] */
+static int rhs(double t, const double *y, double *ydot, void *user) {
+    (void)t;
+    Solver *s = user;
+    ma_derivatives(&s->veh, &s->mm, s->u, s->delta, s->Md, y, ydot, NULL);
+    ydot[4] = y[0];
+    ydot[5] = s->u * cos(y[4]) - y[1] * sin(y[4]);
+    ydot[6] = s->u * sin(y[4]) + y[1] * cos(y[4]);
+    return 0;
+}
+
+static fmi2Status advance(ModelInstance *comp, Solver *s, bool restart, double t0, double t1) {
+    double y[7] = { D->w_r, D->v, D->p, D->phi, D->psi, D->x, D->y };
+    double tret;
+    const OdeResult res = ode_advance(s->ode, restart, t0, y, t1, &tret, NULL);
+    D->w_r = y[0]; D->v = y[1]; D->p = y[2]; D->phi = y[3];
+    D->psi = y[4]; D->x = y[5]; D->y = y[6];
+    if (res != ODE_REACHED) {
+        comp->v.time = tret;
+        return fmi2Error;               /* already logged with the CVODE flag and time */
+    }
+    comp->v.time = t1;
+    return fmi2OK;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    Solver *s = comp->solver;
+    if (!s) {
+        s = comp->solver = calloc(1, sizeof(Solver));
+        if (!s) return log_error(comp, "out of memory");
+        s->comp = comp;
+        const double rtol = comp->tolerance > 0 ? comp->tolerance : D->rtol;
+        s->ode = ode_new(comp, 7, rhs, 0, NULL, s, ODE_BDF, rtol, D->atol);
+        if (!s->ode) return fmi2Error;
+    }
+    make_vehicle(comp, &s->veh);
+    ma_prepare(&s->veh, &s->mm);
+
+    fmi2Status status = fmi2OK;
+    if (D->u < D->uMin && !comp->v.s.warnedSpeed) {
+        comp->v.s.warnedSpeed = 1;
+        log_warning(comp, "u = %g m/s is below uMin = %g m/s at t = %g s: the linear model divides "
+                          "by u (eq. 2) and is evaluated at u = uMin while u < uMin (warned once "
+                          "per episode)", D->u, D->uMin, t);
+        status = fmi2Warning;
+    }
+    s->u = speed(comp);
+    s->Md = D->M_d;
+
+    /* the test step inside this step: integrate up to it, restart after it */
+    const double ts = D->testSteerTime, t1 = t + h, tol = step_tol(comp);
+    bool restart = comp->restart;
+    if (D->testSteerAmp != 0.0 && t < ts - tol && ts < t1 - tol) {
+        steering(comp, t, s->delta);
+        if (advance(comp, s, restart, t, ts)) return fmi2Error;
+        log_event(comp, "test step steer of %g rad on delta[1] at t = %g s", D->testSteerAmp, ts);
+        restart = true;
+        t = ts;
+    }
+    double delta[MA_MAX_AXLES + 1];
+    steering(comp, t, delta);
+    for (int i = 1; i <= MA_MAX_AXLES; i++) {
+        if (delta[i] != s->delta[i]) restart = true;    /* the test step began at t */
+        s->delta[i] = delta[i];
+    }
+    if (advance(comp, s, restart, t, t1)) return fmi2Error;
+    return status;
+}
+
+void model_free(ModelInstance *comp) {
+    Solver *s = comp->solver;
+    if (!s) return;
+    ode_free(s->ode);
+    free(s);
+    comp->solver = NULL;
+}
