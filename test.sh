@@ -11,6 +11,7 @@ ctest --test-dir build --output-on-failure
 echo "== C checks of every FMU under AddressSanitizer + UBSan"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DARTIBUS_SANITIZE=ON >/dev/null
 cmake --build build-asan -j"$(nproc)" >/dev/null
+ARTIBUS_FMU_DIR="$PWD/build-asan/fmus" .venv/bin/artibus pack >/dev/null   # benches with these FMUs
 ctest --test-dir build-asan --output-on-failure
 
 echo "== pytest"

@@ -1,6 +1,7 @@
 """The artibus command line: verbs in the user's words.
 
   artibus run BENCH [options]          run an SSP bench (a name from `artibus list`, or an .ssp)
+  artibus bode BENCH --input C.V --output C.V   gain and phase by sine tests through the co-simulation
   artibus list                         the benches and their parameters
   artibus info FMU|SSP                 an FMU's variables, or a bench's components and connections
   artibus simulate FMU [options]       run one FMU alone, write CSV
@@ -129,6 +130,28 @@ def cmd_run(args):
     return 0
 
 
+def cmd_bode(args):
+    import numpy as np
+    from artibus import bode
+    overrides = _parse_set(args.set)
+    freqs = np.geomspace(args.fmin, args.fmax, args.n) if args.n > 1 else [args.fmin]
+    resp = bode.frequency_response(args.bench, args.input, args.output, freqs, args.amplitude,
+                                   periods=args.periods, settle=args.settle, overrides=overrides,
+                                   step=args.step)
+    out = Path(args.output_file or "bode.csv")
+    rows = ["frequency_Hz," + ",".join(f"{o}.gain,{o}.phase_rad" for o in args.output)]
+    for k, f in enumerate(freqs):
+        rows.append(f"{f:.6g}," + ",".join(f"{resp[o][k].gain:.8g},{resp[o][k].phase:.8g}" for o in args.output))
+    out.write_text("\n".join(rows) + "\n")
+    print(f"{out}: {len(freqs)} frequencies")
+    for line in rows:
+        print("  " + line)
+    if args.plot:
+        bode.plot(args.plot, resp, f"{args.bench}: {', '.join(args.output)} / {args.input}")
+        print(args.plot)
+    return 0
+
+
 def cmd_simulate(args):
     from artibus.parameters import read_parameters, check_against
     from artibus.simulation import simulate
@@ -189,6 +212,21 @@ def build_parser():
     s.add_argument("--algorithm", default="gauss-seidel", choices=["gauss-seidel", "jacobi"])
     s.add_argument("-o", "--output", help="results: .csv or .mat (default: <bench>.csv)")
     s.set_defaults(func=cmd_run)
+    s = sub.add_parser("bode", help="frequency response through the co-simulation (sine tests)")
+    s.add_argument("bench", help="a bench name or the path of an .ssp")
+    s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")
+    s.add_argument("--output", required=True, action="append", metavar="COMP.VAR", help="an output to measure")
+    s.add_argument("--fmin", type=float, default=0.05, help="lowest frequency, Hz")
+    s.add_argument("--fmax", type=float, default=5.0, help="highest frequency, Hz")
+    s.add_argument("--n", type=int, default=12, help="frequencies, log-spaced")
+    s.add_argument("--amplitude", type=float, default=0.01, help="sine amplitude, in the input's unit")
+    s.add_argument("--periods", type=int, default=4, help="periods fitted after the transient")
+    s.add_argument("--settle", type=float, help="time given to the transient, s")
+    s.add_argument("--step", type=float)
+    s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
+    s.add_argument("-o", "--output-file", help="CSV (default bode.csv)")
+    s.add_argument("--plot", help="PNG with gain and phase")
+    s.set_defaults(func=cmd_bode)
     s = sub.add_parser("list", help="the benches and their parameters")
     s.set_defaults(func=cmd_list)
     s = sub.add_parser("pack", help="pack benches into self-contained .ssp files")

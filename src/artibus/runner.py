@@ -179,7 +179,11 @@ def _order(units, links, where):
 class Simulation:
     """A bench, set up and ready to run."""
 
-    def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel"):
+    def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
+                 stimuli=None):
+        """stimuli: {"comp.input": f(t)} added to the input (to its connection's
+        value, or to its start value when it is not connected), sampled at
+        the start of each of the component's steps."""
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
         self.algorithm = algorithm
@@ -192,12 +196,12 @@ class Simulation:
         try:
             with zipfile.ZipFile(self.ssp) as z:
                 z.extractall(self._tmp)
-            self._setup(step, overrides or {}, record, where)
+            self._setup(step, overrides or {}, record, where, stimuli or {})
         except BaseException:
             self.close()
             raise
 
-    def _setup(self, step, overrides, record, where):
+    def _setup(self, step, overrides, record, where, stimuli):
         units = {}
         for path, c in self.bench.components.items():
             fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
@@ -291,6 +295,20 @@ class Simulation:
             if n not in u.out_names:
                 u.out_names.append(n)
                 u.out_vrs.append(u.fmu.var(n).valueReference)
+        self.stimuli = []     # (unit, input index, f, base value or None when connected)
+        for name, f in stimuli.items():
+            comp, _, var = name.rpartition(".")
+            v = units[comp].fmu.vars.get(var) if comp in units else None
+            if v is None or v.causality != "input" or v.type != "Real":
+                raise ArtibusError(f"stimulus {name}: not a Real input of a component of {where}")
+            u = units[comp]
+            if var in u.in_names:
+                self.stimuli.append((u, u.in_names.index(var), f, None))
+            else:
+                u.in_names.append(var)
+                u.in_vrs.append(v.valueReference)
+                base = float(self.parameters[comp].get(var, v.start))
+                self.stimuli.append((u, len(u.in_names) - 1, f, base))
         for u in self.units:
             u.raw = _RawCalls(u)
             u.out_values = u.raw.out      # read and written in place
@@ -319,10 +337,13 @@ class Simulation:
         u.raw.read()
         u.wall += _time.perf_counter() - w
 
-    def _propagate(self, to=None):
+    def _propagate(self, to=None, t=0.0):
         for l in self.links:
             if to is None or l.dst is to:
                 l.dst.in_values[l.dst_index] = l.factor * l.src.out_values[l.src_index] + l.offset
+        for u, i, f, base in self.stimuli:
+            if to is None or u is to:
+                u.in_values[i] = (u.in_values[i] if base is None else base) + f(t)
 
     def _initialize(self, start):
         for u in self.units:
@@ -334,9 +355,9 @@ class Simulation:
             before = [list(u.in_values) for u in self.units]
             for u in self.order:
                 self._read(u)
-                self._propagate(u if self.algorithm == "gauss-seidel" else None)
+                self._propagate(u if self.algorithm == "gauss-seidel" else None, start)
             for u in self.order:
-                self._propagate(u)
+                self._propagate(u, start)
                 self._write(u)
             for u in self.units:
                 self._read(u)
@@ -380,7 +401,7 @@ class Simulation:
                 ending = [u for u in self.order if (k + 1) % u.ratio == 0]
                 if self.algorithm == "jacobi":
                     for u in starting:
-                        self._propagate(u)
+                        self._propagate(u, t)
                     for u in starting:
                         self._write(u)
                     for u in ending:
@@ -389,7 +410,7 @@ class Simulation:
                 else:
                     for u in self.order:
                         if u in starting:
-                            self._propagate(u)
+                            self._propagate(u, t)
                             self._write(u)
                         if u in ending:
                             current = u
@@ -422,9 +443,10 @@ class Simulation:
 
 
 def run(ssp, stop_time=None, step=None, overrides=None, record=None,
-        algorithm="gauss-seidel", progress=False):
+        algorithm="gauss-seidel", progress=False, stimuli=None):
     """Run a bench (name or .ssp path); returns the Result."""
-    with Simulation(ssp, step=step, overrides=overrides, record=record, algorithm=algorithm) as sim:
+    with Simulation(ssp, step=step, overrides=overrides, record=record, algorithm=algorithm,
+                    stimuli=stimuli) as sim:
         return sim.run(stop_time=stop_time, progress=progress)
 
 
