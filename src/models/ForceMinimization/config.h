@@ -1,0 +1,16 @@
+/* ForceMinimization: seed 000, Task 2, as an FMU. Variables in
+ * modelDescription/ForceMinimization.xml; the algorithm in forcemin.c. */
+#ifndef CONFIG_H
+#define CONFIG_H
+
+#include "forcemin.h"
+
+/* plain data, saved as FMU state */
+typedef struct {
+    FmSteering f;           /* parameters and the outputs of the last sample */
+    double t0;              /* start time: sample k is at t0 + k Ts */
+    long long k;            /* index of the next sample */
+    unsigned fault;         /* fault bits of the last sample */
+} ModelState;
+
+#endif

@@ -1,0 +1,90 @@
+/* ForceMinimization: the force-minimising steering of seed 000 (Task 2,
+ * eqs. 43-48) as a discrete controller: at each sample instant t0 + k Ts
+ * inside a communication step the held inputs give gamma3, gamma5
+ * (forcemin.c); the outputs change only there.
+ *
+ * Driving direction: backwards, the A6 end leads and every role is mirrored
+ * (module frames turned by 180 deg): the leading hinge is G2, seen from the
+ * leading module as psi3 - psi2 = -dPsi[2], the second one -dPsi[1]; gamma1
+ * is A6's angle, gamma4/gamma6 are A3's/A1's, and the outputs go to A4 and A2.
+ * Steering angles keep their sign under the 180 deg turn. */
+#include <math.h>
+
+#include "fmu.h"
+#include "forcemin.h"
+
+#define S (&comp->v.s)
+
+static double gamma1_at(ModelInstance *comp, double t) {
+    if (D->testSteerAmp != 0.0 && t < D->testSteerPeriod)
+        return D->gamma1 + D->testSteerAmp * sin(2 * M_PI * t / D->testSteerPeriod);
+    return D->gamma1;
+}
+
+/* the leading module's view of the articulation angles */
+static void hinges(ModelInstance *comp, double *d1, double *d2) {
+    if (D->backwards) {
+        *d1 = -D->dPsi[2];
+        *d2 = -D->dPsi[1];
+    } else {
+        *d1 = D->dPsi[1];
+        *d2 = D->dPsi[2];
+    }
+}
+
+static unsigned sample(ModelInstance *comp, double t) {
+    double d1, d2;
+    hinges(comp, &d1, &d2);
+    return fm_sample(&S->f, gamma1_at(comp, t), d1, d2, D->gamma4, D->gamma6);
+}
+
+fmi2Status model_init(ModelInstance *comp) {
+    const FmParams p = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lA3 = D->lA3, .lg2 = D->lg2,
+                         .l3 = D->l3, .lA5 = D->lA5, .gamma3Max = D->gamma3Max,
+                         .gamma5Max = D->gamma5Max };
+    const int bad = fm_setup(&S->f, &p);
+    if (bad) return log_error(comp, "parameter %s is not valid for the force minimisation "
+                                    "(lengths must be > 0, 0 < limit < pi/2)", fm_param_name(bad));
+    S->t0 = comp->v.time;
+    S->k = 0;
+    sample(comp, comp->v.time);              /* the outputs of the initial inputs */
+    S->fault = 0;                            /* faults are reported from the first step on */
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    D->gamma3 = S->f.gamma3;
+    D->gamma5 = S->f.gamma5;
+    D->fault = (double)S->fault;
+}
+
+static void report(ModelInstance *comp, unsigned fault, double t) {
+    const unsigned now = fault & ~S->fault;
+    if (now & FM_FAULT_GEOMETRY)
+        log_warning(comp, "t = %.6g s: gamma1 = %g, dPsi[1] = %g, dPsi[2] = %g, gamma4 = %g, gamma6 = %g "
+                          "rad: a hinge does not move forward relative to its module (jack-knifed) or an "
+                          "angle is at or beyond 90 deg: no instantaneous centre ahead (seed 000, "
+                          "eqs. 43-48), outputs saturated at gamma3Max = %g, gamma5Max = %g rad; warned "
+                          "once until it clears", t, gamma1_at(comp, t), D->dPsi[1], D->dPsi[2],
+                    D->gamma4, D->gamma6, D->gamma3Max, D->gamma5Max);
+    if (now & FM_FAULT_NAN)
+        log_warning(comp, "t = %.6g s: an input is not finite: outputs held", t);
+    if (now & FM_FAULT_LIMIT)
+        log_event(comp, "t = %.6g s: force-minimising angle beyond gamma3Max = %g or gamma5Max = %g rad, "
+                        "saturated", t, D->gamma3Max, D->gamma5Max);
+    S->fault = fault;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    const double Ts = D->Ts;
+    for (;;) {
+        const double tk = S->t0 + (double)S->k * Ts;
+        if (!(tk < t + h - 1e-9 * Ts)) break;          /* samples in [t, t + h) */
+        report(comp, sample(comp, tk), tk);
+        S->k++;
+    }
+    comp->v.time = t + h;
+    return fmi2OK;
+}
+
+void model_free(ModelInstance *comp) { (void)comp; }

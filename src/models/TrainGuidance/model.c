@@ -1,0 +1,88 @@
+/* TrainGuidance: the train-like guidance of seed 000 (Task 1, eqs. 29-42) as
+ * a discrete controller. At each sample instant t0 + k Ts inside a
+ * communication step it reads the inputs (held over the step), computes the
+ * steady-state angles and advances the arc lags (guidance.c); the outputs
+ * change only there, so they depend on no input directly.
+ *
+ * Driving direction: the bus is symmetric, so driving backwards mirrors every
+ * role (the A6 end leads: gamma1 is A6's angle, v is A5's speed, the outputs
+ * go to A3 and A1; module frames turned by 180 deg keep the sign of every
+ * steering angle). The algorithm is the same; when `backwards` changes, the
+ * lags restart from the steady state of the current gamma1 (the guided axles
+ * change, their old lag states belong to other axles). */
+#include <math.h>
+
+#include "fmu.h"
+#include "guidance.h"
+
+#define S (&comp->v.s)
+
+static double gamma1_at(ModelInstance *comp, double t) {
+    if (D->testSteerAmp != 0.0 && t < D->testSteerPeriod)
+        return D->gamma1 + D->testSteerAmp * sin(2 * M_PI * t / D->testSteerPeriod);
+    return D->gamma1;
+}
+
+fmi2Status model_init(ModelInstance *comp) {
+    const TgParams p = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lg2 = D->lg2, .l3 = D->l3,
+                         .S4 = D->S4, .S6 = D->S6, .Ts = D->Ts,
+                         .gamma4Max = D->gamma4Max, .gamma6Max = D->gamma6Max };
+    const int bad = tg_setup(&S->g, &p);
+    if (bad) return log_error(comp, "parameter %s is not valid for the guidance (lengths and Ts "
+                                    "must be > 0, S >= 0, 0 < limit < pi/2)", tg_param_name(bad));
+    tg_reset(&S->g, gamma1_at(comp, comp->v.time));  /* starts in the steady state of gamma1 */
+    S->t0 = comp->v.time;
+    S->k = 0;
+    S->fault = 0;
+    S->backwards = D->backwards;
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    D->gamma4 = S->g.gamma4;
+    D->gamma6 = S->g.gamma6;
+    D->gamma4ss = S->g.gamma4ss;
+    D->gamma6ss = S->g.gamma6ss;
+    D->fault = (double)S->fault;
+}
+
+/* a warning when a fault appears; once per episode (until it clears) */
+static void report(ModelInstance *comp, unsigned fault, double t, double gamma1, double v) {
+    const unsigned now = fault & ~S->fault;
+    if (now & TG_FAULT_SPEED)
+        log_warning(comp, "t = %.6g s: v = %g m/s < 0 is not a driving speed (use backwards for the "
+                          "direction): treated as v = 0, the arc lags hold; warned once until v >= 0",
+                    t, v);
+    if (now & TG_FAULT_GEOMETRY)
+        log_warning(comp, "t = %.6g s: gamma1 = %g rad: no steady-state triangle with l1 = %g, lg1 = %g, "
+                          "l2 = %g, lg2 = %g, l3 = %g m (the arccos argument of seed 000, eqs. 32/36, "
+                          "leaves [-1, 1]): guided angles saturated at their limits; warned once "
+                          "until it clears", t, gamma1, D->l1, D->lg1, D->l2, D->lg2, D->l3);
+    if (now & TG_FAULT_NAN)
+        log_warning(comp, "t = %.6g s: gamma1 = %g, v = %g: input not finite, outputs held", t, gamma1, v);
+    if (now & TG_FAULT_LIMIT)
+        log_event(comp, "t = %.6g s: gamma1 = %g rad: steady-state angle beyond gamma4Max = %g or "
+                        "gamma6Max = %g rad, saturated", t, gamma1, D->gamma4Max, D->gamma6Max);
+    S->fault = fault;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    const double Ts = S->g.p.Ts;
+    for (;;) {
+        const double tk = S->t0 + (double)S->k * Ts;
+        if (!(tk < t + h - 1e-9 * Ts)) break;          /* samples in [t, t + h) */
+        const double gamma1 = gamma1_at(comp, tk);
+        if (D->backwards != S->backwards) {
+            log_event(comp, "t = %.6g s: driving direction now %s: lags restart from the steady "
+                            "state of gamma1 = %g rad", tk, D->backwards ? "backwards" : "forwards", gamma1);
+            tg_reset(&S->g, gamma1);
+            S->backwards = D->backwards;
+        }
+        report(comp, tg_sample(&S->g, gamma1, D->v), tk, gamma1, D->v);
+        S->k++;
+    }
+    comp->v.time = t + h;
+    return fmi2OK;
+}
+
+void model_free(ModelInstance *comp) { (void)comp; }
