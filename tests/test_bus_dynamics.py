@@ -230,10 +230,9 @@ def test_low_speed_limit_is_bus_kinematics(gamma):
     """At 1 m/s the slip angles vanish and the kinetic model follows the
     kinematic one of seed 003 (BusKinematics) with the same geometry: the
     steady joint angle to < 1 % and the steady circles of the axles to < 5 cm
-    in radius. The kinetic bus needs a few centimetres of travel to build up
-    its yaw rate after the steering step (a lag the kinematic model does not
-    have), which shifts its circles by about 3 cm: the whole paths, transient
-    included, agree to < 10 cm."""
+    in radius; with the same steering ramp (4 s) into both models, the whole
+    axle paths, transient included, agree to < 5 cm (measured: about 3 cm, the
+    kinetic bus's small slip while its yaw rate builds up)."""
     L0, Lh, L1 = 5.9, 1.789, 4.211          # seed 003, Table I (Urbino 18)
     a = 2.4                                  # front axle ahead of the tractor CG (a choice)
     lHr = 2.0                                # hinge ahead of the trailer CG (a choice)
@@ -244,14 +243,16 @@ def test_low_speed_limit_is_bus_kinematics(gamma):
         "lHf[1]": L0 - a + Lh, "lHr[1]": lHr, "vx_start": 1.0,
         "C[1]": 4e5, "C[2]": 7e5, "C[3]": 7e5})
     h, T = 0.05, 80.0
-    r = run_loop(p, int(T / h), h, lambda t, v: {"delta[1]": gamma, "Fx[2]": 20000.0 * (1.0 - v["v"])},
+    ramp = lambda t: gamma * min(1.0, t / 4.0)   # noqa: E731  the same steering ramp for both models
+    r = run_loop(p, int(T / h), h, lambda t, v: {"delta[1]": ramp(t), "Fx[2]": 20000.0 * (1.0 - v["v"])},
                  ["artAngle[1]", "xAxle[2]", "yAxle[2]", "xAxle[3]", "yAxle[3]", "v"])
     assert r["v"][-1] == pytest.approx(1.0, abs=0.02)
     # BusKinematics: P0 = tractor rear axle, same start pose (heading 0, at xA[2] from the CG)
     k = simulate(fmu_path("BusKinematics"),
                  parameters={"N": 1, "k": 0, "L0": L0, "Lh[1]": Lh, "L[1]": L1, "testSteerAmp": 0.0,
                              "x_start": -(L0 - a), "rtol": 1e-10, "atol": 1e-10},
-                 inputs={"gammaF": lambda t: gamma, "v": lambda t: 1.0}, stop_time=T, step=0.01)
+                 inputs={"gammaF": lambda t: ramp(np.floor(t / h + 1e-9) * h), "v": lambda t: 1.0},
+                 stop_time=T, step=0.01)
     beta_k = k["beta[1]"][-1]
     assert abs(beta_k) > 0.2
     assert abs(r["artAngle[1]"][-1] - beta_k) < 0.01 * abs(beta_k)
@@ -262,7 +263,7 @@ def test_low_speed_limit_is_bus_kinematics(gamma):
         assert abs(R_dyn - R_kin) < 0.05, (i_dyn, R_dyn, R_kin)
         d = _polyline_distance(r[f"xAxle[{i_dyn}]"][::10], r[f"yAxle[{i_dyn}]"][::10],
                                k[f"x[{i_kin}]"], k[f"y[{i_kin}]"])
-        assert np.max(d) < 0.10, (i_dyn, np.max(d))
+        assert np.max(d) < 0.05, (i_dyn, np.max(d))
 
 
 @pytest.mark.parametrize("params, words", [
