@@ -81,11 +81,12 @@ void driver_sample(const Road *r, const DriverParams *p, const DriverInput *in,
     const int one = fabs(road_wrap(chi1 - line)) <= fabs(road_wrap(chi2 - line));
     out->method = one ? 1 : 2;
     double delta = driver_delta_for_direction(p, one ? chi1 : chi2);
+    if (p->sHold > 0 && f0.s >= p->sHold) delta = 0.0;   /* hands off: back to straight, then held */
 
     /* under-steer compensation (seed 001, 3.2.1): steer more while the front
      * axle's actual direction of motion chiF lags the steering angle */
     const double lag = m->delta - in->chiF;
-    if (p->kUS > 0 && lag * m->delta > 0) delta += p->kUS * lag;
+    if (p->kUS > 0 && lag * m->delta > 0 && !(p->sHold > 0 && f0.s >= p->sHold)) delta += p->kUS * lag;
 
     /* the limits the thesis lacked (3.2.2): angle, then rate from the last sample */
     delta = clamp(delta, -p->deltaMax, p->deltaMax);

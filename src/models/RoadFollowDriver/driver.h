@@ -28,6 +28,7 @@ typedef struct {
     int nSpeed;                  /* points of the speed profile against distance (0: vSet) */
     double speedS[DRIVER_MAX_SPEED_POINTS];   /* road distance of each point, increasing [m] */
     double speedV[DRIVER_MAX_SPEED_POINTS];   /* speed set point there [m/s] */
+    double sHold;                /* hands off from this road distance on: steer back to straight (0: never) [m] */
     double Kp, Ki;               /* PI on the drive force [N/(m/s)], [N/m] */
     double FxMin, FxMax;         /* drive force limits [N] */
     double Ts;                   /* sample time [s] */

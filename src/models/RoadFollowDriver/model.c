@@ -28,6 +28,7 @@ static void params(ModelInstance *comp, DriverParams *p) {
     p->deltaRateMax = D->deltaRateMax;
     p->vSet = D->vSet;
     p->nSpeed = D->nSpeed;
+    p->sHold = D->sHold;
     for (int k = 0; k < DRIVER_MAX_SPEED_POINTS; k++) {   /* speedS[1..10] -> speedS[0..9] */
         p->speedS[k] = D->speedS[k + 1];
         p->speedV[k] = D->speedV[k + 1];
