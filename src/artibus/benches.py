@@ -199,7 +199,29 @@ def _hinge_oscillation_kpis(r, t_after, what):
     return kpis
 
 
-def _bus36m_road_test(r, out, title, road, t_after, what, extra):
+def _lateral_path(path, traces, road, cones, title):
+    """Axle traces against x with y stretched (a bird's-eye view at equal scale
+    would be a thin line for a 300 m long manoeuvre)."""
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(9, 3.6))
+    ax.plot(road[0], road[1], color="0.75", lw=6, solid_capstyle="round", label="road", zorder=0)
+    for label, (x, y) in traces.items():
+        ax.plot(x, y, lw=1.2, label=label)
+    if cones is not None:
+        ax.plot(cones, np.zeros_like(cones), "k^", ms=7, label="cones")
+    x_all = np.concatenate([x for x, _ in traces.values()])
+    ax.set_xlim(float(np.min(x_all)), float(np.max(x_all)))
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _bus36m_road_test(r, out, title, road, t_after, what, extra, cones=None):
     t = r.time
     util = max(kpi.peak(r[f"Bus.Fy[{a}]"] / r[f"Bus.Fz[{a}]"]) for a in range(1, 7))
     kpis = [Kpi("front axle A1: max |lateral error| (driver)", kpi.peak(r["Driver.eLat"]), "m")] + extra + [
@@ -215,10 +237,9 @@ def _bus36m_road_test(r, out, title, road, t_after, what, extra):
     ]
     images = []
     ax = {a: (r[f"Bus.xAxle[{a}]"], r[f"Bus.yAxle[{a}]"]) for a in (1, 2, 4, 6)}
-    report.birds_eye(out / "path.png", {f"A{a}": ax[a] for a in ax}, outlines=_outlines(r, 3),
-                     road=road, every=50, title=title)
-    images.append(("path.png", "Bird's-eye view (x and y at equal scale): the road (grey, followed by the front "
-                               "axle A1), axle traces, body outlines every 0.5 s."))
+    _lateral_path(out / "path.png", {f"A{a}": ax[a] for a in ax}, road, cones, title)
+    images.append(("path.png", "Lateral position of the axles against x (y stretched): the road (grey, followed "
+                               "by the front axle A1)" + (", the cones (black)." if cones is not None else ".")))
     report.signals(out / "signals.png", t, [
         ("lateral position [m]", {f"A{a}": ax[a][1] for a in (1, 2, 4, 6)}),
         ("articulation [deg]", {"hinge 1": r["Bus.artAngle[1]"] * DEG, "hinge 2": r["Bus.artAngle[2]"] * DEG}),
@@ -270,7 +291,8 @@ def bus36m_slalom(r, out):
         Kpi("rearward amplification A6 / A1", amp6 / amp1, "-"),
     ]
     return _bus36m_road_test(r, out, f"Steered 36 m bus, slalom: {sl.CONES} cones {sl.SPACING:g} m apart "
-                             f"(path +-{sl.AMPLITUDE:g} m) at 40 km/h", (road[0], road[1]), t_after, "slalom", extra)
+                             f"(path +-{sl.AMPLITUDE:g} m) at 40 km/h", (road[0], road[1]), t_after, "slalom", extra,
+                             cones=sl.cones())
 
 
 def bus36m_circle_backwards(r, out):

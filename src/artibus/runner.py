@@ -229,6 +229,15 @@ class Simulation:
                 raise ArtibusError(f"--set {full}={value}: no component '{comp}' in {where} "
                                    f"(components: {', '.join(self.parameters)})")
             self.parameters[comp][var] = value
+        # a String parameter "resources/<file>" names a file inside the .ssp: the
+        # FMU gets its path in the unpacked copy
+        for values in self.parameters.values():
+            for var, value in values.items():
+                if isinstance(value, str) and value.startswith("resources/"):
+                    f = Path(self._tmp) / value
+                    if not f.is_file():
+                        raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
+                    values[var] = str(f)
         for path, values in self.parameters.items():
             fmu = units[path].fmu
             for var, value in values.items():

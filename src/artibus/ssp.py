@@ -49,7 +49,10 @@ def ssp_path(bench):
 
 
 def pack(bench, out_dir=None):
-    """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every referenced file inside."""
+    """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every referenced file
+    inside: components' FMUs, parameter sets, and files named by String
+    parameters whose value starts with "resources/" (found in the bench folder,
+    fmus/, ssp/parameters/ or ssp/roads/)."""
     src = BENCH_DIR / bench
     ssd_file = src / "SystemStructure.ssd"
     tree = etree.parse(str(ssd_file))
@@ -57,10 +60,13 @@ def pack(bench, out_dir=None):
     files = {}
     for el in tree.iter():
         ref = el.get("source")
+        if ref is None and etree.QName(el).localname == "String":
+            ref = el.get("value")     # a file a component reads, e.g. a road: see resolve_resources
         if ref is None or not ref.startswith("resources/"):
             continue
         name = ref[len("resources/"):]
-        candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name]
+        candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name,
+                      ROOT / "ssp" / "roads" / name]
         found = next((c for c in candidates if c.is_file()), None)
         if found is None:
             raise ArtibusError(f"{ssd_file}:{el.sourceline}: <{etree.QName(el).localname} "
