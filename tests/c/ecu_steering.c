@@ -3,10 +3,15 @@
  * header, the way they would go on an ECU: static objects, no heap, a 10 ms
  * loop. Checks against geometry computed here by another route (explicit
  * centres and circle intersections), and that bad input never gives NaN or
- * an angle beyond the limits. Run by ctest; exit status 1 on any failure.
+ * an angle beyond the limits. The pathMemory mode (tg_pm_*) in the loop with
+ * a kinematic model of the 36 m bus's chain written here (A2 rigid, A4 and
+ * A6 steered, RK4 at 1 ms): A4 and A6 on the A2 circle, on the A2 trace
+ * through entry and exit, standing still, bad input. Run by ctest; exit
+ * status 1 on any failure.
  */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "guidance.h"
 #include "forcemin.h"
@@ -23,6 +28,7 @@ static const TgParams TG = { .l1 = 5.9, .lg1 = 3.15, .l2 = 9.05, .lg2 = 3.15, .l
 static const FmParams FM = { .l1 = 5.9, .lg1 = 3.15, .l2 = 9.05, .lA3 = 3.15, .lg2 = 3.15,
                              .l3 = 9.05, .lA5 = 3.15, .gamma3Max = 0.75, .gamma5Max = 0.75 };
 static TgGuidance tg;      /* static: nothing on the heap */
+static TgPath pm;
 static FmSteering fm;
 
 /* the intersection of the circles |P - M| = R and |P - G| = l farther back
@@ -194,12 +200,172 @@ static void force_minimisation(void) {
     }
 }
 
+
+/* ---- pathMemory in the loop with a kinematic chain ------------------------ */
+
+/* the 36 m bus as a kinematic chain: A2 at (x, y), headings psi[0..2] of the
+   modules; A2 rolls at speed v, A1 steered by gamma1, A4 and A6 roll in the
+   directions psi2 + gamma4, psi3 + gamma6 (no slip) */
+typedef struct { double x, y, psi[3]; } Chain;
+
+static void chain_rates(const Chain *c, double v, double g1, double g4, double g6, Chain *d) {
+    const double r1 = v * tan(g1) / TG.l1;
+    d->x = v * cos(c->psi[0]);
+    d->y = v * sin(c->psi[0]);
+    d->psi[0] = r1;
+    /* G1 = A2 - lg1 h(psi1) */
+    const double vG1x = d->x + TG.lg1 * r1 * sin(c->psi[0]), vG1y = d->y - TG.lg1 * r1 * cos(c->psi[0]);
+    /* A4 = G1 - l2 h(psi2): v_A4 = v_G1 - l2 r2 n(psi2), v_A4 . n(psi2 + g4) = 0 */
+    const double n4x = -sin(c->psi[1] + g4), n4y = cos(c->psi[1] + g4);
+    const double r2 = (vG1x * n4x + vG1y * n4y) / (TG.l2 * cos(g4));
+    const double vA4x = vG1x + TG.l2 * r2 * sin(c->psi[1]), vA4y = vG1y - TG.l2 * r2 * cos(c->psi[1]);
+    const double vG2x = vA4x + TG.lg2 * r2 * sin(c->psi[1]), vG2y = vA4y - TG.lg2 * r2 * cos(c->psi[1]);
+    const double n6x = -sin(c->psi[2] + g6), n6y = cos(c->psi[2] + g6);
+    d->psi[1] = r2;
+    d->psi[2] = (vG2x * n6x + vG2y * n6y) / (TG.l3 * cos(g6));
+}
+
+static void chain_step(Chain *c, double v, double g1, double g4, double g6, double h) {
+    Chain k[4], tmp;
+    const double w[4] = { 0.0, 0.5, 0.5, 1.0 };
+    for (int i = 0; i < 4; i++) {
+        tmp = *c;
+        if (i) {
+            tmp.x += w[i] * h * k[i - 1].x;
+            tmp.y += w[i] * h * k[i - 1].y;
+            for (int j = 0; j < 3; j++) tmp.psi[j] += w[i] * h * k[i - 1].psi[j];
+        }
+        chain_rates(&tmp, v, g1, g4, g6, &k[i]);
+    }
+    c->x += h / 6 * (k[0].x + 2 * k[1].x + 2 * k[2].x + k[3].x);
+    c->y += h / 6 * (k[0].y + 2 * k[1].y + 2 * k[2].y + k[3].y);
+    for (int j = 0; j < 3; j++) c->psi[j] += h / 6 * (k[0].psi[j] + 2 * k[1].psi[j] + 2 * k[2].psi[j] + k[3].psi[j]);
+}
+
+static void chain_axles(const Chain *c, double *x4, double *y4, double *x6, double *y6) {
+    *x4 = c->x - TG.lg1 * cos(c->psi[0]) - TG.l2 * cos(c->psi[1]);
+    *y4 = c->y - TG.lg1 * sin(c->psi[0]) - TG.l2 * sin(c->psi[1]);
+    *x6 = *x4 - TG.lg2 * cos(c->psi[1]) - TG.l3 * cos(c->psi[2]);
+    *y6 = *y4 - TG.lg2 * sin(c->psi[1]) - TG.l3 * sin(c->psi[2]);
+}
+
+/* the true trace of A2, a point every 5 cm (static) */
+#define TRACE_MAX 8000
+static double trx[TRACE_MAX], try_[TRACE_MAX];
+static int ntr;
+
+static double trace_distance(double x, double y) {
+    double best = INFINITY;
+    for (int i = 0; i + 1 < ntr; i++) {
+        const double dx = trx[i + 1] - trx[i], dy = try_[i + 1] - try_[i], l2 = dx * dx + dy * dy;
+        double u = l2 > 0 ? ((x - trx[i]) * dx + (y - try_[i]) * dy) / l2 : 0.0;
+        if (i == 0 && u < 0) continue;                   /* behind the reference's start */
+        u = u < 0 ? 0 : u > 1 ? 1 : u;
+        const double d = hypot(x - trx[i] - u * dx, y - try_[i] - u * dy);
+        if (d < best) best = d;
+    }
+    return best;
+}
+
+/* drive the chain (straight at the start) with pathMemory at 10 ms; gamma1
+   as a function of the distance; returns the largest distance of A4 and A6
+   from the true A2 trace (checked every 0.25 m), and in r46 the largest
+   |radius - R2| of A4, A6 about A2's centre over the last half lap of a
+   constant gamma1 (when R2 != 0) */
+static double pm_drive(double (*gamma1_of)(double), double length, double v, double R2, double *r46) {
+    Chain c = { 0.0, 0.0, { 0.0, 0.0, 0.0 } };
+    tg_setup(&tg, &TG);
+    tg_pm_setup(&pm, &tg, 0.5);
+    tg_reset(&tg, 0.0);
+    tg_pm_reset(&pm, &tg, 0.0, 0.0);
+    ntr = 0;
+    const int sub = 10, n = (int)(length / (v * TG.Ts));
+    double s = 0.0, worst = 0.0, nextCheck = 0.0, nextTrace = 0.0;
+    *r46 = 0.0;
+    for (int k = 0; k < n; k++) {
+        const double g1 = gamma1_of(s);
+        tg_sample(&tg, g1, v);
+        const unsigned f = tg_pm_sample(&pm, &tg, g1, v, c.psi[0] - c.psi[1], c.psi[1] - c.psi[2]);
+        CHECK((f & ~(unsigned)TG_FAULT_LIMIT) == 0, "pathMemory fault %u at s = %g", f, s);
+        for (int i = 0; i < sub; i++) chain_step(&c, v, g1, pm.gamma4, pm.gamma6, TG.Ts / sub);
+        s += v * TG.Ts;
+        if (s >= nextTrace && ntr < TRACE_MAX) {
+            trx[ntr] = c.x; try_[ntr] = c.y; ntr++;
+            nextTrace += 0.05;
+        }
+        double x4, y4, x6, y6;
+        chain_axles(&c, &x4, &y4, &x6, &y6);
+        if (s >= nextCheck && s > 30.0) {                /* A6 is beside the trace from 24.4 m on */
+            const double d = fmax(trace_distance(x4, y4), trace_distance(x6, y6));
+            if (d > worst) worst = d;
+            nextCheck += 0.25;
+        }
+        if (R2 != 0 && s > length - PI * fabs(R2)) {
+            const double Mx = c.x - R2 * sin(c.psi[0]), My = c.y + R2 * cos(c.psi[0]);
+            const double r = fmax(fabs(hypot(x4 - Mx, y4 - My) - fabs(R2)), fabs(hypot(x6 - Mx, y6 - My) - fabs(R2)));
+            if (r > *r46) *r46 = r;
+        }
+    }
+    return worst;
+}
+
+static double circle_R2;
+static double circle_gamma1(double s) { return s < 20.0 ? 0.0 : atan(TG.l1 / circle_R2); }
+static double s_curve(double s) {
+    return s < 20.0 ? 0.0 : s < 60.0 ? atan(TG.l1 / 15.0) : s < 100.0 ? -atan(TG.l1 / 20.0) : 0.0;
+}
+
+static void path_memory(void) {
+    CHECK(tg_pm_setup(&pm, &tg, NAN) == -11 && tg_pm_setup(&pm, &tg, -1.0) == -11, "bad kPath accepted");
+    const double radii[] = { 12.0, -12.0, 17.5, -17.5, 50.0, -50.0 };
+    for (unsigned i = 0; i < sizeof radii / sizeof *radii; i++) {
+        circle_R2 = radii[i];
+        const double length = 20.0 + 2 * 2 * PI * fabs(circle_R2);
+        const double v = 5.0;
+        double r46;
+        pm_drive(circle_gamma1, length, v, circle_R2, &r46);
+        CHECK(r46 < 0.01, "R2 = %g: A4/A6 %.4f m off the A2 circle", circle_R2, r46);
+        printf("pathMemory, R2 = %6.1f m: A4/A6 at most %.2f mm off the A2 circle\n", circle_R2, r46 * 1e3);
+        CHECK(pm.gamma4 * circle_R2 < 0 && pm.gamma6 * circle_R2 < 0, "R2 = %g: not opposite to A1", circle_R2);
+    }
+    double r46;
+    const double worst = pm_drive(s_curve, 150.0, 5.0, 0.0, &r46);
+    printf("pathMemory, S-curve with entry and exit: A4/A6 at most %.2f mm from the A2 trace\n", worst * 1e3);
+    CHECK(worst < 0.03, "S-curve: %.4f m from the A2 trace", worst);
+
+    /* standing still: nothing changes, bit for bit */
+    static TgPath before;
+    memcpy(&before, &pm, sizeof pm);
+    for (int k = 0; k < 500; k++) CHECK(tg_pm_sample(&pm, &tg, 0.3 * sin(k), 0.0, 0.1 * k, -0.2) == 0, "v = 0 fault");
+    CHECK(memcmp(&before, &pm, sizeof pm) == 0, "pathMemory moved at v = 0");
+    /* bad input: held, flagged */
+    CHECK(tg_pm_sample(&pm, &tg, NAN, 3.0, 0, 0) == TG_FAULT_NAN, "NaN gamma1 not flagged");
+    CHECK(tg_pm_sample(&pm, &tg, 0.1, INFINITY, 0, 0) == TG_FAULT_NAN, "Inf v not flagged");
+    CHECK(tg_pm_sample(&pm, &tg, 0.1, 3.0, NAN, 0) == TG_FAULT_NAN, "NaN dPsi1 not flagged");
+    CHECK(tg_pm_sample(&pm, &tg, 0.1, 3.0, 0, -INFINITY) == TG_FAULT_NAN, "Inf dPsi2 not flagged");
+    CHECK(tg_pm_sample(&pm, &tg, 0.1, -1.0, 0, 0) == TG_FAULT_SPEED, "v < 0 not flagged");
+    CHECK(memcmp(&before, &pm, sizeof pm) == 0, "pathMemory moved on bad input");
+    /* absurd but finite input: finite, within the limits, never NaN */
+    const double bad[][4] = { { 1.5, 3.0, 0, 0 }, { -PI / 2, 3.0, 3.0, -3.0 }, { 3.0, 3.0, PI, PI },
+                              { 1e300, 3.0, -1e300, 1e300 }, { 0.2, 1e6, 0, 0 }, { 0.2, 1e300, 0.1, 0.1 },
+                              { 0.0, 3.0, 0.0, 0.0 } };
+    for (unsigned i = 0; i < sizeof bad / sizeof *bad; i++)
+        for (int k = 0; k < 200; k++) {
+            const unsigned f = tg_pm_sample(&pm, &tg, bad[i][0], bad[i][1], bad[i][2], bad[i][3]);
+            CHECK(isfinite(pm.gamma4) && isfinite(pm.gamma6) && fabs(pm.gamma4) <= TG.gamma4Max &&
+                  fabs(pm.gamma6) <= TG.gamma6Max && isfinite(pm.e4) && isfinite(pm.e6) && isfinite(pm.x) &&
+                  isfinite(pm.psi), "bad case %u: fault %u, gamma4 = %g, gamma6 = %g", i, f, pm.gamma4, pm.gamma6);
+            if (bad[i][1] > 1e5) CHECK(f & TG_FAULT_TRACE, "bad case %u: too long a step not flagged", i);
+        }
+}
+
 int main(void) {
     CHECK(tg_setup(&tg, &TG) == 0, "tg_setup");
     guidance_steady_state();
     guidance_lag();
     guidance_bad_input();
     force_minimisation();
+    path_memory();
     printf("ecu_steering: %d passed, %d failed\n", checks - failures, failures);
     return failures ? 1 : 0;
 }

@@ -8,6 +8,7 @@
 /* plain data, saved as FMU state */
 typedef struct {
     TgGuidance g;           /* parameters, constants, lag states */
+    TgPath pm;              /* mode = pathMemory: pose, stored trace of A2 (fixed ring buffer) */
     double t0;              /* start time: sample k is at t0 + k Ts */
     long long k;            /* index of the next sample */
     unsigned fault;         /* fault bits of the last sample (a warning when a bit turns on) */

@@ -41,6 +41,9 @@
 #define TG_FAULT_GEOMETRY 4u   /* no steady-state triangle (|gamma1| too large
                                   for the geometry, or |gamma1| >= pi/2): saturated */
 #define TG_FAULT_LIMIT    8u   /* a steady-state angle beyond its steering limit: saturated */
+#define TG_FAULT_TRACE   16u   /* pathMemory: a guided axle is not beside the stored trace of
+                                  A2 (its foot would be beyond an end of the buffer), or v Ts
+                                  is too long for the buffer: the trace is re-seeded */
 
 typedef struct {
     double l1, lg1, l2, lg2, l3;   /* geometry [m] */
@@ -76,5 +79,99 @@ void tg_set(TgGuidance *g, double gamma4, double gamma6);
 /* One sample: steady state for gamma1, then the arc lags over the distance
  * v Ts. Outputs in g->gamma4, g->gamma6, always finite and within the limits. */
 unsigned tg_sample(TgGuidance *g, double gamma1, double v);
+
+/* ---- pathMemory: follow-the-leader on the stored trace of A2 -------------
+ *
+ * Beyond the paper (issue 6). The controller dead-reckons the path of A2 from
+ * what an ECU on the bus measures and stores it; A4 and A6 are steered to
+ * follow that stored trace at their own arc-length position.
+ *
+ * Dead reckoning (frame of the ECU: A2 at the origin heading +x at the last
+ * reset). Per sample, with the held inputs, A2 advances by ds = v Ts along
+ * module 1's heading psi1, which turns by ds tan(gamma1) / l1 (the kinematic
+ * single-track: A2 rolls without side slip, yaw rate v tan(gamma1) / l1):
+ *   psi1 += ds kappa, x += ds cos(psi1 - ds kappa / 2), y += ds sin(...).
+ * Every TG_PM_N-th of the buffer length of arc length (spacing ds_grid, the
+ * buffer holding 2 (lg1 + l2 + lg2 + l3) + 10 m: on any circle the arc of A2
+ * between A6's foot and A2 is at most pi/2 times the chain) a point
+ * (x, y, psi1) of the trace goes into a ring buffer, interpolated to the grid.
+ *
+ * Where the guided axles are: from the pose of A2 and the measured
+ * articulation angles, psi2 = psi1 - dPsi1, psi3 = psi2 - dPsi2,
+ *   A4 = A2 - lg1 h(psi1) - l2 h(psi2),  A6 = A4 - lg2 h(psi2) - l3 h(psi3).
+ * Each one's foot on the stored polyline is searched near its last foot (a
+ * window of max(2 m, 3 ds) either side; never across the whole buffer, so a
+ * trace that passes near itself cannot capture it): arc length s, the
+ * trace's heading theta(s) interpolated, the signed lateral offset e (left +).
+ *
+ * Steering (follow-the-leader): the guided axle's velocity points along the
+ * trace at its position, plus feedback on its offset,
+ *   chi = theta(s + ds/2) - atan(kPath e),   gamma = chi - psi_module,
+ * theta half a sample ahead being the feed-forward of the trace's curvature
+ * over the coming sample (theta(s) + kappa(s) ds/2). Kinematically the axle
+ * then rolls along the trace and an offset decays as exp(-kPath s) in
+ * distance; angles are wrapped to (-pi, pi] and saturated at the limits.
+ *
+ * Odometry drift. The ECU only knows v, gamma1, dPsi: where A2 really slips
+ * sideways (tyre side slip beta2 of a few mrad on the circle at 3 m/s), or
+ * its yaw rate differs from v tan(gamma1) / l1 (under-steer, side slip of A1),
+ * the stored trace is rotated and bent against the real one. Only the last
+ * arc between A6's foot and A2 matters (the feet are found relative to the
+ * current estimated pose): a curvature error dk (a gamma1 sensor biased by b:
+ * dk = tan(b)/l1) puts an axle the arc s behind A2 about
+ *   dk (s^2/2 - s/kPath)
+ * off the real trace (s ~ 12 m for A4, ~ 24 m for A6; the bent estimate turns
+ * under the bus and the feedback follows it with an estimated offset of
+ * -dk s/kPath: 0.074 m and 0.37 m for a 0.5 deg bias, checked in
+ * tests/test_path_memory.py); a side slip beta2 of A2 rotates the trace by
+ * beta2, about beta2 s. The error does not accumulate with the distance
+ * driven (the global drift of the pose is common to trace and bus); it grows
+ * with lateral acceleration (slip) and with the square of the distance A2-A6.
+ * An error of v (scale) only stretches the trace and shifts the feet along
+ * it. On the 36 m bench (3 m/s, ~0.6 m/s^2) the dead-reckoning error is most
+ * of what is left: A4/A6 5-10 cm off the real trace while their estimated
+ * offsets stay below 3 cm.
+ *
+ * Start, change of driving direction, an axle beyond an end of the buffer,
+ * v Ts longer than an eighth of the buffer (TG_FAULT_TRACE): the trace is seeded
+ * from the bus as it stands (the measured articulation angles): going back
+ * from A2, the arc tangent to module 1 at A2 through A4, the arc tangent to
+ * that at A4 through A6, then 5 m straight on. The axles start on it with
+ * zero offset; a bus standing in a steady circle gets exactly its circle, a
+ * straight bus a straight line (a chord replaces an arc only when the axle
+ * is not behind the point before it: jack-knifed). v = 0: no
+ * motion, nothing is recorded, the outputs hold. Bad input (not finite,
+ * v < 0): nothing is updated, the outputs hold (fault bits as above).
+ */
+#define TG_PM_N 1024                 /* points in the ring buffer */
+
+typedef struct {
+    double kPath;                    /* feedback gain on the lateral offset [1/m], >= 0 */
+    double dsGrid;                   /* arc length between stored points [m] */
+    double window;                   /* foot search: half width [m] */
+    /* dead-reckoned pose of A2 (ECU frame) */
+    double x, y, psi;                /* psi wrapped to (-pi, pi] */
+    double s;                        /* odometer of A2 [m] */
+    /* the trace: point i (global index) at arc length i dsGrid, in slot i % TG_PM_N;
+       stored are i = first .. next - 1, first = max(0, next - TG_PM_N) */
+    double px[TG_PM_N], py[TG_PM_N], pth[TG_PM_N];
+    long long next;
+    /* the guided axles: segment index of the last foot, arc length, offset */
+    long long seg4, seg6;
+    double s4, s6, e4, e6;
+    /* outputs [rad] */
+    double gamma4, gamma6;
+} TgPath;
+
+/* the path memory for a set-up TgGuidance: 0, or -11 (kPath not valid) */
+int tg_pm_setup(TgPath *m, const TgGuidance *g, double kPath);
+/* seed the trace from the bus as it stands (see above); outputs from it */
+void tg_pm_reset(TgPath *m, const TgGuidance *g, double dPsi1, double dPsi2);
+/* One sample: steer A4 and A6 from the pose at this instant (outputs in
+ * m->gamma4, m->gamma6, finite and within the limits), then advance the pose
+ * by v Ts and record the trace. Returns fault bits (TG_FAULT_NAN, TG_FAULT_SPEED:
+ * outputs held; TG_FAULT_TRACE: re-seeded; TG_FAULT_LIMIT: saturated). */
+unsigned tg_pm_sample(TgPath *m, const TgGuidance *g, double gamma1, double v, double dPsi1, double dPsi2);
+const char *tg_pm_param_name(void);   /* "kPath" (the code -11 of tg_pm_setup) */
 
 #endif

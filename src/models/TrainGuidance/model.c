@@ -9,7 +9,14 @@
  * go to A3 and A1; module frames turned by 180 deg keep the sign of every
  * steering angle). The algorithm is the same; when `backwards` changes, the
  * lags restart from the steady state of the current gamma1 (the guided axles
- * change, their old lag states belong to other axles). */
+ * change, their old lag states belong to other axles).
+ *
+ * mode = 1 (pathMemory, beyond the paper; guidance.h): A4 and A6 follow the
+ * dead-reckoned, stored trace of A2 (inputs dPsi[1], dPsi[2] besides gamma1
+ * and v). The arc lags run alongside (gamma4ss, gamma6ss stay the paper's
+ * steady-state angles). Backwards the leading module sees G2 first, as
+ * -dPsi[2], then G1 as -dPsi[1] (as in ForceMinimization); a change of
+ * direction re-seeds the trace from the bus as it stands. */
 #include <math.h>
 
 #include "fmu.h"
@@ -23,6 +30,17 @@ static double gamma1_at(ModelInstance *comp, double t) {
     return D->gamma1;
 }
 
+/* the leading module's view of the articulation angles (ForceMinimization's) */
+static void hinges(ModelInstance *comp, double *d1, double *d2) {
+    if (D->backwards) {
+        *d1 = -D->dPsi[2];
+        *d2 = -D->dPsi[1];
+    } else {
+        *d1 = D->dPsi[1];
+        *d2 = D->dPsi[2];
+    }
+}
+
 fmi2Status model_init(ModelInstance *comp) {
     const TgParams p = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lg2 = D->lg2, .l3 = D->l3,
                          .S4 = D->S4, .S6 = D->S6, .Ts = D->Ts,
@@ -31,6 +49,11 @@ fmi2Status model_init(ModelInstance *comp) {
     if (bad) return log_error(comp, "parameter %s is not valid for the guidance (lengths and Ts "
                                     "must be > 0, S >= 0, 0 < limit < pi/2)", tg_param_name(bad));
     tg_reset(&S->g, gamma1_at(comp, comp->v.time));  /* starts in the steady state of gamma1 */
+    if (tg_pm_setup(&S->pm, &S->g, D->kPath))
+        return log_error(comp, "parameter %s = %g is not valid (finite, 0 .. 1000 1/m)", tg_pm_param_name(), D->kPath);
+    double d1, d2;
+    hinges(comp, &d1, &d2);
+    tg_pm_reset(&S->pm, &S->g, d1, d2);              /* the trace: the bus as it stands */
     S->t0 = comp->v.time;
     S->k = 0;
     S->fault = 0;
@@ -39,8 +62,15 @@ fmi2Status model_init(ModelInstance *comp) {
 }
 
 void model_outputs(ModelInstance *comp) {
-    D->gamma4 = S->g.gamma4;
-    D->gamma6 = S->g.gamma6;
+    if (D->mode == 1) {
+        D->gamma4 = S->pm.gamma4;
+        D->gamma6 = S->pm.gamma6;
+    } else {
+        D->gamma4 = S->g.gamma4;
+        D->gamma6 = S->g.gamma6;
+    }
+    D->e4 = S->pm.e4;
+    D->e6 = S->pm.e6;
     D->gamma4ss = S->g.gamma4ss;
     D->gamma6ss = S->g.gamma6ss;
     D->fault = (double)S->fault;
@@ -59,7 +89,13 @@ static void report(ModelInstance *comp, unsigned fault, double t, double gamma1,
                           "leaves [-1, 1]): guided angles saturated at their limits; warned once "
                           "until it clears", t, gamma1, D->l1, D->lg1, D->l2, D->lg2, D->l3);
     if (now & TG_FAULT_NAN)
-        log_warning(comp, "t = %.6g s: gamma1 = %g, v = %g: input not finite, outputs held", t, gamma1, v);
+        log_warning(comp, "t = %.6g s: gamma1 = %g, v = %g, dPsi[1] = %g, dPsi[2] = %g: input not finite, "
+                          "outputs held; warned once until it clears", t, gamma1, v, D->dPsi[1], D->dPsi[2]);
+    if (now & TG_FAULT_TRACE)
+        log_warning(comp, "t = %.6g s: pathMemory: a guided axle is not beside the stored trace of A2, or "
+                          "v Ts = %g m is too long for it: the trace is re-seeded from the bus as it stands "
+                          "(dPsi[1] = %g, dPsi[2] = %g rad); warned once until it clears",
+                    t, v * D->Ts, D->dPsi[1], D->dPsi[2]);
     if (now & TG_FAULT_LIMIT)
         log_event(comp, "t = %.6g s: gamma1 = %g rad: steady-state angle beyond gamma4Max = %g or "
                         "gamma6Max = %g rad, saturated", t, gamma1, D->gamma4Max, D->gamma6Max);
@@ -77,8 +113,17 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
                             "state of gamma1 = %g rad", tk, D->backwards ? "backwards" : "forwards", gamma1);
             tg_reset(&S->g, gamma1);
             S->backwards = D->backwards;
+            double d1, d2;
+            hinges(comp, &d1, &d2);
+            tg_pm_reset(&S->pm, &S->g, d1, d2);
         }
-        report(comp, tg_sample(&S->g, gamma1, D->v), tk, gamma1, D->v);
+        unsigned fault = tg_sample(&S->g, gamma1, D->v);
+        if (D->mode == 1) {
+            double d1, d2;
+            hinges(comp, &d1, &d2);
+            fault |= tg_pm_sample(&S->pm, &S->g, gamma1, D->v, d1, d2);
+        }
+        report(comp, fault, tk, gamma1, D->v);
         S->k++;
     }
     comp->v.time = t + h;
