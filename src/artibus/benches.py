@@ -77,6 +77,8 @@ VARIANTS = {
     "unsteered": ("A3..A6 unsteered", "about 6 (unsteered)", "> 20 with wrong A3/A5 angles", None),
     "guided": ("A4, A6 guided (Task 1), A3, A5 straight", "< 1.0 (steered)", "> 20 with wrong A3/A5 angles",
                lambda F: F > 20),
+    "guided all": ("A3 steered like A4, A5 like A6 (Task 1 on every trailer axle)", "< 1.0 (steered)",
+                   "> 20 with wrong A3/A5 angles", lambda F: F > 20),
     "guided+forcemin": ("A4, A6 guided (Task 1), A3, A5 force-minimising (Task 2)", "< 1.0 (steered)",
                         "< 4 (steered)", lambda F: F < 4),
 }
@@ -359,6 +361,7 @@ REPORTS = {
     "Bus36m_Circle": bus36m_circle,
     "Bus36m_Circle_Guided": lambda r, out: bus36m_circle(r, out, "guided"),
     "Bus36m_Circle_GuidedForceMin": lambda r, out: bus36m_circle(r, out, "guided+forcemin"),
+    "Bus36m_Circle_GuidedAll": lambda r, out: bus36m_circle(r, out, "guided all"),
     "Scania18m_LaneChange": scania18m_lane_change,
     "Bus36m_LaneChange": bus36m_lane_change,
     "Bus36m_Slalom": bus36m_slalom,
