@@ -12,6 +12,7 @@
 #ifndef ARTIBUS_FMU_H
 #define ARTIBUS_FMU_H
 
+#include <math.h>
 #include <stdbool.h>
 #include "fmi2Functions.h"
 #include "vartable.h"
@@ -77,6 +78,13 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h);
 
 /* Release comp->solver (fmi2Reset, fmi2FreeInstance). */
 void model_free(ModelInstance *comp);
+
+/* The built-in test stimulus of a model run alone (`fmpy simulate`): one
+ * sine period amp sin(2 pi t / period), an S-curve on a steering input, then
+ * nothing. Parameters testSteerAmp / testSteerPeriod; benches set amp = 0. */
+static inline double test_sine(double amp, double period, double t) {
+    return (amp != 0.0 && t < period) ? amp * sin(2 * M_PI * t / period) : 0.0;
+}
 
 /* ---- logging (messages name the variable and the value) ----------------- */
 

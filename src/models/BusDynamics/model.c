@@ -48,8 +48,7 @@ static void make_inputs(ModelInstance *comp, double t, DynInputs *u) {
         u->Fx[a] = D->Fx[a];
     }
     for (int k = 1; k <= DYN_MAX_HINGES; k++) u->Mjoint[k] = D->Mjoint[k];
-    if (D->testSteerAmp != 0.0 && t < D->testSteerPeriod)
-        u->delta[1] += D->testSteerAmp * sin(2 * M_PI * t / D->testSteerPeriod);
+    u->delta[1] += test_sine(D->testSteerAmp, D->testSteerPeriod, t);
 }
 
 static fmi2Status check_inputs(ModelInstance *comp, double t) {

@@ -34,9 +34,7 @@ static void make_chain(ModelInstance *comp, KinChain *c) {
 
 /* the input plus the built-in test steering (an S-curve for running alone) */
 static double gammaF_at(ModelInstance *comp, double t) {
-    if (D->testSteerAmp != 0.0 && t < D->testSteerPeriod)
-        return D->gammaF + D->testSteerAmp * sin(2 * M_PI * t / D->testSteerPeriod);
-    return D->gammaF;
+    return D->gammaF + test_sine(D->testSteerAmp, D->testSteerPeriod, t);
 }
 
 static fmi2Status check_inputs(ModelInstance *comp, double t) {

@@ -16,9 +16,7 @@
 #define S (&comp->v.s)
 
 static double gamma1_at(ModelInstance *comp, double t) {
-    if (D->testSteerAmp != 0.0 && t < D->testSteerPeriod)
-        return D->gamma1 + D->testSteerAmp * sin(2 * M_PI * t / D->testSteerPeriod);
-    return D->gamma1;
+    return D->gamma1 + test_sine(D->testSteerAmp, D->testSteerPeriod, t);
 }
 
 /* the leading module's view of the articulation angles */
