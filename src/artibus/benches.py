@@ -356,12 +356,62 @@ def bus36m_circle_backwards(r, out):
                           "tests/test_benches_roads.py compares the two within 10 %. A5 is driven (the mirror of A2).")
 
 
+def multiaxle_step_steer(r, out):
+    """seed 004, Figs. 3-4: step responses at several speeds and the frequency
+    response, zero-side-slip steering (ZS) against front-axle steering (FWS),
+    each a run of this bench (FWS: the plant ignores the tag axle's angle)."""
+    from artibus import bode, runner
+    speeds = (5.0, 10.0, 20.0, 30.0)
+    delta1 = 0.02                       # the bench's step (Steering.testSteerAmp)
+
+    def variant(u, zs):
+        o = {"Vehicle.u": u, "Steering.u": u}
+        if not zs:
+            o["Vehicle.steerable[3]"] = False
+        return o
+
+    runs = {(u, zs): runner.run("MultiAxle_StepSteer", overrides=variant(u, zs)) for u in speeds for zs in (True, False)}
+    kpis = []
+    for u in speeds:
+        for zs in (True, False):
+            rr = runs[(u, zs)]
+            name = "ZS" if zs else "FWS"
+            kpis.append(Kpi(f"{name} at {u:g} m/s: side-slip after 10 s", rr["Vehicle.beta"][-1], "rad",
+                            "0 (zero side-slip steering)" if zs else "", "seed 004, eq. 3",
+                            abs(rr["Vehicle.beta"][-1]) < 1e-6 if zs else None))
+            kpis.append(Kpi(f"{name} at {u:g} m/s: yaw-rate gain", rr["Vehicle.w_r"][-1] / delta1, "1/s"))
+    t = runs[(20.0, True)].time
+    panels = []
+    for sig, label in (("Vehicle.w_r", "yaw rate [rad/s]"), ("Vehicle.a_y", "lateral acc. [m/s2]"),
+                       ("Vehicle.beta", "side-slip [rad]")):
+        series = {}
+        for u in speeds:
+            series[f"ZS {u:g} m/s"] = runs[(u, True)][sig]
+            series[f"FWS {u:g} m/s"] = runs[(u, False)][sig]
+        panels.append((label, series))
+    report.signals(out / "step.png", t, panels, title="Front step steer 0.02 rad: ZS (K(u) delta1 on the tag axle) vs FWS")
+    freqs = [0.1, 0.2, 0.5, 1.0, 2.0, 3.0]
+    resp = {}
+    for zs in (True, False):
+        o = {**variant(20.0, zs), "Steering.testSteerAmp": 0.0}
+        f = bode.frequency_response("MultiAxle_StepSteer", "Steering.delta1", ["Vehicle.w_r", "Vehicle.a_y"],
+                                    freqs, 0.01, overrides=o)
+        for k, v in f.items():
+            resp[f"{'ZS' if zs else 'FWS'} {k.split('.')[-1]}"] = v
+    bode.plot(out / "bode.png", resp, "Frequency response at 20 m/s, per rad of delta1 (sine tests through the co-simulation)")
+    images = [("step.png", "Step responses at 5, 10, 20 and 30 m/s (seed 004, Fig. 3)."),
+              ("bode.png", "Yaw rate and lateral acceleration per front steering angle at 20 m/s (seed 004, Fig. 4).")]
+    return kpis, images, ("Vehicle data: ssp/parameters/Bus15mTagAxle.ssv (estimates: seed 004 gives none). "
+                          "Zero-side-slip steering trades yaw-rate gain at speed for zero side-slip.")
+
+
 REPORTS = {
     "Urbino18_Circle": urbino18_circle,
     "Bus36m_Circle": bus36m_circle,
     "Bus36m_Circle_Guided": lambda r, out: bus36m_circle(r, out, "guided"),
     "Bus36m_Circle_GuidedForceMin": lambda r, out: bus36m_circle(r, out, "guided+forcemin"),
     "Bus36m_Circle_GuidedAll": lambda r, out: bus36m_circle(r, out, "guided all"),
+    "MultiAxle_StepSteer": multiaxle_step_steer,
     "Scania18m_LaneChange": scania18m_lane_change,
     "Bus36m_LaneChange": bus36m_lane_change,
     "Bus36m_Slalom": bus36m_slalom,
