@@ -60,6 +60,7 @@ Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
              void *user, OdeMethod method, double rtol, double atol) {
     Ode *o = calloc(1, sizeof *o);
     if (!o) return NULL;
+    if (comp->tolerance > 0) rtol = comp->tolerance;   /* fmi2SetupExperiment's tolerance wins */
     o->comp = comp; o->n = n; o->rhs = rhs; o->nroots = nroots; o->roots = roots; o->user = user;
     if (SUNContext_Create(ARTIBUS_COMM, &o->ctx)) goto fail;
 #if SUNDIALS_VERSION_MAJOR >= 7

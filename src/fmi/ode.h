@@ -22,6 +22,7 @@ typedef enum { ODE_BDF, ODE_ADAMS } OdeMethod;
 
 typedef struct Ode Ode;
 
+/* rtol: the model's parameter; a tolerance given in fmi2SetupExperiment replaces it */
 Ode *ode_new(struct ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
              void *user, OdeMethod method, double rtol, double atol);
 

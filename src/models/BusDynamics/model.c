@@ -191,9 +191,8 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         sv = comp->solver = calloc(1, sizeof(Solver));
         if (!sv) return log_error(comp, "out of memory");
         sv->comp = comp;
-        const double rtol = comp->tolerance > 0 ? comp->tolerance : D->rtol;
         sv->ode = ode_new(comp, 2 * (2 + D->nModules), rhs, 0, NULL, sv,
-                          D->solver == 1 ? ODE_ADAMS : ODE_BDF, rtol, D->atol);
+                          D->solver == 1 ? ODE_ADAMS : ODE_BDF, D->rtol, D->atol);
         if (!sv->ode) return fmi2Error;
     }
     make_params(comp, &sv->p);

@@ -130,8 +130,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         s = comp->solver = calloc(1, sizeof(Solver));
         if (!s) return log_error(comp, "out of memory");
         s->comp = comp;
-        const double rtol = comp->tolerance > 0 ? comp->tolerance : D->rtol;
-        s->ode = ode_new(comp, 3 + D->N, rhs, D->N, roots, s, ODE_ADAMS, rtol, D->atol);
+        s->ode = ode_new(comp, 3 + D->N, rhs, D->N, roots, s, ODE_ADAMS, D->rtol, D->atol);
         if (!s->ode) return fmi2Error;
     }
     make_chain(comp, &s->chain);

@@ -120,8 +120,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         s = comp->solver = calloc(1, sizeof(Solver));
         if (!s) return log_error(comp, "out of memory");
         s->comp = comp;
-        const double rtol = comp->tolerance > 0 ? comp->tolerance : D->rtol;
-        s->ode = ode_new(comp, 7, rhs, 0, NULL, s, ODE_BDF, rtol, D->atol);
+        s->ode = ode_new(comp, 7, rhs, 0, NULL, s, ODE_BDF, D->rtol, D->atol);
         if (!s->ode) return fmi2Error;
     }
     make_vehicle(comp, &s->veh);
