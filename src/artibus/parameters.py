@@ -57,19 +57,20 @@ def typed(type_, text):
     return text
 
 
-def check_against(values, fmu, source):
+def check_against(values, fmu, source, prefix=""):
+    """Each name must be a parameter or input of the FMU (a model description
+    or a path) and each number within its range; errors name the source, the
+    parameter (``prefix`` + name, e.g. a component path) and the value."""
     md = fmu if hasattr(fmu, "modelVariables") else read_model_description(str(fmu))
     variables = {v.name: v for v in md.modelVariables}
     for name, value in values.items():
         v = variables.get(name)
+        label = f"{source}: Parameter '{prefix}{name}' = {value!r}"
         if v is None:
-            raise ArtibusError(f"{source}: Parameter '{name}' = {value!r}: "
-                               f"{md.modelName} has no variable of that name")
+            raise ArtibusError(f"{label}: {md.modelName} has no variable '{name}'")
         if v.causality not in ("parameter", "input"):
-            raise ArtibusError(f"{source}: Parameter '{name}' = {value!r}: "
-                               f"it is an {v.causality} of {md.modelName} and cannot be set")
+            raise ArtibusError(f"{label}: it is an {v.causality} of {md.modelName} and cannot be set")
         if v.type in ("Real", "Integer"):
             x = float(value)
             if v.min is not None and x < float(v.min) or v.max is not None and x > float(v.max):
-                raise ArtibusError(f"{source}: Parameter '{name}' = {value!r} is outside "
-                                   f"[{v.min}, {v.max}] of {md.modelName}")
+                raise ArtibusError(f"{label} is outside [{v.min}, {v.max}] of {md.modelName}")

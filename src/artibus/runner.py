@@ -29,6 +29,7 @@ import numpy as np
 from fmpy.fmi1 import FMICallException
 
 from artibus import ArtibusError
+from artibus.parameters import check_against
 from artibus.simulation import Fmu, Result, SimulationError
 from artibus import ssp as ssp_mod
 
@@ -239,15 +240,7 @@ class Simulation:
                         raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
                     values[var] = str(f)
         for path, values in self.parameters.items():
-            fmu = units[path].fmu
-            for var, value in values.items():
-                v = fmu.vars.get(var)
-                if v is None:
-                    raise ArtibusError(f"{where}: parameter '{path}.{var}' = {value!r}: "
-                                       f"{fmu.md.modelName} has no variable '{var}'")
-                if v.causality not in ("parameter", "input"):
-                    raise ArtibusError(f"{where}: parameter '{path}.{var}' = {value!r}: it is an "
-                                       f"{v.causality} and cannot be set")
+            check_against(values, units[path].fmu.md, where, prefix=f"{path}.")
 
         # connections
         self.links = []
