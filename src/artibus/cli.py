@@ -171,7 +171,8 @@ def cmd_demo(args):
     """Urbino 18 Electric (seed 003, Table I) pushed at 3 m/s through an
     S-curve: 25 deg left, 25 deg right, straight; results and a plot."""
     from artibus.parameters import read_parameters
-    from artibus.plots import plot_path
+    import numpy as np
+    from artibus.report import birds_eye, signals
     from artibus.simulation import simulate
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
@@ -188,7 +189,14 @@ def cmd_demo(args):
     csv = out / "BusKinematics_Urbino18_SCurve.csv"
     png = out / "BusKinematics_Urbino18_SCurve.png"
     result.to_csv(csv)
-    plot_path(result, 1, png, "Urbino 18 pusher, S-curve at 3 m/s (seed 003 model)")
+    theta0 = result["theta[0]"]
+    front = (result["x[0]"] + params["L0"] * np.cos(theta0), result["y[0]"] + params["L0"] * np.sin(theta0))
+    birds_eye(png, {"front axle": front, "tractor rear axle P0": (result["x[0]"], result["y[0]"]),
+                    "wagon axle P1": (result["x[1]"], result["y[1]"])},
+              title="Urbino 18 pusher, S-curve at 3 m/s (seed 003 model)")
+    signals(out / "BusKinematics_Urbino18_SCurve_signals.png", result.time,
+            [("steering gammaF [deg]", {"gammaF": np.degrees([gammaF(t) for t in result.time])}),
+             ("joint angle [deg]", {"beta[1]": np.degrees(result["beta[1]"])})], title="S-curve")
     bmax = max(abs(result["beta[1]"]))
     print(f"demo: {csv}\ndemo: {png}\nmax |beta[1]| = {math.degrees(bmax):.1f} deg "
           f"(Urbino 18 mechanical limit 54 deg, seed 003 Table I)")
