@@ -16,6 +16,7 @@
 - on a failure midway, the results so far are kept with the failing time and
   the FMU's log.
 """
+import math
 import shutil
 import sys
 from ctypes import POINTER, c_double, c_int, c_size_t, c_uint, c_void_p
@@ -48,7 +49,7 @@ class Link:
     name: str
 
 
-@dataclass
+@dataclass(eq=False)        # a unit is itself: compared by identity
 class Unit:
     """A component while it runs."""
     path: str
@@ -62,6 +63,7 @@ class Unit:
     out_values: list = field(default_factory=list)
     in_values: list = field(default_factory=list)
     feeds: set = field(default_factory=set)      # (input name, output name) direct feedthrough
+    links_in: list = field(default_factory=list)  # the Links into its inputs
     wall: float = 0.0
     raw: object = None                           # _RawCalls, once the variables are known
 
@@ -269,6 +271,7 @@ class Simulation:
             b.in_vrs.append(vb.valueReference)
             self.links.append(Link(a, a.out_names.index(c.start[1]), b, len(b.in_names) - 1,
                                    f, o, f"{c.end[0]}.{c.end[1]}"))
+            b.links_in.append(self.links[-1])
         # direct feedthrough from the model descriptions
         for u in self.units:
             inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
@@ -340,9 +343,8 @@ class Simulation:
         u.wall += _time.perf_counter() - w
 
     def _propagate(self, to=None, t=0.0):
-        for l in self.links:
-            if to is None or l.dst is to:
-                l.dst.in_values[l.dst_index] = l.factor * l.src.out_values[l.src_index] + l.offset
+        for l in (self.links if to is None else to.links_in):
+            l.dst.in_values[l.dst_index] = l.factor * l.src.out_values[l.src_index] + l.offset
         for u, i, f, base in self.stimuli:
             if to is None or u is to:
                 u.in_values[i] = (u.in_values[i] if base is None else base) + f(t)
@@ -391,16 +393,19 @@ class Simulation:
         n = int(round((stop - start) / self.base_step))
         t = start
         current = None
+        # a component with step H = ratio * h takes its inputs at the start of
+        # its interval and publishes its outputs at the end, when the others get
+        # there: which start and which end at base step k repeats with this period
+        period = math.lcm(*(u.ratio for u in self.units))
+        plan = [([u for u in self.order if k % u.ratio == 0],
+                 [u for u in self.order if (k + 1) % u.ratio == 0]) for k in range(period)]
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
             self._record(result, t)
             for k in range(n):
                 t = start + k * self.base_step
-                # a component with step H = ratio * h takes its inputs at the start of
-                # its interval and publishes its outputs at the end, when the others get there
-                starting = [u for u in self.order if k % u.ratio == 0]
-                ending = [u for u in self.order if (k + 1) % u.ratio == 0]
+                starting, ending = plan[k % period]
                 if self.algorithm == "jacobi":
                     for u in starting:
                         self._propagate(u, t)

@@ -198,7 +198,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
     comp->v.state = S_INSTANTIATED;
     comp->stopTime = INFINITY;
     vars_set_start_values(&comp->v.d);
-    comp->restart = comp->dirty = true;
+    comp->restart = comp->forget = comp->dirty = true;
     return comp;
 }
 
@@ -241,7 +241,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     if (status > fmi2Warning) return leave(comp, status);
     model_outputs(comp);
     comp->dirty = false;
-    comp->restart = true;
+    comp->restart = comp->forget = true;
     comp->v.state = S_STEP_COMPLETE;
     log_event(comp, "initialized at t = %g", comp->v.time);
     return status;
@@ -261,7 +261,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     comp->v.state = S_INSTANTIATED;
     comp->stopTime = INFINITY;
     comp->tolerance = 0.0;
-    comp->restart = comp->dirty = true;
+    comp->restart = comp->forget = comp->dirty = true;
     return fmi2OK;
 }
 
@@ -414,7 +414,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     *state = s;
     /* the integrator restarts here, exactly as it will after a restore: so a
        run continued from this point and one restored to it are identical */
-    comp->restart = true;
+    comp->restart = comp->forget = true;
     return fmi2OK;
 }
 
@@ -423,7 +423,7 @@ static fmi2Status restore(ModelInstance *comp, const char *fn, const FmuState *s
         strcmp(s->guid, MODEL_GUID) != 0)
         return log_error(comp, "%s: the state was not made by this FMU (GUID %s)", fn, MODEL_GUID);
     comp->v = s->v;
-    comp->restart = true;
+    comp->restart = comp->forget = true;
     comp->dirty = true;
     log_event(comp, "%s: state restored at t = %g", fn, comp->v.time);
     return fmi2OK;
@@ -518,7 +518,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         return leave(comp, log_error(comp, "fmi2DoStep: step to t = %.17g goes beyond stopTime = %.17g",
                                      now + h, comp->stopTime));
     fmi2Status status = model_do_step(comp, now, h);
-    comp->restart = false;
+    comp->restart = comp->forget = false;
     if (status <= fmi2Warning) {
         comp->dirty = true;         /* outputs are computed when they are read */
     } else {

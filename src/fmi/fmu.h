@@ -56,6 +56,11 @@ typedef struct ModelInstance {
     double tolerance;       /* 0 unless fmi2SetupExperiment defined it */
     bool restart;           /* a variable was set or the state restored: the
                                integrator must restart from v.d at the next step */
+    bool forget;            /* that restart must also forget what the integrator
+                               learnt before it (its Jacobian, its step size), so
+                               it is reproducible bit for bit: set at
+                               initialisation and where the FMU state is saved
+                               or restored */
     bool dirty;             /* outputs must be recalculated before a get */
     void *solver;           /* model-owned resources (CVODE memory, tables) */
 } ModelInstance;

@@ -1,4 +1,5 @@
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 #include <cvode/cvode.h>
@@ -28,6 +29,10 @@ struct Ode {
     void *user;
     bool started;
     long nrhs;
+    SUNMatrix J;        /* the last Jacobian computed, for reuse after a restart */
+    bool haveJ;         /* J holds one that may be reused */
+    bool reuseJ;        /* the next Jacobian request is the first after a restart */
+    N_Vector ewt;
 };
 
 static int cv_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *p) {
@@ -39,6 +44,50 @@ static int cv_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *p) {
 static int cv_roots(sunrealtype t, N_Vector y, sunrealtype *g, void *p) {
     Ode *o = p;
     return o->roots(t, N_VGetArrayPointer(y), g, o->user);
+}
+
+/* The Jacobian df/dy by difference quotients, column by column, with
+   CVODE's own increments (cvLsDenseDQJac: sqrt(eps)|y_j|, at least
+   1000 |h| eps n ||f||_wrms / ewt_j), kept for reuse.
+
+   After a restart (an input changed: y is continuous, only f jumped) the
+   first request gets the Jacobian kept from before the restart instead of a
+   new one: CVODE's Newton iteration only needs an approximate Jacobian (it
+   keeps one for up to 51 steps itself), and if the iteration does not
+   converge with it CVODE asks again (CV_FAIL_OTHER) and gets a fresh one. */
+static int cv_jac(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix Jac, void *p,
+                  N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
+    (void)tmp3;
+    Ode *o = p;
+    if (o->reuseJ) {
+        o->reuseJ = false;
+        return SUNMatCopy(o->J, Jac) == 0 ? 0 : -1;
+    }
+    o->reuseJ = false;
+    const int n = o->n;
+    sunrealtype h = 0.0;
+    CVodeGetCurrentStep(o->mem, &h);
+    if (CVodeGetErrWeights(o->mem, o->ewt) != CV_SUCCESS) return -1;
+    const sunrealtype fnorm = N_VWrmsNorm(fy, o->ewt);
+    const sunrealtype eps = SUN_UNIT_ROUNDOFF, srur = sqrt(eps);
+    const sunrealtype minInc = fnorm != 0.0 ? 1000.0 * fabs(h) * eps * n * fnorm : 1.0;
+    const double *ew = N_VGetArrayPointer(o->ewt), *f0 = N_VGetArrayPointer(fy);
+    double *yv = N_VGetArrayPointer(tmp1), *f1 = N_VGetArrayPointer(tmp2);
+    N_VScale(1.0, y, tmp1);
+    for (int j = 0; j < n; j++) {
+        const double yj = yv[j];
+        const double inc = fmax(srur * fabs(yj), minInc / ew[j]);
+        yv[j] = yj + inc;
+        o->nrhs++;
+        const int flag = o->rhs(t, yv, f1, o->user);
+        yv[j] = yj;
+        if (flag) return flag;
+        double *col = SUNDenseMatrix_Column(Jac, j);
+        for (int i = 0; i < n; i++) col[i] = (f1[i] - f0[i]) / inc;
+    }
+    if (SUNMatCopy(Jac, o->J) != 0) return -1;
+    o->haveJ = true;
+    return 0;
 }
 
 #if SUNDIALS_VERSION_MAJOR >= 7
@@ -81,6 +130,9 @@ Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
     o->A = SUNDenseMatrix(n, n, o->ctx);
     o->LS = SUNLinSol_Dense(o->y, o->A, o->ctx);
     if (!o->A || !o->LS || CVodeSetLinearSolver(o->mem, o->LS, o->A) != CV_SUCCESS) goto fail;
+    o->J = SUNDenseMatrix(n, n, o->ctx);
+    o->ewt = N_VNew_Serial(n, o->ctx);
+    if (!o->J || !o->ewt || CVodeSetJacFn(o->mem, cv_jac) != CV_SUCCESS) goto fail;
     if (nroots > 0) {
         if (CVodeRootInit(o->mem, nroots, cv_roots) != CV_SUCCESS) goto fail;
         CVodeSetNoInactiveRootWarn(o->mem);
@@ -97,8 +149,22 @@ OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
                       double *t, int *rootsfound) {
     double *yv = N_VGetArrayPointer(o->y);
     if (restart || !o->started) {
+        /* An input changed (restart): y is continuous, only f jumped. The
+           Jacobian kept from before serves the first Newton iteration, and
+           the first step starts from a tenth of the last one (that was taken
+           at order >= 2, the restart is at order 1; CVODE grows it again)
+           instead of CVODE's conservative estimate, which starts ~1e-6 s.
+           Where the FMI layer asks to forget (initialisation, FMU state saved
+           or restored) both come from CVODE afresh, so such restarts are
+           reproducible bit for bit. */
+        const bool keep = o->started && !o->comp->forget;
+        sunrealtype hlast = 0.0;
+        if (keep) CVodeGetLastStep(o->mem, &hlast);
         memcpy(yv, y, sizeof(double) * (size_t)o->n);
         if (CVodeReInit(o->mem, t0, o->y) != CV_SUCCESS) return ODE_FAILED;
+        CVodeSetInitStep(o->mem, keep ? 0.1 * hlast : 0.0);
+        o->reuseJ = keep && o->haveJ;
+        if (!keep) o->haveJ = false;
         o->started = true;
     }
     /* no stop time: with the inputs held, CVODE may step past t1 and
@@ -131,6 +197,8 @@ void ode_free(Ode *o) {
     if (o->mem) CVodeFree(&o->mem);
     if (o->LS) SUNLinSolFree(o->LS);
     if (o->A) SUNMatDestroy(o->A);
+    if (o->J) SUNMatDestroy(o->J);
+    if (o->ewt) N_VDestroy(o->ewt);
     if (o->y) N_VDestroy(o->y);
     if (o->ctx) SUNContext_Free(&o->ctx);
     free(o);

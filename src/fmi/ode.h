@@ -29,7 +29,10 @@ Ode *ode_new(struct ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots
 typedef enum { ODE_REACHED = 0, ODE_ROOT = 1, ODE_FAILED = -1 } OdeResult;
 
 /* Advance y from t0 to t1. With restart, or on the first call, the integrator
-   starts afresh at (t0, y); otherwise it continues its history (y must then be
+   starts again at (t0, y) at order 1, keeping its last Jacobian and step size
+   as first guesses unless the FMI layer asked it to forget them
+   (ModelInstance.forget: initialisation, FMU state saved or restored);
+   otherwise it continues its history (y must then be
    what the last call returned): its internal steps may then run past t1, and
    y(t1) is interpolated, as the right-hand side must not change in between. On ODE_ROOT, *t is the root's
    time and rootsfound[i] != 0 for the functions that crossed zero. */

@@ -11,6 +11,7 @@
 #include <math.h>
 
 #include "fmu.h"
+#include "leading_hinges.h"
 #include "forcemin.h"
 
 #define S (&comp->v.s)
@@ -21,13 +22,7 @@ static double gamma1_at(ModelInstance *comp, double t) {
 
 /* the leading module's view of the articulation angles */
 static void hinges(ModelInstance *comp, double *d1, double *d2) {
-    if (D->backwards) {
-        *d1 = -D->dPsi[2];
-        *d2 = -D->dPsi[1];
-    } else {
-        *d1 = D->dPsi[1];
-        *d2 = D->dPsi[2];
-    }
+    leading_hinges(D->backwards, D->dPsi[1], D->dPsi[2], d1, d2);
 }
 
 static unsigned sample(ModelInstance *comp, double t) {

@@ -20,6 +20,7 @@
 #include <math.h>
 
 #include "fmu.h"
+#include "leading_hinges.h"
 #include "guidance.h"
 
 #define S (&comp->v.s)
@@ -28,15 +29,9 @@ static double gamma1_at(ModelInstance *comp, double t) {
     return D->gamma1 + test_sine(D->testSteerAmp, D->testSteerPeriod, t);
 }
 
-/* the leading module's view of the articulation angles (ForceMinimization's) */
+/* the leading module's view of the articulation angles */
 static void hinges(ModelInstance *comp, double *d1, double *d2) {
-    if (D->backwards) {
-        *d1 = -D->dPsi[2];
-        *d2 = -D->dPsi[1];
-    } else {
-        *d1 = D->dPsi[1];
-        *d2 = D->dPsi[2];
-    }
+    leading_hinges(D->backwards, D->dPsi[1], D->dPsi[2], d1, d2);
 }
 
 fmi2Status model_init(ModelInstance *comp) {
