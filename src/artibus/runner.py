@@ -64,6 +64,9 @@ class Unit:
     in_values: list = field(default_factory=list)
     feeds: set = field(default_factory=set)      # (input name, output name) direct feedthrough
     links_in: list = field(default_factory=list)  # the Links into its inputs
+    feed: list = field(default_factory=list)      # the same, as (input index, source buffer,
+                                                  # output index, factor, offset)
+    stimuli: list = field(default_factory=list)   # (input index, f(t), base value or None)
     wall: float = 0.0
     raw: object = None                           # _RawCalls, once the variables are known
 
@@ -87,21 +90,22 @@ class _RawCalls:
         self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
         self.inp = (c_double * self.n_in)()
 
-    @staticmethod
-    def _check(name, status):
-        if status > 1:  # fmi2Discard or worse
-            raise FMICallException(function=name, status=status)
-
     def read(self):
         if self.n_out:
-            self._check("fmi2GetReal", self._get(self.comp, self.out_vrs, self.n_out, self.out))
+            status = self._get(self.comp, self.out_vrs, self.n_out, self.out)
+            if status > 1:  # fmi2Discard or worse
+                raise FMICallException(function="fmi2GetReal", status=status)
 
     def write(self):
         if self.n_in:
-            self._check("fmi2SetReal", self._set(self.comp, self.in_vrs, self.n_in, self.inp))
+            status = self._set(self.comp, self.in_vrs, self.n_in, self.inp)
+            if status > 1:
+                raise FMICallException(function="fmi2SetReal", status=status)
 
     def step(self, t, h):
-        self._check("fmi2DoStep", self._do(self.comp, t, h, 1))
+        status = self._do(self.comp, t, h, 1)
+        if status > 1:  # fmi2Discard or worse
+            raise FMICallException(function="fmi2DoStep", status=status)
 
 
 def _unit_conversion(md_a, var_a, md_b, var_b, where):
@@ -300,33 +304,33 @@ class Simulation:
             if n not in u.out_names:
                 u.out_names.append(n)
                 u.out_vrs.append(u.fmu.var(n).valueReference)
-        self.stimuli = []     # (unit, input index, f, base value or None when connected)
-        for name, f in stimuli.items():
+        for name, f in stimuli.items():       # added to the input: f(t) + its connection or base value
             comp, _, var = name.rpartition(".")
             v = units[comp].fmu.vars.get(var) if comp in units else None
             if v is None or v.causality != "input" or v.type != "Real":
                 raise ArtibusError(f"stimulus {name}: not a Real input of a component of {where}")
             u = units[comp]
             if var in u.in_names:
-                self.stimuli.append((u, u.in_names.index(var), f, None))
+                u.stimuli.append((u.in_names.index(var), f, None))
             else:
                 u.in_names.append(var)
                 u.in_vrs.append(v.valueReference)
                 base = float(self.parameters[comp].get(var, v.start))
-                self.stimuli.append((u, len(u.in_names) - 1, f, base))
+                u.stimuli.append((len(u.in_names) - 1, f, base))
         for u in self.units:
             u.raw = _RawCalls(u)
             u.out_values = u.raw.out      # read and written in place
             u.in_values = u.raw.inp
+        for u in self.units:
+            u.feed = [(l.dst_index, l.src.raw.out, l.src_index, l.factor, l.offset) for l in u.links_in]
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
-        # recording: per component, numpy views of its output buffer and the
-        # columns its recorded outputs go to
+        # recording: per component, which of its outputs go to which columns
         self._rec = []
         for u in self.units:
             cols = [k + 1 for k, (v, _) in enumerate(self.record) if v is u]
             idx = [u.out_names.index(n) for v, n in self.record if v is u]
             if cols:
-                self._rec.append((np.frombuffer(u.raw.out, dtype=np.float64), np.array(idx), np.array(cols)))
+                self._rec.append((u, np.array(idx), np.array(cols)))
 
     # --- the algorithm ---------------------------------------------------------------
 
@@ -338,16 +342,21 @@ class Simulation:
 
     def _step(self, u, t0):
         w = _time.perf_counter()
-        u.raw.step(t0, u.step)
-        u.raw.read()
+        raw = u.raw
+        raw.step(t0, u.step)
+        raw.read()
         u.wall += _time.perf_counter() - w
 
     def _propagate(self, to=None, t=0.0):
-        for l in (self.links if to is None else to.links_in):
-            l.dst.in_values[l.dst_index] = l.factor * l.src.out_values[l.src_index] + l.offset
-        for u, i, f, base in self.stimuli:
-            if to is None or u is to:
-                u.in_values[i] = (u.in_values[i] if base is None else base) + f(t)
+        if to is None:
+            for u in self.units:
+                self._propagate(u, t)
+            return
+        inp = to.in_values
+        for i, out, j, factor, offset in to.feed:
+            inp[i] = factor * out[j] + offset
+        for i, f, base in to.stimuli:
+            inp[i] = (inp[i] if base is None else base) + f(t)
 
     def _initialize(self, start):
         for u in self.units:
@@ -375,12 +384,29 @@ class Simulation:
             u.fmu.slave.exitInitializationMode()
             self._read(u)
 
-    def _record(self, result, t):
-        row = np.empty(len(self.names))
-        row[0] = t
-        for view, idx, cols in self._rec:
-            row[cols] = view[idx]
-        result.rows.append(row)
+    class _Recorder:
+        """At every base step a copy of each recorded component's output buffer
+        (one memcpy), sorted into the result's columns when it is asked for."""
+
+        def __init__(self, names, rec):
+            self.names, self.rec, self.times = names, rec, []
+            self.buffers = [(u.raw.out, []) for u, _, _ in rec]
+
+        def take(self, t):
+            self.times.append(t)
+            for out, copies in self.buffers:
+                copies.append(bytes(out))
+
+        def result(self):
+            n = len(self.times)
+            table = np.empty((n, len(self.names)))
+            table[:, 0] = self.times
+            for (u, idx, cols), (_, copies) in zip(self.rec, self.buffers):
+                values = np.frombuffer(b"".join(copies), dtype=np.float64).reshape(n, u.raw.n_out)
+                table[:, cols] = values[:, idx]
+            result = Result(list(self.names), list(table))
+            result._array = table
+            return result
 
     def run(self, stop_time=None, start_time=None, progress=False):
         start = self.bench.start_time if start_time is None else start_time
@@ -389,7 +415,7 @@ class Simulation:
             raise ArtibusError(f"{self.bench.file}: no DefaultExperiment stopTime; give --stop-time")
         if not stop > start:
             raise ArtibusError(f"stop time {stop} must be after the start time {start}")
-        result = Result(list(self.names))
+        rec = self._Recorder(self.names, self._rec)
         n = int(round((stop - start) / self.base_step))
         t = start
         current = None
@@ -402,7 +428,7 @@ class Simulation:
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
-            self._record(result, t)
+            rec.take(t)
             for k in range(n):
                 t = start + k * self.base_step
                 starting, ending = plan[k % period]
@@ -424,7 +450,7 @@ class Simulation:
                             self._step(u, t + self.base_step - u.step)
                 current = None
                 t = start + (k + 1) * self.base_step
-                self._record(result, t)
+                rec.take(t)
                 if progress and k % max(1, n // 50) == 0:
                     sys.stderr.write(f"\r{self.bench.name}: t = {t:8.2f} s  [{'#' * (50 * (k + 1) // n):50s}]")
             if progress:
@@ -433,9 +459,9 @@ class Simulation:
             who = current.path if current else "?"
             log = current.fmu.log if current else [m for u in self.units for m in u.fmu.log]
             raise SimulationError(f"{self.ssp}: component '{who}' failed at t = {t:g} s: "
-                                  f"{log[-1] if log else 'no message'}", result, list(log)) from None
+                                  f"{log[-1] if log else 'no message'}", rec.result(), list(log)) from None
         self.wall = _time.perf_counter() - wall0
-        return result
+        return rec.result()
 
     def close(self):
         for u in getattr(self, "units", []):
