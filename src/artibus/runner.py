@@ -425,6 +425,10 @@ class Simulation:
         period = math.lcm(*(u.ratio for u in self.units))
         plan = [([u for u in self.order if k % u.ratio == 0],
                  [u for u in self.order if (k + 1) % u.ratio == 0]) for k in range(period)]
+        # Gauss-Seidel: per base step, in the order, (unit, starts, ends) of those that do either
+        plan_gs = [[(u, u in starting, u in ending) for u in self.order if u in starting or u in ending]
+                   for starting, ending in plan]
+        h = self.base_step
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
@@ -441,13 +445,13 @@ class Simulation:
                         current = u
                         self._step(u, t + self.base_step - u.step)
                 else:
-                    for u in self.order:
-                        if u in starting:
+                    for u, starts, ends in plan_gs[k % period]:
+                        if starts:
                             self._propagate(u, t)
-                            self._write(u)
-                        if u in ending:
+                            u.raw.write()
+                        if ends:
                             current = u
-                            self._step(u, t + self.base_step - u.step)
+                            self._step(u, t + h - u.step)
                 current = None
                 t = start + (k + 1) * self.base_step
                 rec.take(t)

@@ -58,7 +58,7 @@ def pack(bench, out_dir=None):
     tree = etree.parse(str(ssd_file))
     out = Path(out_dir or fmu_dir()) / f"{bench}.ssp"
     files = {}
-    for el in tree.iter():
+    for el in tree.iter(tag=etree.Element):      # elements only: comments and PIs have no tag name
         ref = el.get("source")
         if ref is None and etree.QName(el).localname == "String":
             ref = el.get("value")     # a file a component reads, e.g. a road: see resolve_resources

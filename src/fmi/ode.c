@@ -2,6 +2,7 @@
 #include <math.h>
 #include <string.h>
 
+#include <arkode/arkode_erkstep.h>
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -16,10 +17,15 @@
 #define ARTIBUS_COMM NULL
 #endif
 
+/* The first step after an input change is at most this many communication
+   steps long (ODE_ERK; see ode_advance). */
+#define ERK_RESTART_STEPS 10.0
+
 struct Ode {
     ModelInstance *comp;
     SUNContext ctx;
-    void *mem;
+    void *mem;          /* CVODE (ODE_BDF, ODE_ADAMS) */
+    void *erk;          /* ARKODE ERKStep (ODE_ERK) */
     N_Vector y;
     SUNMatrix A;
     SUNLinearSolver LS;
@@ -117,12 +123,30 @@ Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
     SUNContext_PushErrHandler(o->ctx, cv_error, o);
 #endif
     o->y = N_VNew_Serial(n, o->ctx);
+    if (!o->y) goto fail;
+    N_VConst(0.0, o->y);
+    if (method == ODE_ERK) {
+        o->erk = ERKStepCreate(cv_rhs, 0.0, o->y, o->ctx);   /* ARKODE's default 4th-order table */
+        if (!o->erk) goto fail;
+#if SUNDIALS_VERSION_MAJOR < 7
+        ERKStepSetErrHandlerFn(o->erk, cv_error, o);
+#endif
+        if (ERKStepSetUserData(o->erk, o) != ARK_SUCCESS) goto fail;
+        if (ERKStepSStolerances(o->erk, rtol, atol) != ARK_SUCCESS) goto fail;
+        ERKStepSetMaxNumSteps(o->erk, 100000);
+        if (nroots > 0) {   /* no model needs it yet: say so rather than run it untested */
+            log_error(comp, "root finding (%d functions) is not offered with the explicit "
+                            "Runge-Kutta integrator: use BDF or Adams", nroots);
+            ode_free(o);
+            return NULL;
+        }
+        return o;
+    }
     o->mem = CVodeCreate(method == ODE_ADAMS ? CV_ADAMS : CV_BDF, o->ctx);
-    if (!o->y || !o->mem) goto fail;
+    if (!o->mem) goto fail;
 #if SUNDIALS_VERSION_MAJOR < 7
     CVodeSetErrHandlerFn(o->mem, cv_error, o);
 #endif
-    N_VConst(0.0, o->y);
     if (CVodeInit(o->mem, cv_rhs, 0.0, o->y) != CV_SUCCESS) goto fail;
     if (CVodeSetUserData(o->mem, o) != CV_SUCCESS) goto fail;
     if (CVodeSStolerances(o->mem, rtol, atol) != CV_SUCCESS) goto fail;
@@ -139,14 +163,53 @@ Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
     }
     return o;
 fail:
-    log_error(comp, "CVODE could not be set up for %d states (out of memory or bad tolerances "
-                    "rtol = %g, atol = %g)", n, rtol, atol);
+    log_error(comp, "%s could not be set up for %d states (out of memory or bad tolerances "
+                    "rtol = %g, atol = %g)", method == ODE_ERK ? "ARKODE" : "CVODE", n, rtol, atol);
     ode_free(o);
     return NULL;
 }
 
+/* ODE_ERK: a one-step method has no history to rebuild when an input
+   changes: it goes on from (t0, y) with its last step size. While the inputs
+   were held that step may have grown far beyond what the changed dynamics
+   allow (driving straight is integrated exactly: the error estimate is zero),
+   so the first step after a change is at most ERK_RESTART_STEPS communication
+   steps long; the error control takes it from there. Where the FMI layer asks
+   to forget, it starts afresh (ARKODE's own first-step estimate). */
+static OdeResult erk_advance(Ode *o, bool restart, double t0, double *y, double t1, double *t) {
+    double *yv = N_VGetArrayPointer(o->y);
+    if (restart || !o->started) {
+        const bool keep = o->started && !o->comp->forget;
+        memcpy(yv, y, sizeof(double) * (size_t)o->n);
+        if (keep) {
+            sunrealtype hlast = 0.0;
+            ERKStepGetLastStep(o->erk, &hlast);
+            ERKStepSetInitStep(o->erk, fmin(fabs(hlast), ERK_RESTART_STEPS * (t1 - t0)));
+            if (ERKStepReset(o->erk, t0, o->y) != ARK_SUCCESS) return ODE_FAILED;
+        } else {
+            ERKStepSetInitStep(o->erk, 0.0);
+            if (ERKStepReInit(o->erk, cv_rhs, t0, o->y) != ARK_SUCCESS) return ODE_FAILED;
+        }
+        o->started = true;
+    }
+    sunrealtype tret = t0;
+    const int flag = ERKStepEvolve(o->erk, t1, o->y, &tret, ARK_NORMAL);
+    *t = tret;
+    memcpy(y, yv, sizeof(double) * (size_t)o->n);
+    if (flag < 0) {
+        char *name = ERKStepGetReturnFlagName(flag);   /* allocated by ARKODE */
+        log_error(o->comp, "ARKODE ERKStep failed with flag %d (%s) at t = %.17g while stepping to t = %.17g",
+                  flag, name ? name : "?", tret, t1);
+        free(name);
+        o->started = false;
+        return ODE_FAILED;
+    }
+    return ODE_REACHED;
+}
+
 OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
                       double *t, int *rootsfound) {
+    if (o->erk) return erk_advance(o, restart, t0, y, t1, t);
     double *yv = N_VGetArrayPointer(o->y);
     if (restart || !o->started) {
         /* An input changed (restart): y is continuous, only f jumped. The
@@ -195,6 +258,7 @@ long ode_nrhs(const Ode *o) { return o ? o->nrhs : 0; }
 void ode_free(Ode *o) {
     if (!o) return;
     if (o->mem) CVodeFree(&o->mem);
+    if (o->erk) ERKStepFree(&o->erk);
     if (o->LS) SUNLinSolFree(o->LS);
     if (o->A) SUNMatDestroy(o->A);
     if (o->J) SUNMatDestroy(o->J);

@@ -1,4 +1,4 @@
-/* A small CVODE wrapper shared by the models that integrate inside doStep.
+/* A small SUNDIALS (CVODE, ARKODE) wrapper shared by the models that integrate inside doStep.
  * The ODE state lives in the model's own variables: each step packs it into
  * y[], advances, and unpacks it. CVODE's messages go to the FMI logger with
  * the CVODE flag and the time. */
@@ -18,7 +18,12 @@ struct ModelInstance;
 typedef int (*OdeRhs)(double t, const double *y, double *ydot, void *user);
 typedef int (*OdeRoots)(double t, const double *y, double *g, void *user);
 
-typedef enum { ODE_BDF, ODE_ADAMS } OdeMethod;
+/* ODE_BDF, ODE_ADAMS: CVODE's multistep methods, restarted at order 1 when an
+   input changes; ODE_ERK: ARKODE's explicit Runge-Kutta (ERKStep, 4th order),
+   a one-step method that goes on with its step size when an input changes
+   (cheap in co-simulation, where the inputs change every few steps), for
+   non-stiff problems only: its step is bounded by stability where BDF's is not */
+typedef enum { ODE_BDF, ODE_ADAMS, ODE_ERK } OdeMethod;
 
 typedef struct Ode Ode;
 

@@ -192,7 +192,8 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         if (!sv) return log_error(comp, "out of memory");
         sv->comp = comp;
         sv->ode = ode_new(comp, 2 * (2 + D->nModules), rhs, 0, NULL, sv,
-                          D->solver == 1 ? ODE_ADAMS : ODE_BDF, D->rtol, D->atol);
+                          D->solver == 2 ? ODE_ERK : D->solver == 1 ? ODE_ADAMS : ODE_BDF,
+                          D->rtol, D->atol);
         if (!sv->ode) return fmi2Error;
     }
     make_params(comp, &sv->p);
