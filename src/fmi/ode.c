@@ -169,6 +169,16 @@ fail:
     return NULL;
 }
 
+/* A failed integration: logged with the solver's flag (name allocated by
+   SUNDIALS) and the time; the history is unusable now, the next call restarts. */
+static OdeResult failed(Ode *o, const char *solver, int flag, char *name, double tret, double t1) {
+    log_error(o->comp, "%s failed with flag %d (%s) at t = %.17g while stepping to t = %.17g",
+              solver, flag, name ? name : "?", tret, t1);
+    free(name);
+    o->started = false;
+    return ODE_FAILED;
+}
+
 /* ODE_ERK: a one-step method has no history to rebuild when an input
    changes: it goes on from (t0, y) with its last step size. While the inputs
    were held that step may have grown far beyond what the changed dynamics
@@ -196,14 +206,7 @@ static OdeResult erk_advance(Ode *o, bool restart, double t0, double *y, double 
     const int flag = ERKStepEvolve(o->erk, t1, o->y, &tret, ARK_NORMAL);
     *t = tret;
     memcpy(y, yv, sizeof(double) * (size_t)o->n);
-    if (flag < 0) {
-        char *name = ERKStepGetReturnFlagName(flag);   /* allocated by ARKODE */
-        log_error(o->comp, "ARKODE ERKStep failed with flag %d (%s) at t = %.17g while stepping to t = %.17g",
-                  flag, name ? name : "?", tret, t1);
-        free(name);
-        o->started = false;
-        return ODE_FAILED;
-    }
+    if (flag < 0) return failed(o, "ARKODE ERKStep", flag, ERKStepGetReturnFlagName(flag), tret, t1);
     return ODE_REACHED;
 }
 
@@ -241,15 +244,7 @@ OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
         CVodeGetRootInfo(o->mem, rootsfound);
         return ODE_ROOT;
     }
-    if (flag < 0) {
-        char *name = CVodeGetReturnFlagName(flag);   /* allocated by CVODE */
-        log_error(o->comp, "CVODE failed with flag %d (%s) at t = %.17g while stepping to t = %.17g",
-                  flag, name ? name : "?", tret, t1);
-        free(name);
-        /* the history is unusable now: the next call must restart */
-        o->started = false;
-        return ODE_FAILED;
-    }
+    if (flag < 0) return failed(o, "CVODE", flag, CVodeGetReturnFlagName(flag), tret, t1);
     return ODE_REACHED;
 }
 
