@@ -16,7 +16,8 @@ from artibus.runner import Simulation, run, save
 
 NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
       'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
-      'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"')
+      'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" '
+      'xmlns:ssm="http://ssp-standard.org/SSP1/SystemStructureParameterMapping"')
 
 
 def component(name, connectors, extra=""):
@@ -132,6 +133,72 @@ def test_parameters_from_bindings_and_overrides(tmp_path):
     np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(r["Lead.beta[1]"]) / 4.0, rtol=1e-12)
     r = run(ssp, step=0.05, overrides={"Follow.L0": 8.0, "Lead.testSteerAmp": 0.0, **QUIET})
     np.testing.assert_allclose(r["Follow.kappa[0]"], 0.0, atol=1e-15)   # no steering at all now
+
+
+# a vehicle data set written for another component: names BusKinematics does not have
+VEHICLE_SSV = ('<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet ' + NS + ' version="1.0" name="vehicle">'
+               '<ssv:Parameters><ssv:Parameter name="wheelbase_mm"><ssv:Real value="4000.0"/></ssv:Parameter>'
+               '<ssv:Parameter name="mass"><ssv:Real value="12000.0"/></ssv:Parameter>'
+               '</ssv:Parameters></ssv:ParameterSet>')
+
+
+def mapping_entries(*entries):
+    return "".join(f'<ssm:MappingEntry source="{a}" target="{b}">'
+                   + (f'<ssc:LinearTransformation factor="{k}"/>' if k is not None else "")
+                   + '</ssm:MappingEntry>' for a, b, k in entries)
+
+
+def mapped_bench(tmp_path, entries, inline):
+    """Follow bound to VEHICLE_SSV through a parameter mapping, inline or a .ssm file."""
+    files = {"vehicle.ssv": VEHICLE_SSV}
+    if inline:
+        mapping = f'<ssd:ParameterMapping><ssm:ParameterMapping version="1.0">{entries}</ssm:ParameterMapping></ssd:ParameterMapping>'
+    else:
+        files["follow.ssm"] = ('<?xml version="1.0" encoding="UTF-8"?><ssm:ParameterMapping ' + NS
+                               + f' version="1.0">{entries}</ssm:ParameterMapping>')
+        mapping = '<ssd:ParameterMapping source="resources/follow.ssm"/>'
+    binding = (f'<ssd:ParameterBindings><ssd:ParameterBinding source="resources/vehicle.ssv">{mapping}'
+               '</ssd:ParameterBinding></ssd:ParameterBindings>')
+    elements = (component("Lead", [("beta[1]", "output")])
+                + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")], binding))
+    return make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"), ssv=files)
+
+
+@pytest.mark.parametrize("inline", [True, False])
+def test_parameter_mapping_renames_transforms_and_applies_only_mapped(tmp_path, inline):
+    """SSP's parameter mapping: wheelbase_mm -> L0 with factor 0.001 gives
+    L0 = 4.0 m, seen through BusKinematics' eq. 19 (kappa0 = tan(gammaF)/L0);
+    'mass', which BusKinematics does not have, is not mapped and so not
+    applied (bound without a mapping it is an error: the next test). The
+    bench validates against the SSP XSDs (FMPy's reader) first."""
+    ssp = mapped_bench(tmp_path, mapping_entries(("wheelbase_mm", "L0", 0.001)), inline)
+    r = run(ssp, step=0.05, overrides=QUIET)
+    assert np.max(np.abs(r["Lead.beta[1]"])) > 0.05
+    np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(r["Lead.beta[1]"]) / 4.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize("entries, words", [
+    (None, ["no variable 'wheelbase_mm'"]),                           # no mapping: every name applies
+    (mapping_entries(("wheelbase", "L0", None)), ['source="wheelbase"', "has no 'wheelbase'"]),
+    (mapping_entries(("wheelbase_mm", "L0", 0.001), ("mass", "L0", None)), ["'L0' is mapped to twice"]),
+    (mapping_entries(("mass", "Lzero", None)), ["no variable 'Lzero'"]),
+])
+def test_bad_parameter_mappings_name_file_entry_value(tmp_path, entries, words):
+    if entries is None:
+        binding = ('<ssd:ParameterBindings><ssd:ParameterBinding source="resources/vehicle.ssv"/>'
+                   '</ssd:ParameterBindings>')
+        elements = (component("Lead", [("beta[1]", "output")])
+                    + component("Follow", [("gammaF", "input")], binding))
+        ssp = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"),
+                       ssv={"vehicle.ssv": VEHICLE_SSV})
+    else:
+        ssp = mapped_bench(tmp_path, entries, inline=False)
+    with pytest.raises(ArtibusError) as e:
+        run(ssp, step=0.05)
+    msg = str(e.value)
+    assert str(ssp) in msg and all(w in msg for w in words), msg
+    if entries is not None and "Lzero" not in words[0]:
+        assert "follow.ssm:1:" in msg      # the file and line of the entry
 
 
 def test_mat_output(tmp_path):

@@ -23,6 +23,7 @@ NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
     "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+    "ssm": "http://ssp-standard.org/SSP1/SystemStructureParameterMapping",
     "artibus": "urn:artibus",
 }
 #: annotation type holding artibus-specific simulation settings of a component
@@ -143,25 +144,65 @@ def read(ssp):
 
     index_xml(root.find("ssd:System", NS), "")
 
-    def bound_values(element, what):
+    def bound_values(element, xml_element, what):
         values = {}
-        for b in element.parameterBindings:
+        xml_bindings = xml_element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS)
+        for b, xb in zip(element.parameterBindings, xml_bindings):
             prefix = b.prefix or ""
+            source = {}
             for pset in b.parameterValues:
                 for p in pset.parameters:
                     try:
-                        values[prefix + p.name] = typed(p.type, p.value)
+                        source[prefix + p.name] = typed(p.type, p.value)
                     except ValueError:
                         raise ArtibusError(f"{where}: {what}: parameter '{p.name}' = {p.value!r} "
                                            f"is not a {p.type}") from None
+            mapping = xb.find("ssd:ParameterMapping", NS)
+            values.update(source if mapping is None else mapped(source, mapping, what))
         return values
+
+    def mapped(source, mapping, what):
+        """SSP's parameter mapping (SSP 1.0, ssd:ParameterMapping, SSM): only
+        the mapped values are applied, under their target names, after the
+        entry's linear transformation; the others are not applied. The mapping
+        is inline or a .ssm file in the .ssp."""
+        ref = mapping.get("source")
+        if ref is None:
+            file, root_m = where, mapping.find("ssm:ParameterMapping", NS)
+            entries = [] if root_m is None else root_m.findall("ssm:MappingEntry", NS)
+        else:
+            file = f"{ssp}/{ref}"
+            if ref not in names:
+                raise ArtibusError(f"{where}:{mapping.sourceline}: {what}: ParameterMapping source "
+                                   f"\"{ref}\" is not in the .ssp")
+            with zipfile.ZipFile(ssp) as z:
+                entries = etree.fromstring(z.read(ref)).findall("ssm:MappingEntry", NS)
+        out = {}
+        for e in entries:
+            src, dst = e.get("source"), e.get("target")
+            head = f"{file}:{e.sourceline}: {what}: MappingEntry source=\"{src}\" target=\"{dst}\""
+            if src not in source:
+                raise ArtibusError(f"{head}: the parameter source has no '{src}'")
+            if dst in out:
+                raise ArtibusError(f"{head}: '{dst}' is mapped to twice")
+            value = source[src]
+            for tr in e:
+                kind = etree.QName(tr).localname if isinstance(tr.tag, str) else None
+                if kind == "LinearTransformation":
+                    if not isinstance(value, float):
+                        raise ArtibusError(f"{head}: a LinearTransformation needs a Real, got {value!r}")
+                    value = float(tr.get("factor", 1.0)) * value + float(tr.get("offset", 0.0))
+                elif kind not in (None, "Annotations"):
+                    raise ArtibusError(f"{head}: {kind} is not supported (LinearTransformation is)")
+            out[dst] = value
+        return out
 
     # system-level bindings, with names relative to that system: "Comp.var"
     inherited = []
 
     def walk(system, prefix):
         xml = xml_systems[prefix]
-        inherited.append((prefix, bound_values(system, f"System '{system.name}'")))
+        inherited.append((prefix, bound_values(system, xml, f"System '{system.name}'")))
         for el in system.elements:
             path = f"{prefix}.{el.name}" if prefix else el.name
             if isinstance(el, SsdComponent):
@@ -170,7 +211,7 @@ def read(ssp):
                     raise ArtibusError(f"{where}:{xml_el.sourceline}: Component '{path}': source "
                                        f"\"{el.source}\" is not in the .ssp")
                 c = Component(path=path, source=el.source, element=el, line=xml_el.sourceline)
-                c.parameters = bound_values(el, f"Component '{path}'")
+                c.parameters = bound_values(el, xml_el, f"Component '{path}'")
                 c.outputs = [k.name for k in el.connectors if k.kind == "output"]
                 c.connectors = [k.name for k in el.connectors]
                 ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
