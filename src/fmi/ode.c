@@ -18,7 +18,7 @@
 #endif
 
 /* The first step after an input change is at most this many communication
-   steps long (ODE_ERK; see ode_advance). */
+   steps long (ODE_ERK; see erk_advance). */
 #define ERK_RESTART_STEPS 10.0
 
 struct Ode {
