@@ -89,6 +89,7 @@ class _RawCalls:
         self.out = (c_double * self.n_out)()
         self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
         self.inp = (c_double * self.n_in)()
+        self.written = None       # the input values last set (bytes): unchanged ones are not set again
 
     def read(self):
         if self.n_out:
@@ -98,9 +99,13 @@ class _RawCalls:
 
     def write(self):
         if self.n_in:
+            values = bytes(self.inp)
+            if values == self.written:    # the FMU holds them already (FMI 2.0: inputs keep their values)
+                return
             status = self._set(self.comp, self.in_vrs, self.n_in, self.inp)
             if status > 1:
                 raise FMICallException(function="fmi2SetReal", status=status)
+            self.written = values
 
     def step(self, t, h):
         status = self._do(self.comp, t, h, 1)
