@@ -369,6 +369,7 @@ class Simulation:
             s.setupExperiment(startTime=start)
             s.enterInitializationMode()
             u.fmu.set_values(self.parameters[u.path])
+            u.raw.written = None      # every connected input is set at least once
         for _ in range(MAX_INIT_ITERATIONS):
             before = [list(u.in_values) for u in self.units]
             for u in self.order:
