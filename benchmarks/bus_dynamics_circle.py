@@ -43,12 +43,7 @@ def open_bus(solver, rtol):
     p.update(testSteerAmp=0.0, tyreModel=1, vx_start=SPEED, solver=solver)
     if rtol is not None:
         p.update(rtol=rtol, atol=rtol)
-    fmu = Fmu(fmu_path("BusDynamics"))
-    fmu.slave.setupExperiment(startTime=0.0)
-    fmu.slave.enterInitializationMode()
-    fmu.set_values(p)
-    fmu.slave.exitInitializationMode()
-    return fmu
+    return Fmu(fmu_path("BusDynamics")).initialize(p)
 
 
 def governed(solver, rtol):

@@ -34,10 +34,7 @@ def open_fmu():
 
 def init(fmu, **values):
     """setupExperiment + initialization mode with the given values set."""
-    fmu.slave.setupExperiment(startTime=0.0)
-    fmu.slave.enterInitializationMode()
-    fmu.set_values(values)
-    fmu.slave.exitInitializationMode()
+    fmu.initialize(values)
 
 
 DEG = math.pi / 180

@@ -161,11 +161,7 @@ def test_straight_driving_hinge_force_is_longitudinal():
 
 def run_loop(params, n_steps, h, control, outputs):
     """Step the FMU from Python with feedback: control(t, values) -> {input: value}."""
-    with Fmu(fmu_path("BusDynamics")) as fmu:
-        fmu.slave.setupExperiment(startTime=0.0)
-        fmu.slave.enterInitializationMode()
-        fmu.set_values(params)
-        fmu.slave.exitInitializationMode()
+    with Fmu(fmu_path("BusDynamics")).initialize(params) as fmu:
         rows, t = [], 0.0
         for i in range(n_steps):
             vals = dict(zip(outputs, fmu.get(*outputs)))
@@ -372,11 +368,7 @@ def test_explicit_runge_kutta_state_round_trip():
     from artibus.parameters import read_parameters
     p = read_parameters("Bus36m", fmu_path("BusDynamics"))
     p.update(testSteerAmp=0.0, vx_start=3.0, solver=2)
-    with Fmu(fmu_path("BusDynamics")) as fmu:
-        fmu.slave.setupExperiment(startTime=0.0)
-        fmu.slave.enterInitializationMode()
-        fmu.set_values(p)
-        fmu.slave.exitInitializationMode()
+    with Fmu(fmu_path("BusDynamics")).initialize(p) as fmu:
         outs = [fmu.var(n).valueReference for n in ("xAxle[6]", "yAxle[6]", "FjointY[1]", "psi[3]")]
 
         def advance(t0, n=100, h=0.01):

@@ -32,12 +32,7 @@ BENCH_R2 = 15.0              # radius of A2 (the outer front corner then runs on
 
 
 def opened(name, values):
-    f = Fmu(fmu_path(name))
-    f.slave.setupExperiment(startTime=0.0)
-    f.slave.enterInitializationMode()
-    f.set_values(values)
-    f.slave.exitInitializationMode()
-    return f
+    return Fmu(fmu_path(name)).initialize(values)
 
 
 def fit_circle(x, y):

@@ -112,7 +112,24 @@ class Fmu:
         reals = [self.var(n).valueReference for n in names]
         return self.slave.getReal(reals)
 
+    def initialize(self, values, start_time=0.0):
+        """setupExperiment, the values set in initialisation mode, exit it:
+        the instance is ready to step from start_time. Returns self."""
+        try:
+            self.slave.setupExperiment(startTime=start_time)
+            self.slave.enterInitializationMode()
+            self.set_values(values)
+            self.slave.exitInitializationMode()
+        except Exception:
+            self.close()
+            raise
+        return self
+
     def close(self):
+        """Free the instance and its unpacked files; again is a no-op."""
+        if getattr(self, "_closed", False):
+            return
+        self._closed = True
         try:
             self.slave.freeInstance()
         finally:
