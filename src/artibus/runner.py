@@ -19,7 +19,7 @@
 import math
 import shutil
 import sys
-from ctypes import POINTER, c_double, c_int, c_size_t, c_uint, c_void_p
+from ctypes import CDLL, c_double, c_int, c_size_t, c_uint, c_void_p
 import tempfile
 import time as _time
 import zipfile
@@ -74,26 +74,29 @@ class Unit:
 class _RawCalls:
     """fmi2GetReal/SetReal/DoStep called through ctypes directly, with the value
     references and value buffers allocated once: one call per component and
-    step, without FMPy's per-call wrapper (it logs and converts lists)."""
+    step, without FMPy's per-call wrapper (it logs and converts lists). The
+    functions come from a handle of our own on the FMU's library (FMPy's are
+    left as they are) and get ctypes objects made once, not Python values to
+    convert at every call."""
 
     def __init__(self, unit):
-        dll, self.comp = unit.fmu.slave.dll, unit.fmu.slave.component
+        dll = CDLL(unit.fmu.slave.dll._name)      # the library FMPy loaded: the same instance
         self._get, self._set, self._do = dll.fmi2GetReal, dll.fmi2SetReal, dll.fmi2DoStep
-        for f in (self._get, self._set):
-            f.argtypes = [c_void_p, POINTER(c_uint), c_size_t, POINTER(c_double)]
+        for f in (self._get, self._set, self._do):
             f.restype = c_int
-        self._do.argtypes = [c_void_p, c_double, c_double, c_int]
-        self._do.restype = c_int
+        self.comp = c_void_p(unit.fmu.slave.component)
         self.n_out, self.n_in = len(unit.out_vrs), len(unit.in_vrs)
+        self._n_out, self._n_in = c_size_t(self.n_out), c_size_t(self.n_in)
         self.out_vrs = (c_uint * self.n_out)(*unit.out_vrs)
         self.out = (c_double * self.n_out)()
         self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
         self.inp = (c_double * self.n_in)()
         self.written = None       # the input values last set (bytes): unchanged ones are not set again
+        self._true = c_int(1)     # noSetFMUStatePriorToCurrentPoint
 
     def read(self):
         if self.n_out:
-            status = self._get(self.comp, self.out_vrs, self.n_out, self.out)
+            status = self._get(self.comp, self.out_vrs, self._n_out, self.out)
             if status > 1:  # fmi2Discard or worse
                 raise FMICallException(function="fmi2GetReal", status=status)
 
@@ -102,13 +105,13 @@ class _RawCalls:
             values = bytes(self.inp)
             if values == self.written:    # the FMU holds them already (FMI 2.0: inputs keep their values)
                 return
-            status = self._set(self.comp, self.in_vrs, self.n_in, self.inp)
+            status = self._set(self.comp, self.in_vrs, self._n_in, self.inp)
             if status > 1:
                 raise FMICallException(function="fmi2SetReal", status=status)
             self.written = values
 
     def step(self, t, h):
-        status = self._do(self.comp, t, h, 1)
+        status = self._do(self.comp, c_double(t), c_double(h), self._true)
         if status > 1:  # fmi2Discard or worse
             raise FMICallException(function="fmi2DoStep", status=status)
 
