@@ -64,8 +64,8 @@ class Unit:
     in_values: list = field(default_factory=list)
     feeds: set = field(default_factory=set)      # (input name, output name) direct feedthrough
     links_in: list = field(default_factory=list)  # the Links into its inputs
-    feed: list = field(default_factory=list)      # the same, as (input index, source buffer,
-                                                  # output index, factor, offset)
+    sources: list = field(default_factory=list)   # the same Links as (input index, source
+                                                  # output buffer, output index, factor, offset)
     stimuli: list = field(default_factory=list)   # (input index, f(t), base value or None)
     wall: float = 0.0
     raw: object = None                           # _RawCalls, once the variables are known
@@ -330,7 +330,7 @@ class Simulation:
             u.out_values = u.raw.out      # read and written in place
             u.in_values = u.raw.inp
         for u in self.units:
-            u.feed = [(l.dst_index, l.src.raw.out, l.src_index, l.factor, l.offset) for l in u.links_in]
+            u.sources = [(l.dst_index, l.src.raw.out, l.src_index, l.factor, l.offset) for l in u.links_in]
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
         # recording: per component, which of its outputs go to which columns
         self._rec = []
@@ -361,7 +361,7 @@ class Simulation:
                 self._propagate(u, t)
             return
         inp = to.in_values
-        for i, out, j, factor, offset in to.feed:
+        for i, out, j, factor, offset in to.sources:
             inp[i] = factor * out[j] + offset
         for i, f, base in to.stimuli:
             inp[i] = (inp[i] if base is None else base) + f(t)
@@ -413,9 +413,7 @@ class Simulation:
             for (u, idx, cols), (_, copies) in zip(self.rec, self.buffers):
                 values = np.frombuffer(b"".join(copies), dtype=np.float64).reshape(n, u.raw.n_out)
                 table[:, cols] = values[:, idx]
-            result = Result(list(self.names), list(table))
-            result._array = table
-            return result
+            return Result.from_array(self.names, table)
 
     def run(self, stop_time=None, start_time=None, progress=False):
         start = self.bench.start_time if start_time is None else start_time

@@ -27,6 +27,13 @@ class Result:
     names: list
     rows: list = field(default_factory=list)
 
+    @classmethod
+    def from_array(cls, names, table):
+        """A result from a filled table (a row per time), kept as its array."""
+        result = cls(list(names), list(table))
+        result._array = table
+        return result
+
     def __getitem__(self, name):
         return self.array()[:, self.names.index(name)]
 

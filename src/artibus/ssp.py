@@ -171,10 +171,7 @@ def read(ssp):
             file, root_m = where, mapping.find("ssm:ParameterMapping", NS)
             entries = [] if root_m is None else root_m.findall("ssm:MappingEntry", NS)
         else:
-            file = f"{ssp}/{ref}"
-            if ref not in names:
-                raise ArtibusError(f"{where}:{mapping.sourceline}: {what}: ParameterMapping source "
-                                   f"\"{ref}\" is not in the .ssp")
+            file = f"{ssp}/{ref}"    # there: FMPy's reader has read and validated it
             with zipfile.ZipFile(ssp) as z:
                 entries = etree.fromstring(z.read(ref)).findall("ssm:MappingEntry", NS)
         out = {}
