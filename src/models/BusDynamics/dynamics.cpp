@@ -2,7 +2,9 @@
  * Jacobians of the points of a chain of n modules, the mass matrix M(z), the
  * velocity term G(z, z') z', the generalised forces of the tyres (eqs. 5-14)
  * and of the hinge torques, and the tyre models (section II-B).
- * Matrices have a fixed maximum size: no heap allocation in the right-hand side. */
+ * Every matrix has its size fixed at compile time (the module count is a
+ * template parameter, 1..4 instantiated): no heap allocation in the
+ * right-hand side, and Eigen unrolls the small products. */
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -12,9 +14,6 @@
 namespace {
 
 using Vec2 = Eigen::Vector2d;
-using VecQ = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, DYN_MAX_Q, 1>;
-using MatQ = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, DYN_MAX_Q, DYN_MAX_Q>;
-using Jac = Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, DYN_MAX_Q>;
 
 /* A point xi ahead of the CG of module m is
  *     r = (x, y) + sum_{j=1..m} l_j e(psi_j)
@@ -28,11 +27,12 @@ void levers(const DynParams *p, int m, double xi, double *l) {
     }
 }
 
-/* cos and sin of every yaw angle, computed once per evaluation */
+/* cos and sin of the yaw angle of each of N modules, computed once per evaluation */
+template <int N>
 struct Trig {
-    double c[DYN_MAX_MODULES + 1], s[DYN_MAX_MODULES + 1];
-    Trig(const DynParams *p, const double *z) {
-        for (int m = 1; m <= p->nMod; m++) { c[m] = std::cos(z[1 + m]); s[m] = std::sin(z[1 + m]); }
+    double c[N + 1], s[N + 1];
+    explicit Trig(const double *z) {
+        for (int m = 1; m <= N; m++) { c[m] = std::cos(z[1 + m]); s[m] = std::sin(z[1 + m]); }
     }
     Vec2 e(int m) const { return Vec2(c[m], s[m]); }     /* module x axis */
     Vec2 n(int m) const { return Vec2(-s[m], c[m]); }    /* module y axis */
@@ -43,32 +43,50 @@ struct Trig {
     }
 };
 
-/* position r, Jacobian J = dr/dz (eq. 7) and the velocity-product term J' z' */
-struct Point {
-    Vec2 r, v, Jdzd;
-    Jac J;
-};
+/* The chain of N modules (N + 2 minimal coordinates). The module count is a
+ * template parameter so that every matrix has a size known to the compiler
+ * (Eigen then unrolls the small products); dyn_eval picks N at run time. */
+template <int N>
+struct Chain {
+    static constexpr int NQ = 2 + N;
+    using VecQ = Eigen::Matrix<double, NQ, 1>;
+    using MatQ = Eigen::Matrix<double, NQ, NQ>;
+    using Jac = Eigen::Matrix<double, 2, NQ>;
 
-Point point(const DynParams *p, const Trig &T, const double *z, const double *zd, int m, double xi) {
-    const int nq = dyn_nq(p);
-    double l[DYN_MAX_MODULES + 1];
-    levers(p, m, xi, l);
-    Point P;
-    P.J = Jac::Zero(2, nq);
-    P.J(0, 0) = 1.0;
-    P.J(1, 1) = 1.0;
-    P.r = Vec2(z[0], z[1]);
-    P.Jdzd = Vec2::Zero();
-    for (int j = 1; j <= m; j++) {
-        const double r = zd ? zd[1 + j] : 0.0;
-        P.r += l[j] * T.e(j);
-        P.J.col(1 + j) = l[j] * T.n(j);              /* d(l e(psi))/dpsi = l n(psi) */
-        P.Jdzd -= l[j] * r * r * T.e(j);             /* d(l n(psi))/dt psi' = -l e(psi) psi'^2 */
+    /* position r, velocity v, Jacobian J = dr/dz (eq. 7) and the
+       velocity-product term J' z' */
+    struct Point {
+        Vec2 r, v, Jdzd;
+        Jac J;
+    };
+
+    static Point point(const DynParams *p, const Trig<N> &T, const double *z, const double *zd,
+                       int m, double xi) {
+        double l[DYN_MAX_MODULES + 1];
+        levers(p, m, xi, l);
+        Point P;
+        P.J.setZero();
+        P.J(0, 0) = 1.0;
+        P.J(1, 1) = 1.0;
+        P.r = Vec2(z[0], z[1]);
+        P.Jdzd.setZero();
+        for (int j = 1; j <= m; j++) {
+            const double r = zd ? zd[1 + j] : 0.0;
+            P.r += l[j] * T.e(j);
+            P.J.col(1 + j) = l[j] * T.n(j);              /* d(l e(psi))/dpsi = l n(psi) */
+            P.Jdzd -= l[j] * r * r * T.e(j);             /* d(l n(psi))/dt psi' = -l e(psi) psi'^2 */
+        }
+        if (zd) P.v = P.J * Eigen::Map<const VecQ>(zd);
+        return P;
     }
-    if (zd) P.v = P.J * Eigen::Map<const VecQ>(zd, nq);
-    return P;
-}
 
+    static Vec2 position(const DynParams *p, const double *z, int m, double xi) {
+        return point(p, Trig<N>(z), z, nullptr, m, xi).r;
+    }
+
+    static int eval(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
+                    double *zdd, DynOut *out);
+};
 }  // namespace
 
 extern "C" double dyn_slip(double u, double w, double vSlip) {
@@ -108,45 +126,51 @@ extern "C" double dyn_tyre(const DynParams *p, int a, double alpha) {
 
 extern "C" void dyn_point(const DynParams *p, const double *z, int m, double xi,
                           double *px, double *py) {
-    const Trig T(p, z);
-    const Point P = point(p, T, z, nullptr, m, xi);
-    *px = P.r.x();
-    *py = P.r.y();
+    Vec2 r;
+    switch (p->nMod) {
+    case 1: r = Chain<1>::position(p, z, m, xi); break;
+    case 2: r = Chain<2>::position(p, z, m, xi); break;
+    case 3: r = Chain<3>::position(p, z, m, xi); break;
+    default: r = Chain<4>::position(p, z, m, xi); break;
+    }
+    *px = r.x();
+    *py = r.y();
 }
 
-extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
-                        const double *zd, double *zdd, DynOut *out) {
-    const int nq = dyn_nq(p), N = p->nMod;
-    const Trig T(p, z);
-    MatQ M = MatQ::Zero(nq, nq);
-    VecQ h = VecQ::Zero(nq), q = VecQ::Zero(nq);
-    Vec2 a0[DYN_MAX_MODULES + 1];           /* J' z' of each CG */
-    Jac Jcg[DYN_MAX_MODULES + 1];
+template <int N>
+int Chain<N>::eval(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
+                   double *zdd, DynOut *out) {
+    constexpr int nq = NQ;
+    const Trig<N> T(z);
+    MatQ M = MatQ::Zero();
+    VecQ h = VecQ::Zero(), q = VecQ::Zero();
+    Point Cg[N + 1];                        /* the CG of each module */
+    Vec2 vCgK[N + 1];                       /* its velocity in K_m */
     Vec2 Fw[DYN_MAX_AXLES + 1];             /* tyre force of each axle, world frame */
 
     /* mass matrix and velocity term, module by module (eq. 3) */
     for (int m = 1; m <= N; m++) {
-        const Point C = point(p, T, z, zd, m, 0.0);
+        const Point &C = Cg[m] = point(p, T, z, zd, m, 0.0);
         M.noalias() += p->m[m] * C.J.transpose() * C.J;
         M(1 + m, 1 + m) += p->J[m];
         h.noalias() += p->m[m] * C.J.transpose() * C.Jdzd;
-        Jcg[m] = C.J;
-        a0[m] = C.Jdzd;
+        vCgK[m] = T.A(m).transpose() * C.v;
         if (out) {
             out->xCG[m] = C.r.x();
             out->yCG[m] = C.r.y();
-            const Vec2 vK = T.A(m).transpose() * C.v;
-            out->vx[m] = vK.x();
-            out->vy[m] = vK.y();
+            out->vx[m] = vCgK[m].x();
+            out->vy[m] = vCgK[m].y();
         }
     }
 
-    /* tyre forces (eqs. 22-28) and their generalised forces (eqs. 5-9) */
+    /* tyre forces (eqs. 22-28) and their generalised forces (eqs. 5-9). Axle a
+       lies xi ahead of the CG of its module m: r_a = r_CG + xi e(psi_m), so
+       J_a = J_CG + xi n(psi_m) (in column psi_m) and, in K_m, its velocity is
+       the CG's plus xi psi_m' across (eq. 27) */
     for (int a = 1; a <= p->nAxle; a++) {
         const int m = p->axleModule[a];
-        const Point A = point(p, T, z, zd, m, p->xA[a]);
-        const Eigen::Matrix2d AIK = T.A(m);
-        const Vec2 vK = AIK.transpose() * A.v;                 /* eq. 27 */
+        const double xi = p->xA[a];
+        const Vec2 vK(vCgK[m].x(), vCgK[m].y() + xi * zd[1 + m]);   /* eq. 27 */
         const double d = u->delta[a], cd = std::cos(d), sd = std::sin(d);
         const double uw = cd * vK.x() + sd * vK.y();           /* eq. 23 applied to the velocity */
         const double ww = -sd * vK.x() + cd * vK.y();
@@ -154,11 +178,15 @@ extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
         const double Fy = dyn_tyre(p, a, alpha);
         const Vec2 fA(u->Fx[a], Fy);                             /* wheel frame A_i */
         const Vec2 fK(cd * fA.x() - sd * fA.y(), sd * fA.x() + cd * fA.y());   /* eq. 28: A_KA f */
-        Fw[a] = AIK * fK;
-        q.noalias() += A.J.transpose() * Fw[a];                  /* eq. 8 */
+        Fw[a] = T.A(m) * fK;
+        /* eq. 8: J_a^T F = J_CG^T F + xi (n(psi_m) . F) in row psi_m, and
+           n(psi_m) . A_IK fK is fK's lateral component */
+        q.noalias() += Cg[m].J.transpose() * Fw[a];
+        q(1 + m) += xi * fK.y();
         if (out) {
-            out->xAxle[a] = A.r.x();
-            out->yAxle[a] = A.r.y();
+            const Vec2 r = Cg[m].r + xi * T.e(m);
+            out->xAxle[a] = r.x();
+            out->yAxle[a] = r.y();
             out->alpha[a] = alpha;
             out->Fy[a] = Fy;
         }
@@ -178,7 +206,7 @@ extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
         for (int i = 0; i < nq; i++) out->zdd[i] = acc(i);
         Vec2 aCG[DYN_MAX_MODULES + 1];
         for (int m = 1; m <= N; m++) {
-            aCG[m] = Jcg[m] * acc + a0[m];
+            aCG[m] = Cg[m].J * acc + Cg[m].Jdzd;
             const Vec2 aK = T.A(m).transpose() * aCG[m];
             out->ax[m] = aK.x();
             out->ay[m] = aK.y();
@@ -197,6 +225,17 @@ extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
         }
     }
     return 0;
+}
+
+extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
+                        const double *zd, double *zdd, DynOut *out) {
+    switch (p->nMod) {
+    case 1: return Chain<1>::eval(p, u, z, zd, zdd, out);
+    case 2: return Chain<2>::eval(p, u, z, zd, zdd, out);
+    case 3: return Chain<3>::eval(p, u, z, zd, zdd, out);
+    case 4: return Chain<4>::eval(p, u, z, zd, zdd, out);
+    default: return 1;   /* nModules is checked against 1..DYN_MAX_MODULES before */
+    }
 }
 
 extern "C" int dyn_static_loads(DynParams *p, double g) {
