@@ -277,3 +277,61 @@ def test_cli_run_writes_results(tmp_path):
     assert r.returncode == 0, r.stderr
     header = out.read_text().splitlines()[0]
     assert '"Follow.kappa[0]"' in header and len(out.read_text().splitlines()) == 102
+
+
+def test_a_bench_by_name_is_packed_again_when_a_file_it_packs_is_newer(tmp_path, monkeypatch):
+    """A bench run by name is what ssp/benches, fmus/ and ssp/parameters hold
+    now: a missing .ssp is packed, an edited parameter set or a rebuilt FMU is
+    packed again (the run sees it), an unchanged bench is left as it is."""
+    import os
+    import shutil
+    from artibus import ssp as ssp_mod
+    benches, fmus = tmp_path / "benches", tmp_path / "fmus"
+    (benches / "Tiny").mkdir(parents=True)
+    fmus.mkdir()
+    shutil.copy(fmu_path("BusKinematics"), fmus / "BusKinematics.fmu")
+    ssv = benches / "Tiny" / "resources" / "Tiny.ssv"
+    ssv.parent.mkdir()
+
+    def write_ssv(L0):
+        ssv.write_text(f'<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet {NS} version="1.0" '
+                       f'name="Tiny"><ssv:Parameters><ssv:Parameter name="L0"><ssv:Real value="{L0}"/>'
+                       f'</ssv:Parameter></ssv:Parameters></ssv:ParameterSet>')
+
+    write_ssv(5.0)
+    binding = ('<ssd:ParameterBindings><ssd:ParameterBinding source="resources/Tiny.ssv"/>'
+               '</ssd:ParameterBindings>')
+    (benches / "Tiny" / "SystemStructure.ssd").write_text(
+        f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="Tiny">'
+        f'<ssd:System name="root"><ssd:Elements>{component("Car", [("kappa[0]", "output")], binding)}'
+        f'</ssd:Elements></ssd:System><ssd:DefaultExperiment startTime="0" stopTime="1"/>'
+        f'</ssd:SystemStructureDescription>')
+    monkeypatch.setattr(ssp_mod, "BENCH_DIR", benches)
+    monkeypatch.setenv("ARTIBUS_FMU_DIR", str(fmus))
+
+    def kappa_times_L0(L0):   # BusKinematics eq. 19: kappa0 = tan(gammaF) / L0, gammaF its test steering
+        r = run("Tiny", step=0.1)
+        k = r["Car.kappa[0]"]
+        assert np.max(np.abs(k)) > 1e-3
+        return k * L0
+
+    path = ssp_mod.ssp_path("Tiny")                    # missing: packed
+    assert path == fmus / "Tiny.ssp"
+    first = kappa_times_L0(5.0)
+    stamp = path.stat().st_mtime_ns
+    assert ssp_mod.ssp_path("Tiny").stat().st_mtime_ns == stamp     # unchanged: not packed again
+
+    later = stamp + 10 ** 9
+    write_ssv(8.0)
+    os.utime(ssv, ns=(later, later))
+    np.testing.assert_allclose(kappa_times_L0(8.0), first, rtol=1e-12)   # the run saw L0 = 8
+    stamp = path.stat().st_mtime_ns
+
+    later = stamp + 10 ** 9
+    os.utime(fmus / "BusKinematics.fmu", ns=(later, later))      # "rebuilt"
+    assert ssp_mod.ssp_path("Tiny").stat().st_mtime_ns > stamp
+
+    (fmus / "BusKinematics.fmu").unlink()              # not built: a clear error, not a stale run
+    with pytest.raises(ArtibusError, match=r"SystemStructure.ssd:1: <Component source=\"resources/"
+                                           r"BusKinematics.fmu\">: no such file .*set-up command"):
+        ssp_mod.ssp_path("Tiny")

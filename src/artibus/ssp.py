@@ -4,7 +4,8 @@ reading a .ssp into a flat list of components and resolved connections.
 A bench lives in ``ssp/benches/<Bench>/SystemStructure.ssd``; its components
 refer to ``resources/<Name>.fmu`` and its parameter bindings to
 ``resources/<Set>.ssv``. ``pack`` copies the FMUs from ``fmus/`` and the
-parameter sets from ``ssp/parameters/`` into ``fmus/<Bench>.ssp``.
+parameter sets from ``ssp/parameters/`` into ``fmus/<Bench>.ssp``; a bench
+run by name is packed again when any of those files is newer.
 
 Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships);
 what it leaves out (default experiment, per-component step sizes in our
@@ -35,29 +36,36 @@ def bench_names():
 
 
 def ssp_path(bench):
-    """A bench by name (``Urbino18_Circle``) or the path of an .ssp file."""
+    """A bench by name (``Urbino18_Circle``) or the path of an .ssp file. A
+    bench of ssp/benches/ by name is ``<fmu_dir>/<bench>.ssp``, packed again
+    first when it is missing or older than any file it packs (its .ssd, the
+    FMUs, parameter sets, roads), as make would: a rebuilt FMU or an edited
+    parameter set is what runs, never a stale copy."""
     p = Path(bench)
     if p.suffix == ".ssp":
         if not p.is_file():
             raise ArtibusError(f"{p}: no such file")
         return p
     q = fmu_dir() / f"{bench}.ssp"
+    if bench in bench_names():
+        ssd_file, files = _sources(bench)
+        if not q.is_file() or any(f.stat().st_mtime_ns > q.stat().st_mtime_ns
+                                  for f in (ssd_file, *files.values())):
+            pack(bench)
+        return q
     if not q.is_file():
-        if bench in bench_names():
-            raise ArtibusError(f"{q}: bench not packed (run the set-up command of the README)")
         raise ArtibusError(f"{bench}: no such bench (known: {', '.join(bench_names()) or 'none'})")
     return q
 
 
-def pack(bench, out_dir=None):
-    """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every referenced file
-    inside: components' FMUs, parameter sets, and files named by String
-    parameters whose value starts with "resources/" (found in the bench folder,
-    fmus/, ssp/parameters/ or ssp/roads/)."""
+def _sources(bench):
+    """The bench's SystemStructure.ssd and {name inside the .ssp: file} for
+    every file it references: components' FMUs, parameter sets, and files
+    named by String parameters whose value starts with "resources/" (found in
+    the bench folder, fmus/, ssp/parameters/ or ssp/roads/)."""
     src = BENCH_DIR / bench
     ssd_file = src / "SystemStructure.ssd"
     tree = etree.parse(str(ssd_file))
-    out = Path(out_dir or fmu_dir()) / f"{bench}.ssp"
     files = {}
     for el in tree.iter(tag=etree.Element):      # elements only: comments and PIs have no tag name
         ref = el.get("source")
@@ -70,15 +78,26 @@ def pack(bench, out_dir=None):
                       ROOT / "ssp" / "roads" / name]
         found = next((c for c in candidates if c.is_file()), None)
         if found is None:
+            hint = " (FMUs are built by the set-up command of the README)" if name.endswith(".fmu") else ""
             raise ArtibusError(f"{ssd_file}:{el.sourceline}: <{etree.QName(el).localname} "
                                f"source=\"{ref}\">: no such file (looked in "
-                               f"{', '.join(str(c.parent) for c in candidates)})")
+                               f"{', '.join(str(c.parent) for c in candidates)}){hint}")
         files[ref] = found
+    return ssd_file, files
+
+
+def pack(bench, out_dir=None):
+    """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every file it
+    references inside (see _sources)."""
+    ssd_file, files = _sources(bench)
+    out = Path(out_dir or fmu_dir()) / f"{bench}.ssp"
     out.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
+    tmp = out.with_name(out.name + ".part")      # a run that reads it never sees half a file
+    with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
         z.write(ssd_file, "SystemStructure.ssd")
         for ref, path in sorted(files.items()):
             z.write(path, ref)
+    tmp.replace(out)
     return out
 
 
