@@ -8,9 +8,11 @@ factor, the right-hand-side evaluations per simulated second and the speed at
 the end, for three ways of driving it:
 
   held    ctypes fmi2DoStep only: the front axle at 0.40 rad and a constant
-          drive force of 69 kN (what holds 3 m/s on this circle; the bus
-          speeds up to 4.7 m/s), set once: the integrator steps across
-          communication points; the FMU's own cost;
+          drive force of 69 kN (what holds 3 m/s on this circle in
+          equilibrium), set once: the integrator steps across communication
+          points; the FMU's own cost. Open-loop the bus does not stay at
+          3 m/s: it surges between ~3.8 and 6 m/s, its trailer axles sliding
+          and gripping in turn (5.4 m/s at the end);
   raw     the steering turned in over the first 5 s and a PI speed governor
           holding 3 m/s, both sampled every 20 ms as the driver FMU does in
           the benches; fmi2SetReal and fmi2DoStep through ctypes directly, the
