@@ -342,12 +342,6 @@ class Simulation:
 
     # --- the algorithm ---------------------------------------------------------------
 
-    def _read(self, u):
-        u.raw.read()
-
-    def _write(self, u):
-        u.raw.write()
-
     def _step(self, u, t0):
         w = _time.perf_counter()
         raw = u.raw
@@ -376,13 +370,13 @@ class Simulation:
         for _ in range(MAX_INIT_ITERATIONS):
             before = [list(u.in_values) for u in self.units]
             for u in self.order:
-                self._read(u)
+                u.raw.read()
                 self._propagate(u if self.algorithm == "gauss-seidel" else None, start)
             for u in self.order:
                 self._propagate(u, start)
-                self._write(u)
+                u.raw.write()
             for u in self.units:
-                self._read(u)
+                u.raw.read()
             if all(np.allclose(b, list(u.in_values), rtol=1e-12, atol=1e-12)
                    for b, u in zip(before, self.units)):
                 break
@@ -391,7 +385,7 @@ class Simulation:
                                f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
         for u in self.units:
             u.fmu.slave.exitInitializationMode()
-            self._read(u)
+            u.raw.read()
 
     class _Recorder:
         """At every base step a copy of each recorded component's output buffer
@@ -423,7 +417,8 @@ class Simulation:
         if not stop > start:
             raise ArtibusError(f"stop time {stop} must be after the start time {start}")
         rec = self._Recorder(self.names, self._rec)
-        n = int(round((stop - start) / self.base_step))
+        h = self.base_step
+        n = int(round((stop - start) / h))
         t = start
         current = None
         # a component with step H = ratio * h takes its inputs at the start of
@@ -435,22 +430,21 @@ class Simulation:
         # Gauss-Seidel: per base step, in the order, (unit, starts, ends) of those that do either
         plan_gs = [[(u, u in starting, u in ending) for u in self.order if u in starting or u in ending]
                    for starting, ending in plan]
-        h = self.base_step
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
             rec.take(t)
             for k in range(n):
-                t = start + k * self.base_step
+                t = start + k * h
                 starting, ending = plan[k % period]
                 if self.algorithm == "jacobi":
                     for u in starting:
                         self._propagate(u, t)
                     for u in starting:
-                        self._write(u)
+                        u.raw.write()
                     for u in ending:
                         current = u
-                        self._step(u, t + self.base_step - u.step)
+                        self._step(u, t + h - u.step)
                 else:
                     for u, starts, ends in plan_gs[k % period]:
                         if starts:
@@ -460,7 +454,7 @@ class Simulation:
                             current = u
                             self._step(u, t + h - u.step)
                 current = None
-                t = start + (k + 1) * self.base_step
+                t = start + (k + 1) * h
                 rec.take(t)
                 if progress and k % max(1, n // 50) == 0:
                     sys.stderr.write(f"\r{self.bench.name}: t = {t:8.2f} s  [{'#' * (50 * (k + 1) // n):50s}]")

@@ -49,9 +49,9 @@ def ssp_path(bench):
     q = fmu_dir() / f"{bench}.ssp"
     if bench in bench_names():
         ssd_file, files = _sources(bench)
-        if not q.is_file() or any(f.stat().st_mtime_ns > q.stat().st_mtime_ns
-                                  for f in (ssd_file, *files.values())):
-            pack(bench)
+        packed = q.stat().st_mtime_ns if q.is_file() else None
+        if packed is None or any(f.stat().st_mtime_ns > packed for f in (ssd_file, *files.values())):
+            _write_pack(q, ssd_file, files)
         return q
     if not q.is_file():
         raise ArtibusError(f"{bench}: no such bench (known: {', '.join(bench_names()) or 'none'})")
@@ -89,8 +89,10 @@ def _sources(bench):
 def pack(bench, out_dir=None):
     """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every file it
     references inside (see _sources)."""
-    ssd_file, files = _sources(bench)
-    out = Path(out_dir or fmu_dir()) / f"{bench}.ssp"
+    return _write_pack(Path(out_dir or fmu_dir()) / f"{bench}.ssp", *_sources(bench))
+
+
+def _write_pack(out, ssd_file, files):
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.name + ".part")      # a run that reads it never sees half a file
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:

@@ -113,6 +113,11 @@ static void cv_error(int code, const char *module, const char *func, char *msg, 
 
 Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
              void *user, OdeMethod method, double rtol, double atol) {
+    if (method == ODE_ERK && nroots > 0) {   /* no model needs it yet: say so rather than run it untested */
+        log_error(comp, "root finding (%d functions) is not offered with the explicit "
+                        "Runge-Kutta integrator: use BDF or Adams", nroots);
+        return NULL;
+    }
     Ode *o = calloc(1, sizeof *o);
     if (!o) return NULL;
     if (comp->tolerance > 0) rtol = comp->tolerance;   /* fmi2SetupExperiment's tolerance wins */
@@ -134,12 +139,6 @@ Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
         if (ERKStepSetUserData(o->erk, o) != ARK_SUCCESS) goto fail;
         if (ERKStepSStolerances(o->erk, rtol, atol) != ARK_SUCCESS) goto fail;
         ERKStepSetMaxNumSteps(o->erk, 100000);
-        if (nroots > 0) {   /* no model needs it yet: say so rather than run it untested */
-            log_error(comp, "root finding (%d functions) is not offered with the explicit "
-                            "Runge-Kutta integrator: use BDF or Adams", nroots);
-            ode_free(o);
-            return NULL;
-        }
         return o;
     }
     o->mem = CVodeCreate(method == ODE_ADAMS ? CV_ADAMS : CV_BDF, o->ctx);
