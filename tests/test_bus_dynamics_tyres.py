@@ -58,16 +58,18 @@ def test_static_loads_that_cannot_be_found_are_an_error():
     assert "module 1" in str(e.value) and "FzFromMasses" in str(e.value)
 
 
+@pytest.mark.parametrize("model", [1, 3])
 @pytest.mark.parametrize("mu", [0.3, 0.7])
 @pytest.mark.parametrize("u", [10.0, 20.0])
-def test_friction_scales_cornering_stiffness(mu, u):
-    """tyreModel 1 below the friction limit is the bicycle model with
-    C_eff = mu C (seed 001): r/delta = u / (L + K u^2), K = m/L (b/(mu Cf) - a/(mu Cr))."""
+def test_friction_scales_cornering_stiffness(mu, u, model):
+    """tyreModel 1 below the friction limit, and tyreModel 3 everywhere, is
+    the bicycle model with C_eff = mu C (seed 001): r/delta = u / (L + K u^2),
+    K = m/L (b/(mu Cf) - a/(mu Cr))."""
     a, b = BICYCLE["xA[1]"], -BICYCLE["xA[2]"]
     L, m = a + b, BICYCLE["m[1]"]
     K = m / L * (b / (mu * BICYCLE["C[1]"]) - a / (mu * BICYCLE["C[2]"]))
     delta = 1e-3
-    p = dict(BICYCLE, vx_start=u, tyreModel=1, **{"mu[1]": mu, "mu[2]": mu})
+    p = dict(BICYCLE, vx_start=u, tyreModel=model, **{"mu[1]": mu, "mu[2]": mu})
     r = simulate(fmu_path("BusDynamics"), parameters=p, inputs={"delta[1]": lambda t: delta},
                  stop_time=15.0, step=0.05, outputs=["r[1]", "vx[1]", "Fy[1]", "Fz[1]"])
     assert abs(r["Fy[1]"][-1]) < 0.1 * mu * r["Fz[1]"][-1]     # far from saturation
@@ -88,6 +90,18 @@ def test_lateral_force_is_limited_by_friction(model):
         assert out["alpha[1]"] == pytest.approx(expected, abs=1e-15)
         assert expected == pytest.approx(d, abs=1e-6)
         assert out["Fy[1]"] == pytest.approx(math.copysign(mu * out["Fz[1]"], d), rel=1e-12)
+
+
+def test_seed001_linear_model_scales_by_friction_without_a_limit():
+    """tyreModel 3 (seed 001's extensive model, eq. C.1 with the friction
+    coefficient scaling the tyre coefficient): Fy = mu C alpha at any slip,
+    also far beyond mu Fz, where tyreModel 1 saturates."""
+    mu = 0.2
+    names = ["Fy[1]", "Fz[1]", "alpha[1]"]
+    for d in (0.01, -0.3, 0.5):
+        out = initial_outputs(dict(BICYCLE, tyreModel=3, **{"mu[1]": mu}), {"delta[1]": d}, names)
+        assert out["Fy[1]"] == pytest.approx(mu * BICYCLE["C[1]"] * out["alpha[1]"], rel=1e-12)
+    assert abs(out["Fy[1]"]) > 2 * mu * out["Fz[1]"]
 
 
 def test_brush_model_closed_form():

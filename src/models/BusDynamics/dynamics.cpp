@@ -119,6 +119,10 @@ extern "C" double dyn_tyre(const DynParams *p, int a, double alpha) {
         const double s = t / tsl;   /* -1 .. 1 */
         return Fmax * (3.0 * s - 3.0 * s * std::fabs(s) + s * s * s);
     }
+    case TYRE_LINEAR_SCALED:
+        /* seed 001, 3.1 and eq. C.1: the extensive model's linear tyre, its
+           friction coefficient scaling the tyre coefficient, nothing saturates */
+        return mu * C * alpha;
     default:
         return C * alpha;          /* eq. 24 */
     }

@@ -30,7 +30,8 @@ extern "C" {
 typedef enum {
     TYRE_LINEAR = 0,        /* Fy = C alpha (eq. 24) */
     TYRE_LINEAR_FRICTION,   /* Fy = mu C alpha, saturated at |Fy| <= mu Fz */
-    TYRE_FIALA              /* brush model (Fiala): smooth saturation at mu Fz */
+    TYRE_FIALA,             /* brush model (Fiala): smooth saturation at mu Fz */
+    TYRE_LINEAR_SCALED      /* Fy = mu C alpha, no saturation (seed 001's extensive model) */
 } TyreModel;
 
 typedef struct {
