@@ -1,0 +1,76 @@
+/* SwayBaseline: a condition-based articulation damping like Scania's ACS5,
+ * modelled from seed 001's description (1.4.1, 5.2.5, 6.1.4), not from
+ * production code, as a discrete controller: at each sample instant t0 + k Ts
+ * inside a communication step the held inputs give the request (baseline.c);
+ * the outputs change only there. */
+#include <math.h>
+
+#include "fmu.h"
+#include "baseline.h"
+
+#define S (&comp->v.s)
+
+fmi2Status model_init(ModelInstance *comp) {
+    SbParams p = { .nGround = D->nGround, .vSSC = D->vSSC, .LambdaDotSSC = D->LambdaDotSSC,
+                   .tHold = D->tHold, .pctSSC = D->pctSSC, .LambdaEP0 = D->LambdaEP0,
+                   .LambdaEP1 = D->LambdaEP1, .pctEP = D->pctEP, .pctMax = D->pctMax, .Ts = D->Ts };
+    for (int i = 0; i < SB_MAX_GROUND; i++) {
+        p.groundSpeed[i] = D->groundSpeed[i + 1];
+        p.groundPct[i] = D->groundPct[i + 1];
+    }
+    const int bad = sb_setup(&S->b, &p);
+    if (bad == -2)
+        return log_error(comp, "parameter groundSpeed[1..nGround] (nGround = %d) is not strictly increasing",
+                         D->nGround);
+    if (bad == -9)
+        return log_error(comp, "parameter LambdaEP1 = %g rad must be above LambdaEP0 = %g rad",
+                         D->LambdaEP1, D->LambdaEP0);
+    if (bad) return log_error(comp, "parameter %s is not valid for the sway baseline", sb_param_name(bad));
+    S->t0 = comp->v.time;
+    S->k = 0;
+    SbBaseline first = S->b;                 /* the outputs of the initial inputs (sample 0 is */
+    sb_sample(&first, D->v, D->Lambda, D->LambdaDot);   /* taken again, with the inputs of t0, */
+    S->b.pct = first.pct;                    /* at the first step) */
+    S->b.pctGround = first.pctGround;
+    S->b.ssc = first.ssc;
+    S->b.ep = first.ep;
+    S->fault = 0;
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    D->pct = S->b.pct;
+    D->pctGround = S->b.pctGround;
+    D->sscActive = S->b.ssc;
+    D->epActive = S->b.ep;
+    D->tSinceSSC = S->b.tSince;
+}
+
+static void report(ModelInstance *comp, unsigned fault, double t) {
+    const unsigned now = fault & ~S->fault;
+    if (now & SB_FAULT_REVERSE)
+        log_warning(comp, "t = %.6g s: v = %g m/s < 0 is not a forward speed: ground level of "
+                          "groundSpeed[1] used; warned once until v >= 0", t, D->v);
+    if (now & SB_FAULT_NAN)
+        log_warning(comp, "t = %.6g s: an input is not finite (v = %g, Lambda = %g, LambdaDot = %g): "
+                          "outputs held; warned once until it clears", t, D->v, D->Lambda, D->LambdaDot);
+    S->fault = fault;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    const double Ts = S->b.p.Ts;
+    for (;;) {
+        const double tk = S->t0 + (double)S->k * Ts;
+        if (!(tk < t + h - 1e-9 * Ts)) break;          /* samples in [t, t + h) */
+        const double was = S->b.ssc;
+        report(comp, sb_sample(&S->b, D->v, D->Lambda, D->LambdaDot), tk);
+        if (S->b.ssc != was)
+            log_event(comp, "t = %.6g s: sway control %s (v = %g m/s, LambdaDot = %g rad/s)", tk,
+                      S->b.ssc != 0.0 ? "on" : "off", D->v, D->LambdaDot);
+        S->k++;
+    }
+    comp->v.time = t + h;
+    return fmi2OK;
+}
+
+void model_free(ModelInstance *comp) { (void)comp; }
