@@ -1,0 +1,81 @@
+/* ArticulationDamper: the two-cylinder articulation damper of seed 001 (1.3.1,
+ * App. B; damper.c) between BusDynamics (artAngle[1], artRate[1] in, Mjoint[1]
+ * out) and a damping controller (pct in, Mmax out).
+ *
+ * The inputs are held over a step. The hydraulic torque is static as in the
+ * thesis (tauP = 0) or follows the valve pressure, whose first-order lag
+ * tauP is solved exactly over the step (no solver). The dissipated energy is
+ * integrated exactly over each step with the inputs held. */
+#include <math.h>
+
+#include "fmu.h"
+#include "damper.h"
+
+#define S (&comp->v.s)
+
+/* the valve pressure now: the lag's state, or the set pressure when static */
+static double valve_pressure(ModelInstance *comp) {
+    return D->tauP > 0.0 ? S->pValve : damper_pset(&S->par, D->pct);
+}
+
+fmi2Status model_init(ModelInstance *comp) {
+    DamperParams *p = &S->par;
+    p->R = D->R;
+    p->Xrear = D->Xrear;
+    p->Yrear = D->Yrear;
+    p->Ap = D->Ap;
+    p->pMax = D->pMax;
+    p->v0 = D->v0;
+    p->LambdaStop = D->LambdaStop;
+    p->kStop = D->kStop;
+    p->cStop = D->cStop;
+    p->bothWays = D->bothWays ? 1 : 0;
+    double Lshort, at;
+    const int side = damper_check(p, &Lshort, &at);
+    if (side)
+        return log_error(comp, "geometry R = %g m, Xrear = %g m, Yrear = %g m: the %s cylinder would be "
+                               "%g m long at Lambda = %g rad (%g deg), shorter than %g m (or through zero "
+                               "length), within |Lambda| <= LambdaStop + %g = %g rad (LambdaStop = %g rad)",
+                         D->R, D->Xrear, D->Yrear, side > 0 ? "left" : "right", Lshort, at,
+                         at * 180.0 / M_PI, DAMPER_L_MIN, DAMPER_CHECK_MARGIN,
+                         D->LambdaStop + DAMPER_CHECK_MARGIN, D->LambdaStop);
+    S->pValve = damper_pset(p, D->pct);      /* the valve settled at the initial command */
+    S->Ediss = 0.0;
+    S->warned = 0;
+    return fmi2OK;
+}
+
+void model_outputs(ModelInstance *comp) {
+    DamperOut o;
+    damper_eval(&S->par, D->Lambda, D->LambdaDot, valve_pressure(comp), &o);
+    D->Mjoint = o.Mjoint;
+    for (int i = 1; i <= 2; i++) {
+        D->F[i] = o.F[i - 1];
+        D->p[i] = o.p[i - 1];
+        D->L[i] = o.L[i - 1];
+        D->Ldot[i] = o.Ldot[i - 1];
+    }
+    D->Mmax = o.Mmax;
+    D->Ediss = S->Ediss;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    fmi2Status status = fmi2OK;
+    const double pv = valve_pressure(comp);
+    DamperOut o;
+    if (damper_eval(&S->par, D->Lambda, D->LambdaDot, pv, &o) && !S->warned) {
+        S->warned = 1;
+        log_warning(comp, "t = %g s: Lambda = %g rad: a cylinder would be shorter than %g m (beyond the "
+                          "end stop at LambdaStop = %g rad); its length is held at %g m (warned once)",
+                    t, D->Lambda, DAMPER_L_MIN, D->LambdaStop, DAMPER_L_MIN);
+        status = fmi2Warning;
+    }
+    double pInt;
+    const double pNew = damper_pressure_step(pv, damper_pset(&S->par, D->pct), D->tauP, h, &pInt);
+    S->Ediss += damper_step_energy(&o, D->LambdaDot, pInt, h);
+    S->pValve = pNew;
+    comp->v.time = t + h;
+    return status;
+}
+
+void model_free(ModelInstance *comp) { (void)comp; }
