@@ -21,16 +21,6 @@ import numpy as np
 from artibus import kc
 
 
-def write_bode_csv(path, v, points, geo, kc_value):
-    with open(path, "w") as f:
-        f.write("frequency_Hz,plant_gain,plant_phase_deg,ref_gain,ref_phase_deg,ref_kc_gain\n")
-        ph = np.degrees(np.unwrap([p.phase for p in points]))
-        for p, q in zip(points, ph):
-            G = kc.g_ref(p.frequency, v, geo)
-            f.write(f"{p.frequency:.6g},{p.gain:.6g},{q:.4f},{abs(G):.6g},{math.degrees(np.angle(G)):.4f},"
-                    f"{kc_value * abs(G):.6g}\n")
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-o", "--out", default="out/kc", help="output directory (default out/kc)")
@@ -60,29 +50,15 @@ def main(argv=None):
 
     t1 = time.perf_counter()
     kc100 = next(r.kc for r in rows if round(r.kmh) == 100)
-    sweeps = {}
-    for kmh in (10, 100):
-        v = kmh / 3.6
-        sweeps[kmh] = kc.plant_points(v, kc.BODE_FREQS, geo)
-    f_pk, g_pk, fine = kc.sway_peak(100 / 3.6, sweeps[100], geo)    # its points join the 100 km/h curve
-    sweeps[100] = sorted(sweeps[100] + fine, key=lambda p: p.frequency)
-    for kmh in (10, 100):
-        write_bode_csv(out / f"bode_{kmh}kmh.csv", kmh / 3.6, sweeps[kmh], geo, kc100 if kmh == 100 else 1.0)
-    figs = [(out / "fig4_1_bode_10kmh.png", 10, 1.0, "Fig. 4.1: steering -> articulation angle at 10 km/h"),
-            (out / "fig4_2_bode_100kmh.png", 100, 1.0, "Fig. 4.2: steering -> articulation angle at 100 km/h"),
-            (out / "fig4_3_bode_100kmh_kc.png", 100, kc100,
-             "Fig. 4.3: at 100 km/h, the reference model with the complementary gain Kc")]
-    for path, kmh, k, title in figs:
-        kc.plot_bode(path, kmh / 3.6, sweeps[kmh], geo, k,
-                     f"{title}\nScania 18 m, friction 1 (seed 001, 4.1.2)")
-        print(path)
+    figs = kc.bode_figures(out, kc100, geo)
+    for path, _ in figs.images:
+        print(out / path)
     t_bode = time.perf_counter() - t1
-    print(f"\nrear-sway resonance at 100 km/h: {f_pk:.3f} Hz = {2 * math.pi * f_pk:.2f} rad/s, "
-          f"gain {g_pk:.3f} ({20 * math.log10(g_pk / (geo['a'] * geo['l2'])):+.1f} dB against a l2; "
+    print(f"\nrear-sway resonance at 100 km/h: {figs.f_peak:.3f} Hz = {2 * math.pi * figs.f_peak:.2f} rad/s, "
+          f"gain {figs.g_peak:.3f} ({20 * math.log10(figs.g_peak / (geo['a'] * geo['l2'])):+.1f} dB against a l2; "
           f"seed 001: about 4.5 rad/s = 0.7 Hz)")
-    band = [p for p in sweeps[10] if 2 * math.pi * p.frequency <= 10.0]
-    dev = max(abs(20 * math.log10(p.gain / abs(kc.g_ref(p.frequency, 10 / 3.6, geo)))) for p in band)
-    print(f"10 km/h, up to 10 rad/s: plant gain within {dev:.2f} dB of the reference model's (seed 001: very similar)")
+    print(f"10 km/h, up to 10 rad/s: plant gain within {figs.dev10:.2f} dB of the reference model's "
+          f"(seed 001: very similar)")
     print(f"\ntime: table {t_table:.1f} s, Bode sweeps and peak {t_bode:.1f} s, "
           f"total {time.perf_counter() - t0:.1f} s")
     return 0

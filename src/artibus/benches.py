@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import kpi, report
+from artibus import damping, kc, kpi, report
 from artibus.report import Kpi
 
 DEG = 180 / math.pi
@@ -432,6 +432,8 @@ REPORTS = {
     "Bus36m_LaneChange": bus36m_lane_change,
     "Bus36m_Slalom": bus36m_slalom,
     "Bus36m_Circle_Backwards": bus36m_circle_backwards,
+    "Scania18m_Damping": damping.report,
+    "Scania18m_OpenLoop": kc.report,
 }
 
 

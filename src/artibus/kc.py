@@ -229,3 +229,64 @@ def sway_peak(v, points, geo, amplitude=AMPLITUDE, n=9):
     c2, c1, c0 = np.polyfit(x, y, 2)
     xm = -c1 / (2 * c2)
     return math.exp(xm), 10 ** (np.polyval([c2, c1, c0], xm) / 20), fine
+
+
+def write_bode_csv(path, v, points, geo, kc_value):
+    with open(path, "w") as f:
+        f.write("frequency_Hz,plant_gain,plant_phase_deg,ref_gain,ref_phase_deg,ref_kc_gain\n")
+        ph = np.degrees(np.unwrap([p.phase for p in points]))
+        for p, q in zip(points, ph):
+            G = g_ref(p.frequency, v, geo)
+            f.write(f"{p.frequency:.6g},{p.gain:.6g},{q:.4f},{abs(G):.6g},{math.degrees(np.angle(G)):.4f},"
+                    f"{kc_value * abs(G):.6g}\n")
+
+
+@dataclass
+class BodeFigures:
+    images: list        # [(file name in out, caption)]
+    f_peak: float       # rear-sway resonance at 100 km/h, Hz
+    g_peak: float       # its gain, rad/rad
+    dev10: float        # 10 km/h: largest |plant - reference| gain up to 10 rad/s, dB
+
+
+def bode_figures(out, kc100, geo=None):
+    """The thesis's Figs. 4.1-4.3 into ``out``: steering -> articulation angle,
+    the reference model against the plant at 10 and 100 km/h, and at 100 km/h
+    with the complementary gain kc100; CSVs beside them."""
+    out = Path(out)
+    geo = geo or reference_geometry()
+    sweeps = {kmh: plant_points(kmh / 3.6, BODE_FREQS, geo) for kmh in (10, 100)}
+    f_pk, g_pk, fine = sway_peak(100 / 3.6, sweeps[100], geo)    # its points join the 100 km/h curve
+    sweeps[100] = sorted(sweeps[100] + fine, key=lambda p: p.frequency)
+    for kmh in (10, 100):
+        write_bode_csv(out / f"bode_{kmh}kmh.csv", kmh / 3.6, sweeps[kmh], geo, kc100 if kmh == 100 else 1.0)
+    figs = [("fig4_1_bode_10kmh.png", 10, 1.0, "Fig. 4.1: steering -> articulation angle at 10 km/h"),
+            ("fig4_2_bode_100kmh.png", 100, 1.0, "Fig. 4.2: steering -> articulation angle at 100 km/h"),
+            ("fig4_3_bode_100kmh_kc.png", 100, kc100,
+             "Fig. 4.3: at 100 km/h, the reference model with the complementary gain Kc")]
+    for name, kmh, k, title in figs:
+        plot_bode(out / name, kmh / 3.6, sweeps[kmh], geo, k, f"{title}\nScania 18 m, friction 1 (seed 001, 4.1.2)")
+    band = [p for p in sweeps[10] if 2 * math.pi * p.frequency <= 10.0]
+    dev = max(abs(20 * math.log10(p.gain / abs(g_ref(p.frequency, 10 / 3.6, geo)))) for p in band)
+    return BodeFigures([(name, title) for name, _, _, title in figs], f_pk, g_pk, dev)
+
+
+def report(r, out):
+    """The Scania18m_OpenLoop bench's report: seed 001's Figs. 4.1-4.3 (the
+    bench's own run, straight ahead, is not what it is for)."""
+    from artibus.report import Kpi
+    geo = reference_geometry()
+    ssv = read_parameters("Scania18mKc")
+    speeds = [ssv[f"KcSpeed[{i}]"] for i in range(1, ssv["nKc"] + 1)]
+    gains = [ssv[f"KcGain[{i}]"] for i in range(1, ssv["nKc"] + 1)]
+    kc100 = float(np.interp(100 / 3.6, speeds, gains))
+    figs = bode_figures(out, kc100, geo)
+    kpis = [Kpi("rear-sway resonance at 100 km/h, friction 1", 2 * math.pi * figs.f_peak, "rad/s",
+                "about 4.5 (0.7 Hz)", "seed 001, 4.1.2, Fig. 4.2", abs(2 * math.pi * figs.f_peak - 4.5) < 0.5),
+            Kpi("10 km/h: plant against reference model gain, up to 10 rad/s (largest difference)", figs.dev10,
+                "dB", "very similar up to 10 rad/s", "seed 001, Fig. 4.1", figs.dev10 < 1.0),
+            Kpi("complementary gain Kc at 100 km/h (Scania18mKc.ssv)", kc100, "-", "not given", "seed 001, 4.1.2")]
+    notes = ("Kc(v) matches the reference model's low-frequency gain to the plant's (scripts/kc_table.py "
+             "writes the table; Scania18mKc.ssv). Sine tests through the co-simulation, amplitude "
+             f"{AMPLITUDE:g} rad.")
+    return kpis, figs.images, notes

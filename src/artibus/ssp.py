@@ -7,10 +7,18 @@ refer to ``resources/<Name>.fmu`` and its parameter bindings to
 parameter sets from ``ssp/parameters/`` into ``fmus/<Bench>.ssp``; a bench
 run by name is packed again when any of those files is newer.
 
+A bench's variants (e.g. the damping options of one bench, or its driving
+cases) are parameter sets of that bench, not copies of its .ssd:
+``ssp/benches/<Bench>/variants/<name>.ssv``, each parameter named
+``Component.variable``. They are packed into the .ssp (``variants/``) and
+selected by name (``artibus run BENCH --variant NAME``), applied after the
+bench's own bindings and before the user's ``--ssv``/``--set``.
+
 Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships);
 what it leaves out (default experiment, per-component step sizes in our
 annotation, connector units) is read here with lxml from the same file.
 """
+import tempfile
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,8 +35,13 @@ NS = {
     "ssm": "http://ssp-standard.org/SSP1/SystemStructureParameterMapping",
     "artibus": "urn:artibus",
 }
+#: a bench's variants: <bench folder>/variants/<name>.ssv, packed as variants/<name>.ssv
+VARIANT_DIR = "variants"
 #: annotation type holding artibus-specific simulation settings of a component
 ANNOTATION = "org.artibus.simulation"
+#: annotation type routing connections over CAN: on the System, <Can source="resources/X.dbc"
+#: period="0.01"/>; on a Connection, <Route message="..." signal="..."/> (see artibus.can)
+CAN_ANNOTATION = "org.artibus.can"
 
 
 def bench_names():
@@ -75,7 +88,7 @@ def _sources(bench):
             continue
         name = ref[len("resources/"):]
         candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name,
-                      ROOT / "ssp" / "roads" / name]
+                      ROOT / "ssp" / "roads" / name, ROOT / "ssp" / "can" / name]
         found = next((c for c in candidates if c.is_file()), None)
         if found is None:
             hint = " (FMUs are built by the set-up command of the README)" if name.endswith(".fmu") else ""
@@ -83,7 +96,50 @@ def _sources(bench):
                                f"source=\"{ref}\">: no such file (looked in "
                                f"{', '.join(str(c.parent) for c in candidates)}){hint}")
         files[ref] = found
+    for v in sorted((src / VARIANT_DIR).glob("*.ssv")):
+        files[f"{VARIANT_DIR}/{v.name}"] = v
     return ssd_file, files
+
+
+def variants(ssp):
+    """The names of a packed bench's variants (see the module's docstring)."""
+    with zipfile.ZipFile(ssp) as z:
+        return sorted(Path(n).stem for n in z.namelist()
+                      if n.startswith(f"{VARIANT_DIR}/") and n.endswith(".ssv"))
+
+
+def variant_overrides(ssp, names):
+    """{"Component.variable": value} of the named variants of a bench (a
+    name or an .ssp), later names winning; an unknown name is an error that
+    lists the bench's variants."""
+    from fmpy.ssp.ssd import read_ssv
+    from artibus.parameters import typed
+    if not names:
+        return {}
+    ssp = ssp_path(ssp)
+    known = variants(ssp)
+    values = {}
+    for name in names:
+        if name not in known:
+            raise ArtibusError(f"--variant {name}: {ssp} has no such variant "
+                               f"(known: {', '.join(known) or 'none'})")
+        where = f"{ssp}/{VARIANT_DIR}/{name}.ssv"
+        with zipfile.ZipFile(ssp) as z, tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
+            f = Path(tmp) / f"{name}.ssv"
+            f.write_bytes(z.read(f"{VARIANT_DIR}/{name}.ssv"))
+            try:
+                pset = read_ssv(str(f), validate=True)
+            except Exception as e:
+                raise ArtibusError(f"{where}: not a valid SSP parameter-value file: {e}") from None
+        for p in pset.parameters:
+            if "." not in p.name:
+                raise ArtibusError(f"{where}: parameter '{p.name}': a variant names "
+                                   f"Component.variable")
+            try:
+                values[p.name] = typed(p.type, p.value)
+            except ValueError:
+                raise ArtibusError(f"{where}: parameter '{p.name}' = {p.value!r} is not a {p.type}") from None
+    return values
 
 
 def pack(bench, out_dir=None):
@@ -122,6 +178,7 @@ class Connection:
     factor: float = 1.0
     offset: float = 0.0
     line: int = 0
+    can: dict | None = None        # routed over CAN: {"message", "signal", "line"}
 
 
 @dataclass
@@ -132,6 +189,7 @@ class Bench:
     connections: list              # Connection, component to component
     start_time: float = 0.0
     stop_time: float | None = None
+    can: dict | None = None        # the CAN network: {"source" (DBC in the .ssp), "period", "line"}
 
 
 def read(ssp):
@@ -164,6 +222,9 @@ def read(ssp):
             index_xml(sub, f"{prefix}.{sub.get('name')}" if prefix else sub.get("name"))
 
     index_xml(root.find("ssd:System", NS), "")
+    can = root.find(f"ssd:System/ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Can", NS)
+    if can is not None:
+        bench.can = {"source": can.get("source"), "period": can.get("period"), "line": can.sourceline}
 
     def bound_values(element, xml_element, what):
         values = {}
@@ -293,26 +354,29 @@ def read(ssp):
         lt = xc.find("ssc:LinearTransformation", NS)
         factor = float(lt.get("factor", 1.0)) if lt is not None else 1.0
         offset = float(lt.get("offset", 0.0)) if lt is not None else 0.0
-        edges.append((a, b, factor, offset, line))
+        route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
+        if route is not None:
+            route = {"message": route.get("message"), "signal": route.get("signal"), "line": route.sourceline}
+        edges.append((a, b, factor, offset, line, route))
 
     # follow chains through system connectors: comp -> sys ... -> comp
     outgoing = {}
-    for a, b, f, o, line in edges:
-        outgoing.setdefault(a, []).append((b, f, o, line))
+    for a, b, f, o, line, route in edges:
+        outgoing.setdefault(a, []).append((b, f, o, line, route))
 
-    def ends(n, f, o, line, seen):
+    def ends(n, f, o, line, route, seen):
         if n[0] == "comp":
-            yield n, f, o, line
+            yield n, f, o, line, route
             return
         if n in seen:
             return
-        for m, f2, o2, l2 in outgoing.get(n, []):
-            yield from ends(m, f2 * f, f2 * o + o2, line, seen | {n})
+        for m, f2, o2, l2, r2 in outgoing.get(n, []):
+            yield from ends(m, f2 * f, f2 * o + o2, line, route or r2, seen | {n})
 
-    for a, b, f, o, line in edges:
+    for a, b, f, o, line, route in edges:
         if a[0] != "comp":
             continue
-        for end, f2, o2, l2 in ends(b, f, o, line, frozenset()):
+        for end, f2, o2, l2, r2 in ends(b, f, o, line, route, frozenset()):
             bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
-                                                factor=f2, offset=o2, line=l2))
+                                                factor=f2, offset=o2, line=l2, can=r2))
     return bench
