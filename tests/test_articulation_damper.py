@@ -319,6 +319,32 @@ def run_into_stop(f, J, T, h, lam0, t_end):
     return np.array(lams), np.array(ws), (w_contact or 0.0)
 
 
+@pytest.mark.parametrize("sign", [1, -1])
+def test_end_stop_law_and_its_energy(damper, sign):
+    """Beyond LambdaStop, with the valves at 0 % (no hydraulic torque): a spring
+    kStop (|Lambda| - LambdaStop) pushing back, plus cStop LambdaDot only while
+    moving further in. Ediss counts the stop's damping, not its spring."""
+    stop, k, c = PAR["LambdaStop"], PAR["kStop"], PAR["cStop"]
+    f = damper(pct=0.0)
+    lam, h = sign * (stop + 0.01), 0.01
+    for rate, damped in ((0.0, False), (sign * 0.3, True), (-sign * 0.3, False)):
+        o = read(f, lam, rate, 0.0)
+        want = sign * k * 0.01 + (c * rate if damped else 0.0)
+        assert o["Mjoint"] == pytest.approx(want, rel=1e-6)
+    # the energy over a few held steps, in and out
+    g = damper(pct=0.0)
+    t = 0.0
+    for rate in (sign * 0.3, -sign * 0.3, sign * 0.1):
+        E0 = g.get("Ediss")[0]
+        read(g, lam, rate, 0.0)
+        g.slave.doStep(t, h)
+        t += h
+        dE = g.get("Ediss")[0] - E0
+        assert dE == pytest.approx(c * rate * rate * h if rate * sign > 0 else 0.0, rel=1e-9, abs=1e-12)
+    # inside the stop nothing but the valves
+    assert read(g, sign * (stop - 1e-6), sign * 0.3, 0.0)["Mjoint"] == 0.0
+
+
 @pytest.mark.parametrize("J", [2e4, 5e4, 1.5e5])
 @pytest.mark.parametrize("T", [3e4, 1e5, 3e5])
 @pytest.mark.parametrize("h", [0.001, 0.01])
@@ -425,6 +451,24 @@ def test_unusual_but_possible_geometry_runs(damper):
         o = read(f, lam, rate, pct)
         assert o["Mjoint"] * rate >= 0
         assert o["L[1]"] == pytest.approx(length(lam, 1, R=0.5, X=0.6, Y=0.35), rel=1e-12)
+
+
+def test_geometry_is_checked_only_up_to_the_stop_and_a_margin(damper):
+    """rho = R: the left cylinder would pass through zero length at 80 deg,
+    beyond LambdaStop + 10 deg: accepted; driven there anyway, its length is
+    held at 5 cm with one warning, the outputs stay finite."""
+    R, phi = 0.5, 80 * DEG
+    geo = dict(R=R, Xrear=R * math.sin(phi), Yrear=R * math.cos(phi))
+    assert length(phi, 1, R=R, X=geo["Xrear"], Y=geo["Yrear"]) < 1e-7
+    assert min(length(lam, s, R=R, X=geo["Xrear"], Y=geo["Yrear"])
+               for lam in np.linspace(-64, 64, 12801) * DEG for s in (1, -1)) > 0.05
+    f = damper(**geo)
+    o = read(f, phi, 0.5, 20.0)
+    assert o["L[1]"] == 0.05 and all(math.isfinite(x) for x in o.values())
+    for i in range(3):
+        f.slave.doStep(i * 0.01, 0.01)
+    assert sum("[Warning]" in line and "Lambda" in line for line in f.log) == 1
+    assert all(math.isfinite(x) for x in f.get(*OUTS))
 
 
 def test_extreme_inputs_and_parameters_give_finite_outputs(damper):
