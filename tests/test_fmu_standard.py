@@ -130,15 +130,25 @@ def test_default_experiment_runs_in_fmpy(name):
 @pytest.mark.parametrize("name", FMU_NAMES)
 @pytest.mark.parametrize("serialize", [False, True])
 def test_fmu_state_round_trip(name, serialize, open_fmu):
-    """simulate, save, continue, restore, continue again: identical outputs."""
+    """simulate, save, continue, restore, continue again: identical outputs.
+    The Real inputs move along a slow ramp from their start values (within
+    their ranges), so an FMU without a built-in stimulus moves too."""
     fmu = open_fmu(name)
     init(fmu)
     outs = [v.valueReference for v in fmu.md.modelVariables if v.causality == "output" and v.type == "Real"]
+    inputs = [v for v in fmu.md.modelVariables if v.causality == "input" and v.type == "Real"]
     h = 0.05
+
+    def drive(t):
+        for v in inputs:
+            x0 = float(v.start)
+            span = min(1.0, float(v.max) - x0) if v.max is not None else 1.0
+            fmu.slave.setReal([v.valueReference], [x0 + 0.1 * span * t])
 
     def advance(t0, n=40):
         rows = []
         for i in range(n):
+            drive(t0 + i * h)
             fmu.slave.doStep(t0 + i * h, h)
             rows.append(fmu.slave.getReal(outs))
         return rows
