@@ -426,6 +426,7 @@ REPORTS = {
     "Bus36m_Circle": bus36m_circle,
     "Bus36m_Circle_Guided": lambda r, out: bus36m_circle(r, out, "guided"),
     "Bus36m_Circle_GuidedForceMin": lambda r, out: bus36m_circle(r, out, "guided+forcemin"),
+    "Bus36m_Circle_CAN": lambda r, out: bus36m_circle(r, out, "guided+forcemin"),
     "Bus36m_Circle_GuidedAll": lambda r, out: bus36m_circle(r, out, "guided all"),
     "MultiAxle_StepSteer": multiaxle_step_steer,
     "Scania18m_LaneChange": scania18m_lane_change,

@@ -6,6 +6,7 @@
   artibus info FMU|SSP                 an FMU's variables, or a bench's components and connections
   artibus simulate FMU [options]       run one FMU alone, write CSV
   artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp
+  artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
   artibus demo [-o DIR]                the main job (for now): the Urbino 18 pusher on an S-curve
 """
 import argparse
@@ -103,8 +104,10 @@ def cmd_run(args):
     summary = []
     for bench in benches:
         with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
-                               algorithm=args.algorithm) as sim:
+                               algorithm=args.algorithm, can=args.can, can_log=args.can_log) as sim:
             result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
+            if sim.can is not None:
+                print(sim.can.summary(result.time[-1] - result.time[0]))
             name = sim.bench.name
             if args.report:
                 out_dir = Path(args.report) / name if args.all else Path(args.report)
@@ -127,6 +130,24 @@ def cmd_run(args):
     if args.all and args.report:
         from artibus.report import write_index
         print(write_index(Path(args.report), summary))
+    return 0
+
+
+def cmd_can_decode(args):
+    from artibus import ROOT, can
+    rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc")
+    header = "time_s,message,signal,value,unit,e2e"
+    lines = [f"{t:.6f},{m},{s},{v!r},{u},{e}" for t, m, s, v, u, e in rows]
+    if args.csv:
+        out = Path(args.csv)
+        out.write_text(header + "\n" + "\n".join(lines) + "\n")
+        print(f"{out}: {len(rows)} signal values")
+    else:
+        print(header)
+        print("\n".join(lines))
+    bad = sum(1 for r in rows if r[5] != "ok")
+    if bad:
+        print(f"artibus: {bad} signal values from frames failing their CRC or counter (e2e column)", file=sys.stderr)
     return 0
 
 
@@ -219,7 +240,18 @@ def build_parser():
                    help="record this variable (default: every connected output)")
     s.add_argument("--algorithm", default="gauss-seidel", choices=["gauss-seidel", "jacobi"])
     s.add_argument("-o", "--output", help="results: .csv or .mat (default: <bench>.csv)")
+    s.add_argument("--can", metavar="virtual|INTERFACE:CHANNEL",
+                   help="for a bench that routes connections over CAN: python-can's virtual bus "
+                        "(the default) or a real interface, e.g. socketcan:vcan0")
+    s.add_argument("--can-log", metavar="FILE.blf|FILE.asc", help="write the CAN traffic (simulated time)")
     s.set_defaults(func=cmd_run)
+    s = sub.add_parser("can", help="CAN tools: decode a log")
+    can_sub = s.add_subparsers(dest="can_verb", required=True)
+    c = can_sub.add_parser("decode", help="print or export (CSV) the signals of a .blf/.asc log")
+    c.add_argument("log", help="a .blf or .asc file")
+    c.add_argument("--dbc", help="default: ssp/can/Bus36m.dbc")
+    c.add_argument("--csv", metavar="OUT", help="write CSV instead of printing")
+    c.set_defaults(func=cmd_can_decode)
     s = sub.add_parser("bode", help="frequency response through the co-simulation (sine tests)")
     s.add_argument("bench", help="a bench name or the path of an .ssp")
     s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")

@@ -47,6 +47,7 @@ class Link:
     factor: float
     offset: float
     name: str
+    connection: object = None   # the bench's Connection (ssp.Connection)
 
 
 @dataclass(eq=False)        # a unit is itself: compared by identity
@@ -195,10 +196,14 @@ class Simulation:
     """A bench, set up and ready to run."""
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
-                 stimuli=None):
+                 stimuli=None, can=None, can_log=None):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
-        the start of each of the component's steps."""
+        the start of each of the component's steps. can: the interface of a
+        bench that routes connections over CAN ("virtual", the default, or
+        "INTERFACE:CHANNEL"), can_log: a .blf or .asc file for its traffic
+        (see artibus.can)."""
+        self.can = None
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
         self.algorithm = algorithm
@@ -211,12 +216,12 @@ class Simulation:
         try:
             with zipfile.ZipFile(self.ssp) as z:
                 z.extractall(self._tmp)
-            self._setup(step, overrides or {}, record, where, stimuli or {})
+            self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log)
         except BaseException:
             self.close()
             raise
 
-    def _setup(self, step, overrides, record, where, stimuli):
+    def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None):
         units = {}
         for path, c in self.bench.components.items():
             fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
@@ -282,8 +287,10 @@ class Simulation:
             b.in_names.append(c.end[1])
             b.in_vrs.append(vb.valueReference)
             self.links.append(Link(a, a.out_names.index(c.start[1]), b, len(b.in_names) - 1,
-                                   f, o, f"{c.end[0]}.{c.end[1]}"))
-            b.links_in.append(self.links[-1])
+                                   f, o, f"{c.end[0]}.{c.end[1]}", c))
+            if c.can is None:                 # a connection routed over CAN goes through self.can
+                b.links_in.append(self.links[-1])
+        self._setup_can(where, can_interface, can_log)
         # direct feedthrough from the model descriptions
         for u in self.units:
             inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
@@ -292,7 +299,7 @@ class Simulation:
                 for d in deps:
                     if d.causality == "input":
                         u.feeds.add((d.name, o.variable.name))
-        self.order = _order(self.units, self.links, where)
+        self.order = _order(self.units, [l for l in self.links if l.connection.can is None], where)
 
         # recording: every connection's source, plus what was asked for
         self.record = []
@@ -318,6 +325,8 @@ class Simulation:
             if v is None or v.causality != "input" or v.type != "Real":
                 raise ArtibusError(f"stimulus {name}: not a Real input of a component of {where}")
             u = units[comp]
+            if self.can is not None and any(l.dst is u and l.name == name for l in self.can_links):
+                raise ArtibusError(f"stimulus {name}: the input is routed over CAN in {where}")
             if var in u.in_names:
                 u.stimuli.append((u.in_names.index(var), f, None))
             else:
@@ -331,6 +340,8 @@ class Simulation:
             u.in_values = u.raw.inp
         for u in self.units:
             u.sources = [(l.dst_index, l.src.raw.out, l.src_index, l.factor, l.offset) for l in u.links_in]
+        if self.can is not None:
+            self.can.bind()
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
         # recording: per component, which of its outputs go to which columns
         self._rec = []
@@ -339,6 +350,28 @@ class Simulation:
             idx = [u.out_names.index(n) for v, n in self.record if v is u]
             if cols:
                 self._rec.append((u, np.array(idx), np.array(cols)))
+
+    def _setup_can(self, where, interface, log):
+        """The CAN network of a bench that routes connections over CAN (see artibus.can)."""
+        self.can_links = [l for l in self.links if l.connection.can is not None]
+        spec = self.bench.can
+        if spec is None:
+            if self.can_links:
+                c = self.can_links[0].connection
+                raise ArtibusError(f"{where}:{c.can['line']}: Connection {c.start[0]}.{c.start[1]} -> "
+                                   f"{c.end[0]}.{c.end[1]} is routed over CAN but the System has no "
+                                   f"org.artibus.can annotation naming the DBC")
+            if interface is not None or log is not None:
+                raise ArtibusError(f"--can/--can-log: {where} routes no connection over CAN")
+            return
+        from artibus import can as can_mod
+        self.can = can_mod.Network(self.bench, can_mod.dbc_in(self._tmp, spec), self.can_links,
+                                   interface or "virtual", log)
+        r = self.can.period / self.base_step
+        if abs(r - round(r)) > 1e-9 or round(r) < 1:
+            raise ArtibusError(f"{where}:{spec['line']}: the CAN tick {self.can.period} s is not a "
+                               f"multiple of the base step {self.base_step} s")
+        self.can_ratio = int(round(r))
 
     # --- the algorithm ---------------------------------------------------------------
 
@@ -372,6 +405,8 @@ class Simulation:
             for u in self.order:
                 u.raw.read()
                 self._propagate(u if self.algorithm == "gauss-seidel" else None, start)
+            if self.can is not None:
+                self.can.settle()
             for u in self.order:
                 self._propagate(u, start)
                 u.raw.write()
@@ -433,9 +468,13 @@ class Simulation:
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
+            if self.can is not None:
+                self.can.start(start)
             rec.take(t)
             for k in range(n):
                 t = start + k * h
+                if self.can is not None and k % self.can_ratio == 0:
+                    self.can.tick(k // self.can_ratio, t)
                 starting, ending = plan[k % period]
                 if self.algorithm == "jacobi":
                     for u in starting:
@@ -466,9 +505,13 @@ class Simulation:
             raise SimulationError(f"{self.ssp}: component '{who}' failed at t = {t:g} s: "
                                   f"{log[-1] if log else 'no message'}", rec.result(), list(log)) from None
         self.wall = _time.perf_counter() - wall0
+        if self.can is not None:
+            self.can.finish()
         return rec.result()
 
     def close(self):
+        if getattr(self, "can", None) is not None:
+            self.can.close()
         for u in getattr(self, "units", []):
             u.fmu.close()
         shutil.rmtree(self._tmp, ignore_errors=True)

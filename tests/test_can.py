@@ -1,0 +1,291 @@
+"""CAN in the loop (artibus.can, issue 12, first part): Bus36m_Circle_CAN
+against the direct bench Bus36m_Circle_GuidedForceMin, logs read back with
+python-can and decoded with cantools against what the receivers used, bus
+load and response times, determinism, errors naming file, message, signal."""
+import math
+import zipfile
+
+import can as pycan
+import cantools
+import numpy as np
+import pytest
+from cantools.autosar.end_to_end import compute_profile2_crc
+
+from artibus import ROOT, ArtibusError, kpi, ssp
+from artibus import can as artcan
+from artibus.runner import Simulation, run
+
+DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
+DIRECT, CAN_BENCH = "Bus36m_Circle_GuidedForceMin", "Bus36m_Circle_CAN"
+T = 0.01                                    # the network's tick (seed 000: 10 ms)
+TO_SI = {"deg": math.pi / 180, "km/h": 1 / 3.6}   # the DBC's units to the FMUs' (rad, m/s)
+
+
+def routes():
+    """{(message, signal): (source "C.v", [receiver "C.v", ...])} as the bench declares them."""
+    bench = ssp.read(ssp.ssp_path(CAN_BENCH))
+    out = {}
+    for c in bench.connections:
+        if c.can:
+            src, ends = out.setdefault((c.can["message"], c.can["signal"]), (".".join(c.start), []))
+            assert src == ".".join(c.start)
+            ends.append(".".join(c.end))
+    return out
+
+
+ROUTES = routes()
+RECEIVERS = sorted({e for _, ends in ROUTES.values() for e in ends})
+SOURCES = sorted({s for s, _ in ROUTES.values()})
+KPI_RECORD = [f"Bus.{n}[{a}]" for n in ("xAxle", "yAxle") for a in range(1, 7)] + ["Bus.FjointY[1]", "Driver.s"]
+
+
+def kpis(r):
+    ax = {a: (r[f"Bus.xAxle[{a}]"], r[f"Bus.yAxle[{a}]"]) for a in (2, 4, 6)}
+    return np.array([kpi.trace_deviation(*ax[2], *ax[4]), kpi.trace_deviation(*ax[2], *ax[6]),
+                     kpi.peak(r["Bus.FjointY[1]"])])
+
+
+@pytest.fixture(scope="module")
+def direct():
+    return run(DIRECT, record=list(dict.fromkeys(KPI_RECORD + SOURCES + RECEIVERS)))
+
+
+@pytest.fixture(scope="module")
+def can_runs(tmp_path_factory):
+    """Two runs of the CAN bench, one logged as .blf, one as .asc."""
+    d = tmp_path_factory.mktemp("can")
+    out = {}
+    for suffix in ("blf", "asc"):
+        log = d / f"run.{suffix}"
+        with Simulation(CAN_BENCH, record=list(dict.fromkeys(KPI_RECORD + RECEIVERS)), can_log=log) as sim:
+            r = sim.run()
+            out[suffix] = (r, log, sim.can.report(r.time[-1] - r.time[0]))
+    return out
+
+
+def test_dbc_frames_carry_counter_crc_at_10_ms():
+    db = cantools.database.load_file(str(DBC))
+    assert len(db.messages) == 6 and {n.name for n in db.nodes} >= {"TractorECU", "Module2ECU", "Module3ECU"}
+    for m in db.messages:
+        assert m.cycle_time == 10 and not m.is_extended_frame
+        names = {s.name: s for s in m.signals}
+        assert (names["CRC"].start, names["CRC"].length) == (0, 8)
+        assert (names["AliveCounter"].start, names["AliveCounter"].length) == (8, 4)
+        assert all(s.unit for s in m.signals if s.name not in ("CRC", "AliveCounter", "DrivingDirection"))
+
+
+def test_e2e_crc_is_cantools_profile2_and_frame_bits_within_the_stuffing_bounds():
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        n = int(rng.integers(2, 9))
+        data = bytes(int(b) for b in rng.integers(0, 256, n))
+        data_id = int(rng.integers(0, 256))
+        assert artcan.e2e_crc(data, data_id) == compute_profile2_crc(data, data_id)
+        bits = artcan.frame_bits(int(rng.integers(0, 2048)), data)
+        # 47 + 8 s bits without stuff bits; at most one per 4 bits after the first of the 34 + 8 s stuffed ones
+        assert 47 + 8 * n <= bits <= 47 + 8 * n + (34 + 8 * n - 1) // 4
+    # identifier 0, no data: 34 zero bits from SOF to the CRC (the CRC of zeros is 0), a stuff
+    # bit after every fifth (00000 1 00000 1 ...): 6, then 10 bits of delimiters, ACK, EOF, 3 of IFS
+    assert artcan.frame_bits(0, b"") == 34 + 6 + 10 + 3
+
+
+def test_response_times_by_hand():
+    """Two 8-byte messages at 500 kbit/s, 10 ms: C = 135 bit times (Davis et
+    al. 2007, eq. 1); the higher one waits for the lower one already on the bus
+    (B = C), the lower one for one instance of the higher one."""
+    C = 135 * 2e-6
+    R = artcan.response_times([(0x100, 8, 0.01), (0x200, 8, 0.01)], 500_000)
+    assert R[0x100] == pytest.approx(2 * C) and R[0x200] == pytest.approx(2 * C)
+    # a bus loaded beyond 100 % never ends its busy period
+    assert math.isinf(artcan.response_times([(i, 8, 0.001) for i in range(5)], 500_000)[4])
+
+
+def test_can_bench_reproduces_the_direct_kpis_within_a_derived_bound(direct, can_runs):
+    """The CAN path changes each routed input by at most half a step of its
+    signal's resolution (the DBC's scale) plus one cycle of delay, T times the
+    input's largest rate on the direct run. The KPIs' sensitivity to those
+    errors comes from direct runs with each signal's error added to its
+    receivers as a constant bias (runner stimuli); bound: twice the sum over
+    the signals (a bias stands for an error that varies in time)."""
+    db = cantools.database.load_file(str(DBC))
+    k0 = kpis(direct)
+    bound = np.zeros(3)
+    h = direct.time[1] - direct.time[0]
+    for (msg, sig), (src, ends) in ROUTES.items():
+        s = db.get_message_by_name(msg).get_signal_by_name(sig)
+        u = direct[src]
+        e = s.scale * TO_SI[s.unit] / 2 + T * np.max(np.abs(np.diff(u))) / h
+        r = run(DIRECT, record=KPI_RECORD, stimuli={x: (lambda t, e=e: e) for x in ends})
+        bound += np.abs(kpis(r) - k0)
+    bound *= 2
+    r = can_runs["blf"][0]
+    k = kpis(r)
+    assert np.all(np.abs(k - k0) <= bound), (k, k0, bound)
+    # the paths themselves: A4, A6 within the bound of their deviation KPIs
+    for a, b in ((4, bound[0]), (6, bound[1])):
+        dist = np.hypot(r[f"Bus.xAxle[{a}]"] - direct[f"Bus.xAxle[{a}]"], r[f"Bus.yAxle[{a}]"] - direct[f"Bus.yAxle[{a}]"])
+        assert np.max(dist) <= b, (a, np.max(dist), b)
+    # and the paper's figures still hold (seed 000, Figs. 9, 10)
+    assert k[0] < 1.0 and k[1] < 1.0 and k[2] < 4e3
+    assert r["Driver.s"][-1] > 25 + 2 * math.pi * 17.5
+
+
+@pytest.mark.parametrize("suffix", ["blf", "asc"])
+def test_log_decodes_to_the_values_the_receivers_used(can_runs, suffix):
+    """The log read back with python-can, decoded with cantools (independently
+    of artibus.can), gives each receiver's input bit for bit: the k-th frame
+    of a message feeds the receivers' step from tick k on (recorded after it,
+    row k + 1), converted deg -> rad, km/h -> m/s. Every frame passes
+    cantools' profile-2 CRC check with its data ID, counters count up."""
+    r, log, _ = can_runs[suffix]
+    db = cantools.database.load_file(str(DBC))
+    reader = pycan.BLFReader(str(log)) if suffix == "blf" else pycan.ASCReader(str(log))
+    frames = {}
+    for f in reader:
+        frames.setdefault(f.arbitration_id, []).append(f)
+    n = len(r.time) - 1
+    for (msg, sig), (src, ends) in ROUTES.items():
+        m = db.get_message_by_name(msg)
+        fs = frames[m.frame_id]
+        assert len(fs) == n
+        data_id = int(m.dbc.attributes["E2EDataID"].value)
+        assert all(compute_profile2_crc(bytes(f.data), data_id) == f.data[0] for f in fs)
+        assert [f.data[1] & 0xF for f in fs] == [k % 16 for k in range(n)]
+        # simulated time: frame k queued at tick k, on the wire for less than a cycle
+        times = np.array([f.timestamp for f in fs])
+        assert np.all((times > np.arange(n) * T) & (times < np.arange(n) * T + T))
+        values = np.array([m.decode(bytes(f.data))[sig] for f in fs])
+        factor = TO_SI[m.get_signal_by_name(sig).unit]
+        for x in ends:
+            np.testing.assert_array_equal(r[x][1:], values * factor, err_msg=f"{msg}.{sig} -> {x}")
+    # the tool prints the same values
+    rows = artcan.decode_log(log, DBC)
+    assert all(e == "ok" for *_, e in rows)
+    assert len(rows) == sum(len(db.get_message_by_frame_id(i).signals) * len(fs) for i, fs in frames.items())
+
+
+def test_two_runs_give_identical_traffic(can_runs):
+    """The .blf of one run and the .asc of another: the same frames, bytes and
+    simulated times (to the .asc's microsecond)."""
+    a = list(pycan.BLFReader(str(can_runs["blf"][1])))
+    b = list(pycan.ASCReader(str(can_runs["asc"][1])))
+    assert len(a) == len(b) > 0
+    assert all(x.arbitration_id == y.arbitration_id and bytes(x.data) == bytes(y.data) for x, y in zip(a, b))
+    assert max(abs(x.timestamp - y.timestamp) for x, y in zip(a, b)) < 1e-6
+    ids = [x.arbitration_id for x in a[:12]]
+    assert ids[:6] == sorted(ids[:6]) and ids[6:] == ids[:6]      # ordered by identifier in each tick
+
+
+def test_bus_load_and_response_times(can_runs):
+    rep = can_runs["blf"][2]
+    assert rep["bitrate"] == 500_000
+    # bits of the frames actually sent, from the log, with this module's stuffing count
+    frames = list(pycan.BLFReader(str(can_runs["blf"][1])))
+    bits = sum(artcan.frame_bits(f.arbitration_id, bytes(f.data)) for f in frames)
+    assert rep["bits"] == bits and rep["frames"] == len(frames)
+    assert rep["load"] == pytest.approx(bits / (500_000 * 70.0)) and rep["load"] < 0.30
+    for m in rep["messages"]:
+        assert m["observed"] <= m["wcrt"] < m["period"] == pytest.approx(T), m
+
+
+def test_a_corrupted_frame_is_not_used(tmp_path):
+    """Entering the circle (t = 9 .. 12 s), every SensorG1_Angle frame has a
+    wrong CRC; from t = 10.5 s right CRCs but a frozen counter: the receivers
+    keep the last good articulation angle throughout while the plant's keeps
+    changing."""
+    from artibus import can as can_mod
+
+    def tamper(msg):
+        if msg.arbitration_id == 0x102 and msg.timestamp > 9.0:
+            data = bytearray(msg.data)
+            if msg.timestamp < 10.5:
+                data[2] ^= 0x01
+            else:
+                data[1] = (data[1] & 0xF0) | (899 % 16)      # the counter of the last good frame (tick 899)
+                data[0] = can_mod.e2e_crc(data, 18)
+            msg = pycan.Message(timestamp=msg.timestamp, arbitration_id=msg.arbitration_id,
+                                is_extended_id=False, data=data)
+        return msg
+
+    with Simulation(CAN_BENCH, record=["Guidance.dPsi[1]", "ForceMin.dPsi[1]", "Bus.artAngle[1]"]) as sim:
+        sim.can.tamper = tamper
+        r = sim.run(stop_time=12.0)
+        rejected = {m["name"]: m["rejected"] for m in sim.can.report(12.0)["messages"]}
+    after = r.time > 9.0 + 2 * T
+    for x in ("Guidance.dPsi[1]", "ForceMin.dPsi[1]"):
+        held = r[x][after]
+        assert np.all(held == held[0])
+    assert np.ptp(r["Bus.artAngle[1]"][after]) > math.radians(0.5)
+    assert rejected["SensorG1_Angle"] == 300 and rejected["SensorG2_Angle"] == 0   # ticks 900..1199
+
+
+# --- errors: file, message, signal named; nothing half-written ---------------------------
+
+def _variant(tmp_path, dbc=None, ssd=None):
+    """The packed CAN bench with its DBC and/or its .ssd text changed."""
+    src = ssp.ssp_path(CAN_BENCH)
+    out = tmp_path / "Bus36m_Circle_CAN.ssp"
+    with zipfile.ZipFile(src) as zi, zipfile.ZipFile(out, "w") as zo:
+        for item in zi.infolist():
+            data = zi.read(item.filename)
+            if item.filename == "resources/Bus36m.dbc" and dbc is not None:
+                data = dbc(data.decode()).encode()
+            if item.filename == "SystemStructure.ssd" and ssd is not None:
+                data = ssd(data.decode()).encode()
+            zo.writestr(item, data)
+    return out
+
+
+@pytest.mark.parametrize("case, words", [
+    ("malformed", ["resources/Bus36m.dbc", "not a valid DBC"]),
+    ("no_crc", ["resources/Bus36m.dbc", "message SensorG2_Angle", "signal CRC"]),
+    ("signal", ["SystemStructure.ssd:", "Connection Bus.artAngle[1] -> Guidance.dPsi[1]",
+                "SensorG1_Angle", "no data signal 'ArtAngleG9'"]),
+    ("message", ["SystemStructure.ssd:", "no message 'SensorG9_Angle'"]),
+    ("range", ["resources/Bus36m.dbc", "message SensorG1_Angle", "signal ArtAngleG1",
+               "Bus.artAngle[1]", "outside the signal's range [-2, 2]"]),
+    ("interface", ["--can nosuch:can0", "no interface 'nosuch'"]),
+])
+def test_errors_name_file_message_signal_and_leave_no_log(tmp_path, case, words):
+    dbc = ssd = None
+    kw = {}
+    if case == "malformed":
+        dbc = lambda t: t.replace("BO_ 258 SensorG1_Angle: 4 HingeSensorG1", "BO_ 258 SensorG1_Angle 4 HingeSensorG1")
+    elif case == "no_crc":
+        dbc = lambda t: t.replace(' SG_ CRC : 0|8@1+ (1,0) [0|255] "" Module2ECU,Module3ECU\n SG_ AliveCounter : 8|4@1+ (1,0) [0|15] "" Module2ECU,Module3ECU\n SG_ ArtAngleG2',
+                                  ' SG_ AliveCounter : 8|4@1+ (1,0) [0|15] "" Module2ECU,Module3ECU\n SG_ ArtAngleG2')
+    elif case == "signal":
+        ssd = lambda t: t.replace('message="SensorG1_Angle" signal="ArtAngleG1"', 'message="SensorG1_Angle" signal="ArtAngleG9"', 1)
+    elif case == "message":
+        ssd = lambda t: t.replace('message="SensorG1_Angle"', 'message="SensorG9_Angle"', 1)
+    elif case == "range":    # hinge G1 swings beyond 2 deg on the circle
+        dbc = lambda t: t.replace('ArtAngleG1 : 16|16@1- (0.1,0) [-90|90]', 'ArtAngleG1 : 16|16@1- (0.1,0) [-2|2]')
+    elif case == "interface":
+        kw["can"] = "nosuch:can0"
+    path = _variant(tmp_path, dbc, ssd)
+    log = tmp_path / "traffic.blf"
+    with pytest.raises(ArtibusError) as e:
+        with Simulation(path, can_log=log, **kw) as sim:
+            sim.run(stop_time=20.0)
+    msg = str(e.value)
+    assert all(w in msg for w in words), msg
+    assert list(tmp_path.glob("traffic*")) == []
+
+
+def test_cli_run_and_decode(tmp_path):
+    import subprocess
+    import sys
+    log, out = tmp_path / "t.asc", tmp_path / "d.csv"
+    r = subprocess.run([sys.executable, "-m", "artibus", "run", CAN_BENCH, "--stop-time", "0.5",
+                        "--can", "virtual", "--can-log", str(log), "-o", str(tmp_path / "r.csv")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "bus load" in r.stdout and "worst-case response" in r.stdout
+    r = subprocess.run([sys.executable, "-m", "artibus", "can", "decode", str(log), "--csv", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    lines = out.read_text().splitlines()
+    assert lines[0] == "time_s,message,signal,value,unit,e2e" and len(lines) == 1 + 50 * (3 * 3 + 4 + 4 + 4)
+    r = subprocess.run([sys.executable, "-m", "artibus", "run", CAN_BENCH, "--can", "nosuch"],
+                       capture_output=True, text=True)
+    assert r.returncode == 1 and "Traceback" not in r.stderr and "--can nosuch" in r.stderr
