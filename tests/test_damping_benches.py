@@ -35,16 +35,28 @@ def test_option1_has_the_largest_initial_overshoot(lc60):
     assert k["option1"].overshoot > k["option3"].overshoot
 
 
-def test_option2_beats_the_baseline_which_beats_no_damping(lc60):
-    """5.2.5: option 2's initial overshoot and articulation after the turn are
-    considerably below the ACS5 system's; the baseline's are below no damping's
-    (implied by Figs. 5.15-5.19)."""
+def test_option2_overshoots_less_than_the_baseline_which_overshoots_less_than_no_damping(lc60):
+    """5.2.5: option 2's initial overshoot is below the ACS5 system's; the
+    baseline's is below no damping's (implied by Figs. 5.15-5.19)."""
     _, k = lc60
-    for what in ("overshoot", "peak_angle"):
-        o2, b, n = (getattr(k[f], what) for f in ("option2", "baseline", "none"))
-        print(what, o2, b, n)
-        assert o2 < b < n, what
-    assert k["option2"].overshoot < 0.9 * k["baseline"].overshoot     # 'considerably'
+    o2, b, n = (k[f].overshoot for f in ("option2", "baseline", "none"))
+    print("overshoot: option 2", o2, "baseline", b, "none", n)
+    assert o2 < b < n
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not reproduced by our plant and damper: after the lane change the peak |articulation| is 9.71 deg with "
+    "option 2 against 9.46 with the baseline (none 11.09), and the overshoots differ by 1 % (0.748 against "
+    "0.757 m), not 'considerably': the baseline's sway control holds 34 % in both directions of motion from "
+    "2.9 s on, while option 2 damps only against the motion and only above the reference's rate; a damper "
+    "twice or four times as strong (HubnerDamper.ssv is an estimate) keeps the order"))
+def test_option2_is_considerably_better_than_the_baseline(lc60):
+    """5.2.5: 'Option 2 has a considerable advantage over the ACS5 damping':
+    its peak articulation after the turn below the baseline's, its
+    overshoot at least 10 % below."""
+    _, k = lc60
+    assert k["option2"].peak_angle < k["baseline"].peak_angle < k["none"].peak_angle
+    assert k["option2"].overshoot < 0.9 * k["baseline"].overshoot
 
 
 def test_option1_oscillates_longer(lc60):
@@ -73,20 +85,26 @@ def test_damping_only_against_the_articulation_motion(lc60):
     articulation angular velocity. The controller's request T (BusDynamics'
     sign: a damping torque has T * artRate >= 0) above the floor must match
     the sign of the measured rate it was computed from (the controller holds
-    its output for a 20 ms sample: the rate of that sample instant, one or two
-    10 ms rows back). The damper's torque never feeds energy in."""
+    its output for a 20 ms sample computed from the inputs at its start: the
+    rate of that sample instant, up to three 10 ms rows back; at an extremum
+    of the angle the rate has turned since, and the one-way valves then give
+    no torque). The damper's torque never feeds energy in."""
     runs, _ = lc60
     for f in OPTIONS:
         r = runs[f]
         T, rate, active = r["Controller.T"], r["Bus.artRate[1]"], r["Controller.active"] > 0.5
         rows = np.nonzero(active)[0]
         assert len(rows) > 10, f
-        ok = [any(T[i] * rate[j] > 0 for j in (i - 2, i - 1, i) if j >= 0) for i in rows]
+        ok = [any(T[i] * rate[j] > 0 for j in (i - 3, i - 2, i - 1, i) if j >= 0) for i in rows]
         assert all(ok), f
         assert np.all(r["Damper.Mjoint"] * rate >= 0), f
         assert np.all(np.diff(r["Damper.Ediss"]) >= -1e-9), f
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "not reproduced: option 2 settles below 1 deg 3.68 s after the lane change, the 3.5 % floor alone 5.03 s "
+    "(ratio 0.73); with the damper twice / four times as strong 0.57 / 0.59: most of the sway's decay comes "
+    "from the driver, who keeps steering (no hands-off, as in the thesis)"))
 def test_option2_settles_in_half_the_time_of_the_floor(lc60):
     """Issue 11: with option 2 the articulation settles below 1 deg after the
     lane change in at most half the time it takes with the 3.5 % floor alone."""

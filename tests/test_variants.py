@@ -77,3 +77,45 @@ def test_the_bench_folders_variants_are_packed(tmp_path):
         expected = sorted(p.stem for p in folder.glob("*.ssv"))
         if expected:
             assert ssp.variants(ssp.pack(bench, out_dir=tmp_path)) == expected
+
+
+def test_heavy_rear_rebinds_the_vehicle_for_plant_and_controller():
+    """Scania18m_Damping's heavyRear variant binds Scania18mHeavyRear.ssv
+    where the bench binds Scania18m.ssv: the plant gets Table 5.4's values,
+    the controller its m2, f2, b2 through the same mapping; nothing else
+    changes, and variants named before it keep their values."""
+    o = ssp.variant_overrides("Scania18m_Damping", ["option1", "heavyRear"])
+    assert o["Controller.option"] == 1
+    assert o["Bus.m[2]"] == 10131.0 and o["Bus.lHr[1]"] == 5.107 and o["Bus.xA[3]"] == 0.167
+    assert o["Controller.m2"] == 10131.0 and o["Controller.f2"] == 5.107 and o["Controller.b2"] == -0.167
+    assert o["Bus.FzFromMasses"] is False
+    assert o["Bus.Fz0[3]"] == pytest.approx(10131.0 * 9.81)
+    assert not any(k.startswith(("Driver.", "Damper.", "Baseline.")) for k in o)
+
+
+def test_heavy_rear_set_is_scania18m_but_for_table_5_4():
+    """One source of truth: Scania18mHeavyRear.ssv repeats Scania18m.ssv but
+    for the values Table 5.4 changes (and the given static loads)."""
+    from artibus.parameters import read_parameters
+    base, heavy = read_parameters("Scania18m"), read_parameters("Scania18mHeavyRear")
+    changed = {k for k in set(base) | set(heavy) if base.get(k) != heavy.get(k)}
+    assert changed == {"m[2]", "lHr[1]", "xA[3]", "FzFromMasses", "Fz0[1]", "Fz0[2]", "Fz0[3]"}
+    assert heavy["lHr[1]"] - heavy["xA[3]"] == pytest.approx(base["lHr[1]"] - base["xA[3]"], abs=1e-3)  # l2 kept
+
+
+def test_rebinding_a_set_the_bench_does_not_bind_is_an_error(tmp_path):
+    rebind = ('<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet '
+              'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" '
+              'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="1.0" name="r">'
+              '<ssv:Parameters/><ssv:Annotations><ssc:Annotation type="org.artibus.variant">'
+              '<Variant xmlns="urn:artibus"><Rebind from="resources/{a}" to="resources/{b}"/></Variant>'
+              '</ssc:Annotation></ssv:Annotations></ssv:ParameterSet>')
+    path = bench_with_variants(tmp_path, {"r": rebind.format(a="nothing.ssv", b="x.ssv")})
+    with pytest.raises(ArtibusError) as e:
+        ssp.variant_overrides(path, ["r"])
+    assert "variants/r.ssv" in str(e.value) and "x.ssv" in str(e.value)
+    with zipfile.ZipFile(path, "a") as z:
+        z.writestr("resources/x.ssv", variant("x"))
+    with pytest.raises(ArtibusError) as e:
+        ssp.variant_overrides(path, ["r"])
+    assert "nothing.ssv" in str(e.value) and "binds no such parameter set" in str(e.value)

@@ -1,7 +1,9 @@
 """The artibus command line: verbs in the user's words.
 
-  artibus run BENCH [options]          run an SSP bench (a name from `artibus list`, or an .ssp)
+  artibus run BENCH [options]          run an SSP bench (a name from `artibus list`, or an .ssp);
+                                       --variant NAME selects one of its parameter-set variants
   artibus bode BENCH --input C.V --output C.V   gain and phase by sine tests through the co-simulation
+  artibus calibrate                    the damping controller's gains (seed 001, 5.2.2)
   artibus list                         the benches and their parameters
   artibus info FMU|SSP                 an FMU's variables, or a bench's components and connections
   artibus simulate FMU [options]       run one FMU alone, write CSV
@@ -78,6 +80,9 @@ def cmd_list(args):
             print(f"{name}: ({e})")
             continue
         print(f"{name}: {', '.join(bench.components)}; stop time {bench.stop_time} s")
+        names = ssp.variants(ssp.ssp_path(name))
+        if names:
+            print(f"    variants (--variant): {', '.join(names)}")
         for c in bench.components.values():
             for k, v in sorted(c.parameters.items()):
                 print(f"    {c.path}.{k} = {v}")
@@ -94,15 +99,18 @@ def cmd_pack(args):
 def cmd_run(args):
     from artibus import runner, ssp
     from artibus.parameters import read_parameters
-    overrides = {}
-    for f in args.ssv or []:
-        overrides.update(read_parameters(f))
-    overrides.update(_parse_set(args.set))
     if args.all == bool(args.bench):
         raise ArtibusError("give one BENCH or --all")
+    if args.all and args.variant:
+        raise ArtibusError("--variant selects a variant of one BENCH, not of --all")
+    user = {}
+    for f in args.ssv or []:
+        user.update(read_parameters(f))
+    user.update(_parse_set(args.set))
     benches = ssp.bench_names() if args.all else [args.bench]
     summary = []
     for bench in benches:
+        overrides = {**ssp.variant_overrides(bench, args.variant), **user}
         with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
                                algorithm=args.algorithm, can=args.can, can_log=args.can_log) as sim:
             result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
@@ -154,7 +162,8 @@ def cmd_can_decode(args):
 def cmd_bode(args):
     import numpy as np
     from artibus import bode
-    overrides = _parse_set(args.set)
+    from artibus import ssp
+    overrides = {**ssp.variant_overrides(args.bench, args.variant), **_parse_set(args.set)}
     freqs = np.geomspace(args.fmin, args.fmax, args.n) if args.n > 1 else [args.fmin]
     resp = bode.frequency_response(args.bench, args.input, args.output, freqs, args.amplitude,
                                    periods=args.periods, settle=args.settle, overrides=overrides,
@@ -170,6 +179,23 @@ def cmd_bode(args):
     if args.plot:
         bode.plot(args.plot, resp, f"{args.bench}: {', '.join(args.output)} / {args.input}")
         print(args.plot)
+    return 0
+
+
+def cmd_calibrate(args):
+    """seed 001, 5.2.2: each damping option's gain for a peak damping of 13.5 %
+    on the 200 m / 100 km/h / rear-friction-0.2 lane change."""
+    from artibus import damping
+    gains, reached = damping.calibrate(target=args.target)
+    print(f"\n{'gain':6s} {'artibus':>10s} {'thesis':>8s} {'ratio':>7s}  peak damping on lc200_100")
+    for name, value in gains.items():
+        thesis = damping.THESIS_GAINS.get(name)
+        ratio = f"{value / thesis:7.3f}" if thesis else "      -"
+        print(f"{name:6s} {value:10.4g} {thesis if thesis else 'n/a':>8} {ratio}  {reached.get(name, float('nan')):.3f} %")
+    if args.dry_run:
+        return 0
+    notes = "Made by `artibus calibrate`; " + ", ".join(f"{n}: {reached[n]:.3f} %" for n in reached) + "."
+    print(damping.write_gains(gains, notes=notes))
     return 0
 
 
@@ -236,6 +262,9 @@ def build_parser():
     s.add_argument("--step", type=float, help="base communication step, s")
     s.add_argument("--ssv", action="append", help="parameter file with names COMPONENT.VARIABLE")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE", help="set a parameter")
+    s.add_argument("--variant", action="append", metavar="NAME",
+                   help="a variant of the bench (its parameter set variants/NAME.ssv; see `artibus list`); "
+                        "repeatable, later ones win; applied before --ssv and --set")
     s.add_argument("--record", action="append", metavar="COMP.VAR",
                    help="record this variable (default: every connected output)")
     s.add_argument("--algorithm", default="gauss-seidel", choices=["gauss-seidel", "jacobi"])
@@ -263,10 +292,16 @@ def build_parser():
     s.add_argument("--periods", type=int, default=4, help="periods fitted after the transient")
     s.add_argument("--settle", type=float, help="time given to the transient, s")
     s.add_argument("--step", type=float)
+    s.add_argument("--variant", action="append", metavar="NAME", help="a variant of the bench (repeatable)")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
     s.add_argument("-o", "--output-file", help="CSV (default bode.csv)")
     s.add_argument("--plot", help="PNG with gain and phase")
     s.set_defaults(func=cmd_bode)
+    s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), "
+                                         "written to ssp/parameters/DampingGains.ssv")
+    s.add_argument("--target", type=float, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
+    s.add_argument("--dry-run", action="store_true", help="print the gains, write nothing")
+    s.set_defaults(func=cmd_calibrate)
     s = sub.add_parser("list", help="the benches and their parameters")
     s.set_defaults(func=cmd_list)
     s = sub.add_parser("pack", help="pack benches into self-contained .ssp files")

@@ -37,6 +37,9 @@ NS = {
 }
 #: a bench's variants: <bench folder>/variants/<name>.ssv, packed as variants/<name>.ssv
 VARIANT_DIR = "variants"
+#: in a variant: <Rebind from="resources/A.ssv" to="resources/B.ssv"/> binds B wherever the bench binds A
+#: (with the same parameter mapping), e.g. another vehicle for the plant and its controller at once
+REBIND = "Rebind"
 #: annotation type holding artibus-specific simulation settings of a component
 ANNOTATION = "org.artibus.simulation"
 #: annotation type routing connections over CAN: on the System, <Can source="resources/X.dbc"
@@ -98,6 +101,14 @@ def _sources(bench):
         files[ref] = found
     for v in sorted((src / VARIANT_DIR).glob("*.ssv")):
         files[f"{VARIANT_DIR}/{v.name}"] = v
+        for rebind in etree.parse(str(v)).iterfind(f".//artibus:{REBIND}", NS):
+            ref = rebind.get("to", "")
+            found = next((c for c in (src / ref, ROOT / "ssp" / "parameters" / ref[len("resources/"):])
+                          if ref.startswith("resources/") and c.is_file()), None)
+            if found is None:
+                raise ArtibusError(f"{v}:{rebind.sourceline}: <{REBIND} to=\"{ref}\">: no such parameter set "
+                                   f"(resources/<name>.ssv, from the bench folder or ssp/parameters)")
+            files[ref] = found
     return ssd_file, files
 
 
@@ -131,6 +142,10 @@ def variant_overrides(ssp, names):
                 pset = read_ssv(str(f), validate=True)
             except Exception as e:
                 raise ArtibusError(f"{where}: not a valid SSP parameter-value file: {e}") from None
+        with zipfile.ZipFile(ssp) as z:
+            rebinds = etree.fromstring(z.read(f"{VARIANT_DIR}/{name}.ssv")).findall(f".//artibus:{REBIND}", NS)
+        for rebind in rebinds:
+            values.update(_rebound(ssp, rebind.get("from", ""), rebind.get("to", ""), f"{where}:{rebind.sourceline}"))
         for p in pset.parameters:
             if "." not in p.name:
                 raise ArtibusError(f"{where}: parameter '{p.name}': a variant names "
@@ -157,6 +172,44 @@ def _write_pack(out, ssd_file, files):
             z.write(path, ref)
     tmp.replace(out)
     return out
+
+
+def _rebound(ssp, old, new, where):
+    """{"Component.variable": value} of every component that binds the
+    parameter set ``old``, as they are when it binds ``new`` instead (through
+    the same mapping): the bench read once more with that one change; only
+    the values that change, so the variants named before or after it keep
+    theirs."""
+    with zipfile.ZipFile(ssp) as z:
+        names = z.namelist()
+        if new not in names:
+            raise ArtibusError(f"{where}: <{REBIND} to=\"{new}\">: not in {ssp}")
+        ssd = etree.fromstring(z.read("SystemStructure.ssd"))
+        bindings = [b for b in ssd.iterfind(".//ssd:ParameterBinding", NS) if b.get("source") == old]
+        if not bindings:
+            raise ArtibusError(f"{where}: <{REBIND} from=\"{old}\">: the bench binds no such parameter set")
+        for b in bindings:
+            b.set("source", new)
+        with tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
+            copy = Path(tmp) / Path(ssp).name
+            with zipfile.ZipFile(copy, "w") as out:
+                for n in names:
+                    out.writestr(n, etree.tostring(ssd) if n == "SystemStructure.ssd" else z.read(n))
+            bench = read(copy)
+    paths = []
+    for b in bindings:
+        c = b.getparent().getparent()           # ParameterBindings, then its element
+        if etree.QName(c).localname != "Component":
+            continue                            # a system-level binding: its names say their component
+        names = [c.get("name")]
+        system = c.getparent().getparent()      # Elements, then the System holding it
+        while etree.QName(system.getparent()).localname == "Elements":
+            names.insert(0, system.get("name"))
+            system = system.getparent().getparent()
+        paths.append(".".join(names))
+    before = read(ssp)
+    return {f"{path}.{k}": v for path in paths for k, v in bench.components[path].parameters.items()
+            if before.components[path].parameters.get(k) != v}     # what the other set changes, only
 
 
 @dataclass
