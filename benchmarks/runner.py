@@ -5,7 +5,8 @@
    Target (issue 5): Bus36m_Circle at 10 ms at least 500 x real time (as the
    bench is: the plant's explicit Runge-Kutta at its default tolerance, 1e-6;
    once more with CVODE's BDF and once at 1e-8 for comparison). Each bench
-   runs REPEAT times; the best and the median are printed.
+   runs REPEAT times; the best and the median are printed. The damping bench
+   once per damping function (its variants; as it stands it runs option 2).
 2. Ours against fmpy.ssp.simulate_ssp on the same two-FMU bench (two
    BusKinematics, one connection, 26 recorded connectors), Jacobi, 60 s at
    10 ms, set-up included; once with both driving straight (the masters'
@@ -52,6 +53,9 @@ def benches():
     # BDF (the FMU's default), and the tolerance: 1e-6 (default) against 1e-8
     bench("Bus36m_Circle", "Bus36m_Circle, BDF", **{"Bus.solver": 0})
     bench("Bus36m_Circle", "Bus36m_Circle, rtol 1e-8", **{"Bus.rtol": 1e-8, "Bus.atol": 1e-8})
+    # the damping bench's functions (issue 11: at least 500 x real time, as the other benches)
+    for f in ("none", "floor", "baseline", "option1", "option3", "revised"):
+        bench("Scania18m_Damping", f"Scania18m_Damping, {f}", **ssp.variant_overrides("Scania18m_Damping", [f]))
 
 
 def against_fmpy(stop=60.0, h=0.01, steer=True):
