@@ -29,4 +29,5 @@ ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   .venv/bin/python -m pytest -q -p no:cacheprovider --capture=sys \
   -k "not binary_depends_only_on_system_libraries and not only_fmi_symbols_exported and not fmi_sim and not bus36m_hinge_forces_on_a_circle" \
   --ignore=tests/test_benches.py --ignore=tests/test_benches_roads.py \
-  --ignore=tests/test_bus36m_equilibrium.py --ignore=tests/test_steering_controllers_benches.py "$@"
+  --ignore=tests/test_bus36m_equilibrium.py --ignore=tests/test_steering_controllers_benches.py \
+  --ignore=tests/test_damping_benches.py --ignore=tests/test_kc.py --ignore=tests/test_can.py "$@"
