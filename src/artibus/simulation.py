@@ -73,7 +73,16 @@ def _callbacks(log):
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
     addLoggerProxy(byref(cb))
     cb._keep = logger  # keep the Python function alive
+    # FMPy's proxy keeps the last logger given to addLoggerProxy in one static
+    # pointer (s_logger in fmpy/logging), which every proxied callback set then
+    # calls, FMPy's own default callbacks included: once this instance is freed
+    # that pointer would dangle (a crash when an FMU logs in fmpy.simulate_fmu
+    # after an Fmu was closed). The callback sets stay alive for the process.
+    _LIVE_CALLBACKS.append(cb)
     return cb
+
+
+_LIVE_CALLBACKS = []
 
 
 class Fmu:

@@ -1,0 +1,17 @@
+/* SteeringActuator: the steering actuators of one trailing module (issue 12)
+ * as an FMU. Variables in modelDescription/SteeringActuator.xml; the
+ * algorithm in actuator.c (can_fallback.c inside). */
+#ifndef CONFIG_H
+#define CONFIG_H
+
+#include "actuator.h"
+
+/* plain data, saved as FMU state */
+typedef struct {
+    SteeringAct a;          /* parameters, fallback state, axle angles */
+    double t0;              /* start time: sample k is at t0 + k Ts */
+    long long k;            /* index of the next sample */
+    int mode;               /* fallback state of the last sample */
+} ModelState;
+
+#endif

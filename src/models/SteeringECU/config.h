@@ -1,0 +1,19 @@
+/* SteeringECU: the steering ECU of module 2 or 3 (issue 12) as an FMU.
+ * Variables in modelDescription/SteeringECU.xml; the algorithm in ecu.c
+ * (guidance.c, forcemin.c, can_fallback.c inside). */
+#ifndef CONFIG_H
+#define CONFIG_H
+
+#include "ecu.h"
+
+/* plain data, saved as FMU state */
+typedef struct {
+    SteeringEcu e;          /* parameters, lag states, fallback state */
+    double t0;              /* start time: sample k is at t0 + k Ts */
+    long long k;            /* index of the next sample */
+    unsigned fault;         /* fault bits of the last sample (a warning when a bit turns on) */
+    unsigned stale;         /* stale mask of the last sample */
+    int mode;               /* fallback state of the last sample */
+} ModelState;
+
+#endif
