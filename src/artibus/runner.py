@@ -17,9 +17,11 @@
   the FMU's log.
 """
 import math
+import os
 import shutil
 import sys
-from ctypes import CDLL, c_double, c_int, c_size_t, c_uint, c_void_p
+from ctypes import (CDLL, Structure, addressof, byref, c_double, c_int, c_long, c_size_t, c_uint,
+                    c_void_p, cast, memmove, sizeof, string_at)
 import tempfile
 import time as _time
 import zipfile
@@ -29,7 +31,7 @@ from pathlib import Path
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
-from artibus import ArtibusError
+from artibus import ROOT, ArtibusError
 from artibus.parameters import check_against
 from artibus.simulation import Fmu, Result, SimulationError
 from artibus import ssp as ssp_mod
@@ -444,7 +446,10 @@ class Simulation:
                 table[:, cols] = values[:, idx]
             return Result.from_array(self.names, table)
 
-    def run(self, stop_time=None, start_time=None, progress=False):
+    def run(self, stop_time=None, start_time=None, progress=False, core=None):
+        """core: the stepping core in C where it applies (None, the default, unless
+        ARTIBUS_CORE=0), True (it must), False (the Python loop below); see
+        _core_stepper. self.stepping says which ran."""
         start = self.bench.start_time if start_time is None else start_time
         stop = stop_time if stop_time is not None else self.bench.stop_time
         if stop is None:
@@ -465,11 +470,16 @@ class Simulation:
         # Gauss-Seidel: per base step, in the order, (unit, starts, ends) of those that do either
         plan_gs = [[(u, u in starting, u in ending) for u in self.order if u in starting or u in ending]
                    for starting, ending in plan]
+        stepper = _core_stepper(self, plan, plan_gs, core)
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
             if self.can is not None:
                 self.can.start(start)
+            if stepper is not None:      # the C core does the loop below, the same, bit for bit
+                result = stepper.run(start, h, n, progress)
+                self.wall = _time.perf_counter() - wall0
+                return result
             rec.take(t)
             for k in range(n):
                 t = start + k * h
@@ -480,6 +490,7 @@ class Simulation:
                     for u in starting:
                         self._propagate(u, t)
                     for u in starting:
+                        current = u
                         u.raw.write()
                     for u in ending:
                         current = u
@@ -488,6 +499,7 @@ class Simulation:
                     for u, starts, ends in plan_gs[k % period]:
                         if starts:
                             self._propagate(u, t)
+                            current = u
                             u.raw.write()
                         if ends:
                             current = u
@@ -521,6 +533,210 @@ class Simulation:
 
     def __exit__(self, *exc):
         self.close()
+
+
+# --- the stepping core in C (issue 13) ---------------------------------------------
+#
+# Simulation.run's loop over the base steps (propagate, set, step, get, record)
+# done by <build>/lib/libartibus_core.so (src/runner_core/core.c) through the
+# FMUs' own fmi2SetReal/fmi2DoStep/fmi2GetReal, on the same value buffers
+# (_RawCalls'), in the same order, with the same floating-point operations:
+# the results are the Python loop's, bit for bit (tests/test_runner_core.py).
+# Python keeps the set-up, the initialisation, the checks and the errors.
+# Today's Python loop runs instead when the core does not apply (the reason is
+# in Simulation.stepping): a bench with stimuli (Python functions of time),
+# with connections routed over CAN (the network ticks in Python), the library
+# not built, or the core switched off (run(core=False) or ARTIBUS_CORE=0).
+
+CORE_ABI = 1                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+_AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
+
+
+class _AcSource(Structure):
+    _fields_ = [("dst", c_void_p), ("src", c_void_p), ("factor", c_double), ("offset", c_double)]
+
+
+class _AcUnit(Structure):
+    _fields_ = [("component", c_void_p), ("doStep", c_void_p), ("getReal", c_void_p),
+                ("setReal", c_void_p), ("step", c_double), ("n_out", c_size_t), ("n_in", c_size_t),
+                ("out_vrs", c_void_p), ("out", c_void_p), ("in_vrs", c_void_p), ("inp", c_void_p),
+                ("written", c_void_p), ("has_written", c_int), ("n_sources", c_int),
+                ("sources", c_void_p), ("wall", c_double)]
+
+
+class _AcSim(Structure):
+    _fields_ = [("n_units", c_int), ("units", c_void_p), ("period", c_int), ("op_start", c_void_p),
+                ("op_kind", c_void_p), ("op_unit", c_void_p), ("start", c_double), ("h", c_double),
+                ("n_cols", c_int), ("rec", c_void_p), ("table", c_void_p), ("fail_unit", c_int),
+                ("fail_function", c_int), ("fail_status", c_int), ("fail_k", c_long)]
+
+
+_core_libs = {}
+
+
+def core_library_path():
+    """$ARTIBUS_CORE_LIB, else the build next to the FMUs in use: with
+    $ARTIBUS_FMU_DIR = <build>/fmus (the sanitizer build's FMUs) its
+    <build>/lib/libartibus_core.so when built, else build/lib's."""
+    if os.environ.get("ARTIBUS_CORE_LIB"):
+        return Path(os.environ["ARTIBUS_CORE_LIB"])
+    name = "libartibus_core.so"
+    fmus = os.environ.get("ARTIBUS_FMU_DIR")
+    if fmus and (Path(fmus).parent / "lib" / name).is_file():
+        return Path(fmus).parent / "lib" / name
+    return ROOT / "build" / "lib" / name
+
+
+def _core_library():
+    """(the loaded core library, None) or (None, why not)."""
+    path = core_library_path()
+    if path in _core_libs:
+        return _core_libs[path]
+    if not path.is_file():
+        return None, f"{path} is not built"
+    try:
+        lib = CDLL(str(path))
+    except OSError as e:
+        return None, f"{path}: {e}"
+    lib.artibus_core_abi.restype = c_int
+    if lib.artibus_core_abi() != CORE_ABI:
+        got = None, f"{path} is of another version (ABI {lib.artibus_core_abi()}, expected {CORE_ABI})"
+    else:
+        lib.artibus_core_record_start.argtypes = [c_void_p]
+        lib.artibus_core_record_start.restype = None
+        lib.artibus_core_run.argtypes = [c_void_p, c_long, c_long]
+        lib.artibus_core_run.restype = c_int
+        got = lib, None
+    _core_libs[path] = got
+    return got
+
+
+def _core_stepper(sim, plan, plan_gs, core=None):
+    """The C core set up for this run of ``sim``, or None where it does not
+    apply: then today's Python loop runs. ``sim.stepping`` says which, and
+    why. core: None (use it where it applies, unless ARTIBUS_CORE=0), True
+    (it must apply: ArtibusError otherwise), False (the Python loop)."""
+    if core is None:
+        core = os.environ.get("ARTIBUS_CORE", "1").strip() not in ("0", "")
+        why = None if core else "switched off (ARTIBUS_CORE=0)"
+        forced = False
+    else:
+        why = None if core else "switched off (core=False)"
+        forced = bool(core)
+    lib = None
+    if why is None:
+        if sim.can is not None:
+            why = "connections routed over CAN (the network ticks in Python)"
+        elif any(u.stimuli for u in sim.units):
+            why = "stimuli (Python functions of time)"
+        else:
+            lib, why = _core_library()
+    if why is not None:
+        sim.stepping = f"Python loop: {why}"
+        if forced:
+            raise ArtibusError(f"{sim.bench.file}: the C stepping core does not apply: {why}")
+        return None
+    sim.stepping = "C core"
+    return _CoreStepper(sim, lib, plan, plan_gs)
+
+
+class _CoreStepper:
+    """The plan and the units as core.h's plain structs, over _RawCalls' buffers."""
+
+    def __init__(self, sim, lib, plan, plan_gs):
+        self.sim, self.lib = sim, lib
+        units = sim.units
+        index = {id(u): i for i, u in enumerate(units)}
+        double = sizeof(c_double)
+        self._keep = []                                  # ctypes objects the structs point into
+        self.units = (_AcUnit * len(units))()
+        self.written = []
+        for s, u in zip(self.units, units):
+            raw = u.raw
+            sources = (_AcSource * max(1, len(u.sources)))()
+            for q, (i, out, j, factor, offset) in zip(sources, u.sources):
+                q.dst = addressof(raw.inp) + double * i
+                q.src = addressof(out) + double * j
+                q.factor, q.offset = factor, offset
+            written = (c_double * max(1, raw.n_in))()
+            self._keep += [sources, written]
+            self.written.append(written)
+            s.component = raw.comp.value
+            s.doStep, s.getReal, s.setReal = (cast(f, c_void_p).value for f in (raw._do, raw._get, raw._set))
+            s.step, s.n_out, s.n_in = u.step, raw.n_out, raw.n_in
+            s.out_vrs, s.out = addressof(raw.out_vrs), addressof(raw.out)
+            s.in_vrs, s.inp = addressof(raw.in_vrs), addressof(raw.inp)
+            s.written, s.n_sources, s.sources = addressof(written), len(u.sources), addressof(sources)
+        # the plan as Simulation.run's loop walks it: per base step of the period, (op, unit)
+        kinds, who, start = [], [], [0]
+        for (starting, ending), gs in zip(plan, plan_gs):
+            if sim.algorithm == "jacobi":
+                ops = ([(_AC_PROPAGATE, u) for u in starting] + [(_AC_WRITE, u) for u in starting]
+                       + [(_AC_STEP, u) for u in ending])
+            else:
+                ops = []
+                for u, starts, ends in gs:
+                    if starts:
+                        ops += [(_AC_PROPAGATE, u), (_AC_WRITE, u)]
+                    if ends:
+                        ops.append((_AC_STEP, u))
+            kinds += [k for k, _ in ops]
+            who += [index[id(u)] for _, u in ops]
+            start.append(len(kinds))
+        self.op_start = (c_int * len(start))(*start)
+        self.op_kind = (c_int * max(1, len(kinds)))(*kinds)
+        self.op_unit = (c_int * max(1, len(who)))(*who)
+        # recording: the Recorder's columns, each a place in an output buffer
+        self.rec = (c_void_p * max(1, len(sim.record)))(
+            *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record))
+        self.period = len(plan)
+
+    def run(self, start, h, n, progress):
+        """Base steps 0 .. n - 1 from the initialised state: the Result, or
+        SimulationError with the results up to the failure, as the Python loop."""
+        sim = self.sim
+        table = np.empty((n + 1, len(sim.names)))
+        s = _AcSim(n_units=len(sim.units), units=addressof(self.units), period=self.period,
+                   op_start=addressof(self.op_start), op_kind=addressof(self.op_kind),
+                   op_unit=addressof(self.op_unit), start=start, h=h, n_cols=len(sim.names),
+                   rec=addressof(self.rec), table=table.ctypes.data)
+        for a, u, written in zip(self.units, sim.units, self.written):
+            a.wall = 0.0
+            a.has_written = u.raw.written is not None
+            if a.has_written:
+                memmove(written, u.raw.written, len(u.raw.written))
+        self.lib.artibus_core_record_start(byref(s))
+        every = max(1, n // 50)
+        # with the progress bar, in pieces ending where the Python loop draws it
+        ends = [k + 1 for k in range(0, n, every)] + [n] if progress else [n]
+        k0, failed = 0, 0
+        try:
+            for k1 in ends:
+                if k1 <= k0:
+                    continue
+                failed = self.lib.artibus_core_run(byref(s), k0, k1)
+                if failed:
+                    break
+                k0 = k1
+                if progress and (k1 - 1) % every == 0:
+                    t = start + k1 * h
+                    sys.stderr.write(f"\r{sim.bench.name}: t = {t:8.2f} s  [{'#' * (50 * k1 // n):50s}]")
+        finally:
+            for a, u, written in zip(self.units, sim.units, self.written):
+                u.wall += a.wall
+                if a.has_written:
+                    u.raw.written = string_at(written, u.raw.n_in * sizeof(c_double))
+        if failed:
+            k = s.fail_k
+            u = sim.units[s.fail_unit]
+            t = start + k * h
+            log = u.fmu.log
+            raise SimulationError(f"{sim.ssp}: component '{u.path}' failed at t = {t:g} s: "
+                                  f"{log[-1] if log else 'no message'}",
+                                  Result.from_array(sim.names, table[:k + 1].copy()), list(log))
+        if progress:
+            sys.stderr.write("\n")
+        return Result.from_array(sim.names, table)
 
 
 def run(ssp, stop_time=None, step=None, overrides=None, record=None,
