@@ -1,7 +1,10 @@
-"""CAN in the loop (artibus.can, issue 12, first part): Bus36m_Circle_CAN
-against the direct bench Bus36m_Circle_GuidedForceMin, logs read back with
-python-can and decoded with cantools against what the receivers used, bus
-load and response times, determinism, errors naming file, message, signal."""
+"""CAN in the loop (artibus.can, issue 12): Bus36m_Circle_CAN (the paper's
+topology: a SteeringECU per trailing module, a SteeringActuator per module's
+axles) against the direct bench Bus36m_Circle_GuidedForceMin, logs read back
+with python-can and decoded with cantools against what the receivers used,
+bus load and response times, determinism, a corrupted frame never used, a
+silent module ECU ending in its actuators' fallback, errors naming file,
+message, signal."""
 import math
 import zipfile
 
@@ -18,7 +21,24 @@ from artibus.runner import Simulation, run
 DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
 DIRECT, CAN_BENCH = "Bus36m_Circle_GuidedForceMin", "Bus36m_Circle_CAN"
 T = 0.01                                    # the network's tick (seed 000: 10 ms)
-TO_SI = {"deg": math.pi / 180, "km/h": 1 / 3.6}   # the DBC's units to the FMUs' (rad, m/s)
+TO_SI = {"deg": math.pi / 180, "km/h": 1 / 3.6, "": 1.0}   # the DBC's units to the FMUs' (rad, m/s)
+COUNTER = "AliveCounter"
+#: what stands for each routed output and input in the direct bench (one instance of
+#: TrainGuidance and of ForceMinimization for both modules, set-points straight into the plant)
+DIRECT_OF = {
+    "ECU2.gammaFront": ["ForceMin.gamma3"], "ECU2.gammaRear": ["Guidance.gamma4"],
+    "ECU3.gammaFront": ["ForceMin.gamma5"], "ECU3.gammaRear": ["Guidance.gamma6"],
+    "ECU2.gamma1": ["Guidance.gamma1", "ForceMin.gamma1"], "ECU3.gamma1": [],
+    "ECU2.v": ["Guidance.v"], "ECU3.v": [],
+    "ECU2.dPsi[1]": ["ForceMin.dPsi[1]"], "ECU3.dPsi[1]": [],
+    "ECU3.dPsi[2]": ["ForceMin.dPsi[2]"],
+    "Act2.cmd[1]": ["Bus.delta[3]"], "Act2.cmd[2]": ["Bus.delta[4]"],
+    "Act3.cmd[1]": ["Bus.delta[5]"], "Act3.cmd[2]": ["Bus.delta[6]"],
+}
+
+
+def direct_names(names):
+    return [d for n in names for d in DIRECT_OF.get(n, [n])]
 
 
 def routes():
@@ -34,9 +54,11 @@ def routes():
 
 
 ROUTES = routes()
+DATA_ROUTES = {k: v for k, v in ROUTES.items() if k[1] != COUNTER}
 RECEIVERS = sorted({e for _, ends in ROUTES.values() for e in ends})
 SOURCES = sorted({s for s, _ in ROUTES.values()})
 KPI_RECORD = [f"Bus.{n}[{a}]" for n in ("xAxle", "yAxle") for a in range(1, 7)] + ["Bus.FjointY[1]", "Driver.s"]
+FALLBACK = ["ECU2.fallback", "ECU3.fallback", "Act2.fallback", "Act3.fallback"]
 
 
 def kpis(r):
@@ -47,7 +69,8 @@ def kpis(r):
 
 @pytest.fixture(scope="module")
 def direct():
-    return run(DIRECT, record=list(dict.fromkeys(KPI_RECORD + SOURCES + RECEIVERS)))
+    return run(DIRECT, record=list(dict.fromkeys(KPI_RECORD + direct_names(
+        [s for s, _ in DATA_ROUTES.values()] + [e for _, ends in DATA_ROUTES.values() for e in ends]))))
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +80,7 @@ def can_runs(tmp_path_factory):
     out = {}
     for suffix in ("blf", "asc"):
         log = d / f"run.{suffix}"
-        with Simulation(CAN_BENCH, record=list(dict.fromkeys(KPI_RECORD + RECEIVERS)), can_log=log) as sim:
+        with Simulation(CAN_BENCH, record=list(dict.fromkeys(KPI_RECORD + RECEIVERS + FALLBACK)), can_log=log) as sim:
             r = sim.run()
             out[suffix] = (r, log, sim.can.report(r.time[-1] - r.time[0]))
     return out
@@ -105,17 +128,20 @@ def test_can_bench_reproduces_the_direct_kpis_within_a_derived_bound(direct, can
     signal's resolution (the DBC's scale) plus one cycle of delay, T times the
     input's largest rate on the direct run. The KPIs' sensitivity to those
     errors comes from direct runs with each signal's error added to its
-    receivers as a constant bias (runner stimuli); bound: twice the sum over
-    the signals (a bias stands for an error that varies in time)."""
+    receivers as a constant bias (runner stimuli; in the direct bench the
+    receivers' counterparts, DIRECT_OF: one controller instance for both module
+    ECUs, the set-points straight into the plant); bound: twice the sum over
+    the signals (a bias stands for an error that varies in time). The alive
+    counters carry no data. No receiver leaves normal operation (fallback 0)."""
     db = cantools.database.load_file(str(DBC))
     k0 = kpis(direct)
     bound = np.zeros(3)
     h = direct.time[1] - direct.time[0]
-    for (msg, sig), (src, ends) in ROUTES.items():
+    for (msg, sig), (src, ends) in DATA_ROUTES.items():
         s = db.get_message_by_name(msg).get_signal_by_name(sig)
-        u = direct[src]
+        u = direct[direct_names([src])[0]]
         e = s.scale * TO_SI[s.unit] / 2 + T * np.max(np.abs(np.diff(u))) / h
-        r = run(DIRECT, record=KPI_RECORD, stimuli={x: (lambda t, e=e: e) for x in ends})
+        r = run(DIRECT, record=KPI_RECORD, stimuli={x: (lambda t, e=e: e) for x in direct_names(ends)})
         bound += np.abs(kpis(r) - k0)
     bound *= 2
     r = can_runs["blf"][0]
@@ -128,6 +154,8 @@ def test_can_bench_reproduces_the_direct_kpis_within_a_derived_bound(direct, can
     # and the paper's figures still hold (seed 000, Figs. 9, 10)
     assert k[0] < 1.0 and k[1] < 1.0 and k[2] < 4e3
     assert r["Driver.s"][-1] > 25 + 2 * math.pi * 17.5
+    for x in FALLBACK:
+        assert np.all(r[x] == 0), x
 
 
 @pytest.mark.parametrize("suffix", ["blf", "asc"])
@@ -155,7 +183,7 @@ def test_log_decodes_to_the_values_the_receivers_used(can_runs, suffix):
         times = np.array([f.timestamp for f in fs])
         assert np.all((times > np.arange(n) * T) & (times < np.arange(n) * T + T))
         values = np.array([m.decode(bytes(f.data))[sig] for f in fs])
-        factor = TO_SI[m.get_signal_by_name(sig).unit]
+        factor = TO_SI[m.get_signal_by_name(sig).unit or ""]
         for x in ends:
             np.testing.assert_array_equal(r[x][1:], values * factor, err_msg=f"{msg}.{sig} -> {x}")
     # the tool prints the same values
@@ -192,7 +220,9 @@ def test_a_corrupted_frame_is_not_used(tmp_path):
     """Entering the circle (t = 9 .. 12 s), every SensorG1_Angle frame has a
     wrong CRC; from t = 10.5 s right CRCs but a frozen counter: the receivers
     keep the last good articulation angle throughout while the plant's keeps
-    changing."""
+    changing. Both module ECUs see its alive counter stop and enter their
+    fallback in the 3rd cycle without a new frame (nStale = 3): holding, then
+    ramping; their actuators, whose commands keep coming, do not."""
     from artibus import can as can_mod
 
     def tamper(msg):
@@ -207,16 +237,83 @@ def test_a_corrupted_frame_is_not_used(tmp_path):
                                 is_extended_id=False, data=data)
         return msg
 
-    with Simulation(CAN_BENCH, record=["Guidance.dPsi[1]", "ForceMin.dPsi[1]", "Bus.artAngle[1]"]) as sim:
+    with Simulation(CAN_BENCH, record=["ECU2.dPsi[1]", "ECU3.dPsi[1]", "Bus.artAngle[1]", "ECU2.aliveG1",
+                                       "ECU2.stale", "Act2.fallback"] + FALLBACK[:2]) as sim:
         sim.can.tamper = tamper
         r = sim.run(stop_time=12.0)
         rejected = {m["name"]: m["rejected"] for m in sim.can.report(12.0)["messages"]}
     after = r.time > 9.0 + 2 * T
-    for x in ("Guidance.dPsi[1]", "ForceMin.dPsi[1]"):
+    for x in ("ECU2.dPsi[1]", "ECU3.dPsi[1]", "ECU2.aliveG1"):
         held = r[x][after]
         assert np.all(held == held[0])
+    # the last good frame is tick 899 (t = 8.99 s); ticks 900, 901, 902 bring none: stale in the
+    # ECUs' sample at 9.02 s, recorded at the end of that step (row of t = 9.03 s)
+    for x in FALLBACK[:2]:
+        first = r.time[np.argmax(r[x] > 0)]
+        assert first == pytest.approx(9.03), (x, first)
+        v = r[x][r.time >= 9.03 - 1e-9]
+        assert v[0] == 1 and 2 in v and np.all(np.diff(v) >= 0)       # holding, then ramping (to straight)
+    assert np.all(r["ECU2.stale"][r.time > 9.03] == 2)                 # bit 2: SensorG1_Angle
+    assert np.all(r["Act2.fallback"] == 0)
     assert np.ptp(r["Bus.artAngle[1]"][after]) > math.radians(0.5)
     assert rejected["SensorG1_Angle"] == 300 and rejected["SensorG2_Angle"] == 0   # ticks 900..1199
+
+
+def test_silent_module_ecu_ends_in_the_actuators_fallback_not_in_a_jack_knife():
+    """Module 3's ECU falls silent at t = 20 s on the circle (every frame it
+    sends from then on is unusable: a wrong CRC, the tamper hook; to the
+    receivers the same as no frame). Its actuators detect it in the 3rd cycle
+    without a new counter (nStale = 3), hold A5 and A6 for tHold = 0.2 s, ramp
+    them to straight at 0.1 rad/s and stay there (fallback 1, 2, 3); module
+    2's ECU does not depend on module 3's and goes on. The bus completes the
+    circle, its articulation bounded well below 90 deg, and straight again at
+    the end (a jack-knifed bus does not straighten)."""
+    t_off = 20.0
+
+    def silence(msg):
+        if msg.arbitration_id == 0x130 and msg.timestamp > t_off:
+            data = bytearray(msg.data)
+            data[2] ^= 0x01
+            msg = pycan.Message(timestamp=msg.timestamp, arbitration_id=msg.arbitration_id,
+                                is_extended_id=False, data=data)
+        return msg
+
+    art = ["Bus.artAngle[1]", "Bus.artAngle[2]"]
+    rec = ["Act3.fallback", "Act3.delta[1]", "Act3.delta[2]", "Act2.fallback", "ECU2.fallback", "ECU3.fallback",
+           "Act2.delta[2]", "Driver.s"] + art
+    with Simulation(CAN_BENCH, record=rec) as sim:
+        sim.can.tamper = silence
+        r = sim.run()
+    t, fb = r.time, r["Act3.fallback"]
+    # the frame of tick 2000 ends on the wire after 20 s: the last good one is tick 1999; ticks
+    # 2000..2002 bring none, stale in the actuators' sample at 20.02 s, recorded at 20.03 s
+    t1 = t[np.argmax(fb > 0)]
+    assert t1 == pytest.approx(20.03)
+    hold = (t >= t1) & (t < t1 + 0.2 - 1e-9)
+    assert np.all(fb[hold] == 1)
+    held = r["Act3.delta[2]"][hold]
+    assert np.all(held == held[0]) and abs(held[0]) > 0.05          # A6 held, steering into the circle
+    t2 = t[np.argmax(fb == 2)]
+    assert t2 == pytest.approx(t1 + 0.2)
+    # ramp at 0.1 rad/s: the larger held angle takes |angle| / 0.1 s to reach 0
+    t3 = t[np.argmax(fb == 3)]
+    big = max(abs(r["Act3.delta[1]"][hold][0]), abs(held[0]))
+    assert t3 - t2 == pytest.approx(big / 0.1, abs=0.011)
+    after = t >= t3
+    assert np.all(fb[after] == 3) and np.all(r["Act3.delta[1]"][after] == 0) and np.all(r["Act3.delta[2]"][after] == 0)
+    assert np.all(r["Act2.fallback"] == 0) and np.all(r["ECU2.fallback"] == 0) and np.all(r["ECU3.fallback"] == 0)
+    assert np.ptp(r["Act2.delta[2]"][t > t3]) > 0.1                   # module 2 still steers
+    # no jack-knife: the circle completed; the articulation stays well below 90 deg (a jack-knife
+    # runs on beyond it) while module 3 runs straight on the circle (G2 about 65 deg, where the
+    # unsteered bus, Bus36m_Circle, has 61 deg and the steered one 56 deg), and comes back on the
+    # straight after it (below 10 deg from t = 60 s; the unsteered bus: G1 4.3, G2 1.7 deg), not
+    # stuck at its circle value
+    assert r["Driver.s"][-1] > 25 + 2 * math.pi * 17.5
+    for a in art:
+        circle = np.max(np.abs(r[a]))
+        assert circle < math.radians(75.0), a
+        end = np.max(np.abs(r[a][t > 60.0]))
+        assert end < math.radians(10.0) and end < 0.2 * circle, a
 
 
 # --- errors: file, message, signal named; nothing half-written ---------------------------
@@ -239,7 +336,7 @@ def _variant(tmp_path, dbc=None, ssd=None):
 @pytest.mark.parametrize("case, words", [
     ("malformed", ["resources/Bus36m.dbc", "not a valid DBC"]),
     ("no_crc", ["resources/Bus36m.dbc", "message SensorG2_Angle", "signal CRC"]),
-    ("signal", ["SystemStructure.ssd:", "Connection Bus.artAngle[1] -> Guidance.dPsi[1]",
+    ("signal", ["SystemStructure.ssd:", "Connection Bus.artAngle[1] -> ECU2.dPsi[1]",
                 "SensorG1_Angle", "no data signal 'ArtAngleG9'"]),
     ("message", ["SystemStructure.ssd:", "no message 'SensorG9_Angle'"]),
     ("range", ["resources/Bus36m.dbc", "message SensorG1_Angle", "signal ArtAngleG1",

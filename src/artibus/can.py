@@ -8,7 +8,11 @@ A bench routes connections over CAN with two SSP annotations of type
 - on each routed Connection, ``<Route xmlns="urn:artibus" message="M" signal="S"/>``.
 
 Every connection from one output to several inputs may share a signal (one
-sender, several receivers). The DBC is loaded with cantools and checked: every
+sender, several receivers). A Route may also name a message's AliveCounter:
+its receivers get the counter of each frame they accept (as a Real), for
+their own stale detection (AUTOSAR E2E); the network fills the counter, so the
+value of that connection's source (an output of the sender) is not sent.
+The DBC is loaded with cantools and checked: every
 frame has an 8-bit CRC in byte 0 and a 4-bit alive counter in bits 8-11 (the
 AUTOSAR E2E profile-2 layout; the CRC is cantools.autosar.end_to_end's
 profile-2 CRC over the payload with the message's data ID, DBC attribute
@@ -277,9 +281,10 @@ class Network:
                 raise ArtibusError(f"{label}: {self.dbc_label} has no message '{r['message']}' "
                                    f"(messages: {', '.join(m.name for m in self.db.messages)})") from None
             sig = next((s for s in msg.signals if s.name == r["signal"]), None)
-            if sig is None or sig.name in (CRC_SIGNAL, COUNTER_SIGNAL):
+            if sig is None or sig.name == CRC_SIGNAL:
                 raise ArtibusError(f"{label}: message {msg.name} of {self.dbc_label} has no data signal "
-                                   f"'{r['signal']}' (signals: {', '.join(s.name for s in msg.signals if s.name not in (CRC_SIGNAL, COUNTER_SIGNAL))})")
+                                   f"'{r['signal']}' (signals: {', '.join(s.name for s in msg.signals if s.name not in (CRC_SIGNAL, COUNTER_SIGNAL))}; "
+                                   f"or its {COUNTER_SIGNAL})")
             if (c.factor, c.offset) != (1.0, 0.0):
                 raise ArtibusError(f"{label}: a connection routed over CAN takes its scaling from the DBC; "
                                    f"remove its LinearTransformation")
@@ -287,7 +292,9 @@ class Network:
             key = (msg.name, sig.name)
             route = routes.get(key)
             if route is None:
+                # the alive counter is the network's (E2E): the receivers get it, the source's value is not sent
                 route = routes[key] = _Route(sig, link.src, link.src_index,
+                                             1.0 if sig.name == COUNTER_SIGNAL else
                                              _conversion(_unit(link.src, src_var), sig.unit, label),
                                              f"{c.start[0]}.{c.start[1]}")
             elif route.source != f"{c.start[0]}.{c.start[1]}":
@@ -350,6 +357,8 @@ class Network:
     def _encode(self, m, t):
         values = dict(m.fixed)
         for r in m.routes:
+            if r.signal.name == COUNTER_SIGNAL:     # routed to receivers only: the network fills it
+                continue
             v = r.factor * r.buffer[r.index]
             s = r.signal
             if not (math.isfinite(v) and s.minimum <= v <= s.maximum):

@@ -51,7 +51,7 @@ unsigned ecu_sample(SteeringEcu *e, const EcuInputs *in) {
     unsigned fault = compute(e, in);
     const int forwards = fabs(in->direction) < 0.5;   /* DrivingDirection 0 (a Real off the bus) */
     if (!forwards) fault |= ECU_FAULT_DIRECTION;
-    e->stale = cf_sample(&e->cf, in->alive, e->used, !forwards, e->calc);
+    e->stale = cf_sample(&e->cf, in->alive, e->used, !forwards, e->calc) & e->used;
     e->fault = fault;
     return fault;
 }

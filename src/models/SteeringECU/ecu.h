@@ -58,7 +58,7 @@ typedef struct {
     FmSteering f;
     CfFallback cf;
     double calc[2];               /* the algorithm's angles: [0] A3/A5, [1] A4/A6 [rad] */
-    unsigned stale;               /* stale mask of the last cycle */
+    unsigned stale;               /* stale mask of the last cycle (messages the module uses) */
     unsigned fault;               /* TG_FAULT_* | FM_FAULT_* | ECU_FAULT_DIRECTION of the last cycle */
 } SteeringEcu;
 
