@@ -316,6 +316,28 @@ def test_silent_module_ecu_ends_in_the_actuators_fallback_not_in_a_jack_knife():
         assert end < math.radians(10.0) and end < 0.2 * circle, a
 
 
+@pytest.mark.parametrize("variant, direct_bench, stop", [("laneChange", "Bus36m_LaneChange", 22.0),
+                                                         ("slalom", "Bus36m_Slalom", 42.0)])
+def test_lane_change_and_slalom_run_on_can_as_variants(variant, direct_bench, stop):
+    """The bench's variants put the road tests on the CAN topology: the same
+    road, speed and start as the direct benches (A2 within 5 cm of its path
+    there, 1.4 % of the 3.5 m lane offset), A4 and A6 as close to A2's trace
+    as there (within 5 cm), the hinge force below the paper's 4 kN, no
+    receiver in fallback."""
+    rec = [f"Bus.{n}[{a}]" for n in ("xAxle", "yAxle") for a in (2, 4, 6)] + ["Bus.FjointY[1]"]
+    c = run(CAN_BENCH, overrides=ssp.variant_overrides(CAN_BENCH, [variant]), record=rec + FALLBACK, stop_time=stop)
+    d = run(direct_bench, record=rec)
+    assert c.time[-1] == d.time[-1] == stop
+    assert np.max(np.hypot(c["Bus.xAxle[2]"] - d["Bus.xAxle[2]"], c["Bus.yAxle[2]"] - d["Bus.yAxle[2]"])) < 0.05
+    for a in (4, 6):
+        dev = [kpi.trace_deviation(r["Bus.xAxle[2]"], r["Bus.yAxle[2]"], r[f"Bus.xAxle[{a}]"], r[f"Bus.yAxle[{a}]"])
+               for r in (c, d)]
+        assert abs(dev[0] - dev[1]) < 0.05, (a, dev)
+    assert kpi.peak(c["Bus.FjointY[1]"]) < 4e3
+    for x in FALLBACK:
+        assert np.all(c[x] == 0), x
+
+
 # --- errors: file, message, signal named; nothing half-written ---------------------------
 
 def _variant(tmp_path, dbc=None, ssd=None):
