@@ -549,6 +549,7 @@ class Simulation:
 # not built, or the core switched off (run(core=False) or ARTIBUS_CORE=0).
 
 CORE_ABI = 1                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 
 
@@ -707,8 +708,10 @@ class _CoreStepper:
                 memmove(written, u.raw.written, len(u.raw.written))
         self.lib.artibus_core_record_start(byref(s))
         every = max(1, n // 50)
-        # with the progress bar, in pieces ending where the Python loop draws it
-        ends = [k + 1 for k in range(0, n, every)] + [n] if progress else [n]
+        # in pieces, so that Ctrl-C is seen between them (KeyboardInterrupt, as in
+        # the Python loop); with the progress bar ending where the Python loop draws it
+        ends = [k + 1 for k in range(0, n, every)] if progress else list(range(CORE_PIECE, n, CORE_PIECE))
+        ends.append(n)
         k0, failed = 0, 0
         try:
             for k1 in ends:
