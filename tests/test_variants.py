@@ -119,3 +119,30 @@ def test_rebinding_a_set_the_bench_does_not_bind_is_an_error(tmp_path):
     with pytest.raises(ArtibusError) as e:
         ssp.variant_overrides(path, ["r"])
     assert "nothing.ssv" in str(e.value) and "binds no such parameter set" in str(e.value)
+
+
+def _with_stop(name, stop):
+    return ('<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet '
+            'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" '
+            'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
+            f'version="1.0" name="{name}"><ssv:Parameters/><ssv:Annotations>'
+            '<ssc:Annotation type="org.artibus.variant">'
+            f'<Variant xmlns="urn:artibus" stopTime="{stop}"/></ssc:Annotation></ssv:Annotations></ssv:ParameterSet>')
+
+
+def test_a_variant_gives_its_stop_time_and_the_user_overrides_it(tmp_path):
+    path = bench_with_variants(tmp_path, {"short": _with_stop("short", 2.0), "bad": _with_stop("bad", -1),
+                                          "plain": variant("plain")})
+    assert ssp.variant_stop_time(path, ["short"]) == 2.0
+    assert ssp.variant_stop_time(path, ["plain"]) is None
+    assert ssp.variant_stop_time(path, ["short", "plain"]) == 2.0      # the last that gives one
+    with pytest.raises(ArtibusError) as e:
+        ssp.variant_stop_time(path, ["bad"])
+    assert "variants/bad.ssv" in str(e.value) and "stopTime" in str(e.value)
+    for extra, last in (([], 2.0), (["--stop-time", "1.5"], 1.5)):
+        out = tmp_path / "r.csv"
+        subprocess.run([sys.executable, "-m", "artibus", "run", str(path), "--variant", "short", "--step", "0.05",
+                        "--set", "Follow.testSteerAmp=0", "--record", "Lead.beta[1]", "-o", str(out), *extra],
+                       check=True, capture_output=True)
+        d = np.genfromtxt(out, delimiter=",", names=True)
+        assert d["time"][-1] == pytest.approx(last)

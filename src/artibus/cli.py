@@ -108,6 +108,8 @@ def cmd_run(args):
         user.update(read_parameters(f))
     user.update(_parse_set(args.set))
     benches = ssp.bench_names() if args.all else [args.bench]
+    if args.stop_time is None and not args.all:
+        args.stop_time = ssp.variant_stop_time(args.bench, args.variant)    # None: the bench's own
     summary = []
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, args.variant), **user}

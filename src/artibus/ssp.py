@@ -12,12 +12,15 @@ cases) are parameter sets of that bench, not copies of its .ssd:
 ``ssp/benches/<Bench>/variants/<name>.ssv``, each parameter named
 ``Component.variable``. They are packed into the .ssp (``variants/``) and
 selected by name (``artibus run BENCH --variant NAME``), applied after the
-bench's own bindings and before the user's ``--ssv``/``--set``.
+bench's own bindings and before the user's ``--ssv``/``--set``. A variant may
+give its own stop time (``<Variant stopTime="42"/>`` in an
+``org.artibus.variant`` annotation) and rebind a parameter set (``Rebind``).
 
 Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships);
 what it leaves out (default experiment, per-component step sizes in our
 annotation, connector units) is read here with lxml from the same file.
 """
+import math
 import tempfile
 import zipfile
 from dataclasses import dataclass, field
@@ -117,6 +120,30 @@ def variants(ssp):
     with zipfile.ZipFile(ssp) as z:
         return sorted(Path(n).stem for n in z.namelist()
                       if n.startswith(f"{VARIANT_DIR}/") and n.endswith(".ssv"))
+
+
+def variant_stop_time(ssp, names):
+    """The stop time the last of the named variants gives (an
+    ``org.artibus.variant`` annotation ``<Variant stopTime="..."/>``), or None."""
+    stop = None
+    if not names:
+        return stop
+    ssp = ssp_path(ssp)
+    with zipfile.ZipFile(ssp) as z:
+        for name in names:
+            ref = f"{VARIANT_DIR}/{name}.ssv"
+            if ref not in z.namelist():
+                continue             # variant_overrides names the unknown variant
+            for v in etree.fromstring(z.read(ref)).iterfind(".//artibus:Variant", NS):
+                if v.get("stopTime") is not None:
+                    try:
+                        stop = float(v.get("stopTime"))
+                    except ValueError:
+                        stop = math.nan
+                    if not stop > 0:
+                        raise ArtibusError(f"{ssp}/{ref}:{v.sourceline}: <Variant stopTime="
+                                           f"\"{v.get('stopTime')}\">: must be a time > 0 s")
+    return stop
 
 
 def variant_overrides(ssp, names):
