@@ -159,3 +159,36 @@ def test_python_roads_read_csv_errors(tmp_path):
         roads.read_csv(p)
     with pytest.raises(ArtibusError, match="radius"):
         roads.generate(roads.CIRCLE, R=0.5)
+
+
+def test_road_built_again_when_its_parameters_change_in_initialisation(tmp_path):
+    """The road is kept between reads in initialisation mode while what it is
+    made from is unchanged, and built again when that changes: a driver whose
+    outputs were read with a 60 m lane change, then set to 25 m, drives the
+    25 m lane change exactly as one set to 25 m from the start; a CSV road is
+    read again (its file may have changed)."""
+    def drive(first, then, road_file=None):
+        with Fmu(fmu_path("RoadFollowDriver")) as d:
+            d.slave.setupExperiment(startTime=0.0)
+            d.slave.enterInitializationMode()
+            d.set_values(first)
+            d.get("delta")                          # the model is initialised with `first`
+            if road_file is not None:
+                roads.write_csv(road_file, *roads.generate(roads.LANE_CHANGE, laneLength=25.0))
+            d.set_values(then)
+            d.slave.exitInitializationMode()
+            out, t = [], 0.0
+            while t < 5.0 - 1e-9:
+                d.slave.doStep(t, 0.02)
+                t += 0.02
+                out.append(d.get("delta", "eLat", "s"))
+        return np.array(out)
+    fresh = drive({"road": 1, "laneLength": 25.0}, {})
+    changed = drive({"road": 1, "laneLength": 60.0}, {"laneLength": 25.0})
+    other = drive({"road": 1, "laneLength": 60.0}, {})
+    assert np.max(np.abs(fresh[:, 0] - other[:, 0])) > 0.01, "60 m and 25 m steer alike: the test cannot fail"
+    assert np.array_equal(changed, fresh)
+    path = tmp_path / "road.csv"
+    roads.write_csv(path, *roads.generate(roads.LANE_CHANGE, laneLength=60.0))
+    from_file = drive({"road": 0, "roadFile": str(path)}, {}, road_file=path)
+    assert np.max(np.abs(from_file - fresh)) <= 1e-9

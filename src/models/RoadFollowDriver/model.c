@@ -11,9 +11,33 @@
 #include "driver.h"
 #include "roads.h"
 
+/* what a built-in road is made from: the road is built again only when one of
+ * these changed (model_init runs at every read in initialisation mode) */
 typedef struct {
-    Road road;              /* built once per initialisation, never in a step */
+    int road;
+    double roadBefore, roadAfter, laneLength, laneOffset, R, isoWidth, roadStep, ds;
+} RoadKey;
+
+typedef struct {
+    Road road;              /* built in initialisation, never in a step */
+    int built;              /* road holds the built-in road of key */
+    RoadKey key;
 } Work;
+
+static RoadKey road_key(ModelInstance *comp) {
+    RoadKey k;
+    memset(&k, 0, sizeof k);     /* padding too: keys are compared with memcmp */
+    k.road = D->road;
+    k.roadBefore = D->roadBefore;
+    k.roadAfter = D->roadAfter;
+    k.laneLength = D->laneLength;
+    k.laneOffset = D->laneOffset;
+    k.R = D->R;
+    k.isoWidth = D->isoWidth;
+    k.roadStep = D->roadStep;
+    k.ds = D->ds;
+    return k;
+}
 
 static void params(ModelInstance *comp, DriverParams *p) {
     p->L0 = D->L0;
@@ -127,8 +151,15 @@ fmi2Status model_init(ModelInstance *comp) {
     if (!w) {
         w = comp->solver = malloc(sizeof(Work));
         if (!w) return log_error(comp, "out of memory");
+        w->built = 0;
     }
-    if (build_road(comp, &w->road)) return fmi2Error;
+    const RoadKey key = road_key(comp);
+    if (!(w->built && D->road != ROAD_CSV && memcmp(&key, &w->key, sizeof key) == 0)) {
+        w->built = 0;                         /* a CSV road is read again: its file may have changed */
+        if (build_road(comp, &w->road)) return fmi2Error;
+        w->built = 1;
+        w->key = key;
+    }
 
     DriverParams p;
     params(comp, &p);
