@@ -212,6 +212,157 @@ def response_times(messages, bitrate):
     return out
 
 
+# --- faults -----------------------------------------------------------------------
+
+#: kinds of fault: the positional value each takes, the options it accepts
+FAULT_KINDS = {
+    "loss": ("rate", {"seed"}),                       # frames not sent, with probability rate
+    "latency": ("delay", {"jitter", "seed"}),         # frames queued delay + U(0, jitter) s late
+    "corrupt": ("mode", {"rate", "seed"}),            # crc | repeat | skip
+    "silent": (None, set()),                          # the node sends nothing
+    "busoff": (None, {"recover"}),                    # error burst, bus-off, optional recovery
+}
+CORRUPT_MODES = ("crc", "repeat", "skip")
+FAULT_SYNTAX = ("KIND:TARGET[:VALUE][:KEY=VALUE...][@T0[-T1]] with KIND loss (VALUE rate 0..1, seed=), "
+                "latency (VALUE delay s, jitter= s, seed=), corrupt (VALUE crc|repeat|skip, rate=, seed=), "
+                "silent, busoff (recover or recover=DELAY s); TARGET a message or a node of the DBC "
+                "(silent/busoff: a node); @T0-T1 the window in simulated s (default: the whole run)")
+BUSOFF_ATTEMPTS = 32          # TEC +8 per failed transmission: 32 of them reach 256 (ISO 11898-1)
+ERROR_FRAME_BITS = 17         # error flag 6, error delimiter 8, interframe space 3
+RECOVERY_BITS = 128 * 11      # 128 occurrences of 11 recessive bits (ISO 11898-1, bus-off recovery)
+_FLOAT = r"[0-9]+(?:\.[0-9]*)?(?:[eE][+-]?[0-9]+)?"
+
+
+@dataclass
+class Fault:
+    """A fault injected into the CAN network (see ``parse_fault`` for the text form).
+
+    kind: loss, latency, corrupt, silent, busoff; target: a message or a node
+    (the sender of messages) of the DBC; rate (loss, corrupt): probability per
+    frame; delay, jitter (latency, s): a frame is queued delay + U(0, jitter)
+    late; mode (corrupt): crc, repeat or skip; start, end: the window of
+    production times [start, end) in simulated s; seed: of the fault's own
+    numpy Generator; recover (busoff): None (stays off) or the application's
+    restart delay after the minimum recovery time (s)."""
+    kind: str
+    target: str
+    rate: float = 1.0
+    delay: float = 0.0
+    jitter: float = 0.0
+    mode: str = "crc"
+    start: float = -math.inf
+    end: float = math.inf
+    seed: int = 0
+    recover: float | None = None
+    text: str = ""
+
+    def __str__(self):
+        return self.text or f"{self.kind}:{self.target}"
+
+
+def parse_fault(text):
+    """A fault from its text form, e.g. ``loss:SensorG2_Angle:0.1:seed=7``,
+    ``latency:Module2ECU_Cmd:0.02:jitter=0.005:seed=3``,
+    ``corrupt:TractorECU_State:crc@20.0-20.5``, ``silent:Module3ECU@20``,
+    ``busoff:Module2ECU@30:recover``. The target's name is checked against the
+    DBC when the network is built."""
+    import re
+    head = f"--can-fault {text}"
+    body, at, window = text.strip().partition("@")
+    # options may also follow the window: busoff:Module2ECU@30:recover
+    if at:
+        window, _, tail = window.partition(":")
+        body = body + (":" + tail if tail else "")
+    parts = [p.strip() for p in body.split(":")]
+    if len(parts) < 2 or not parts[0] or not parts[1]:
+        raise ArtibusError(f"{head}: expected {FAULT_SYNTAX}")
+    kind, target, rest = parts[0].lower(), parts[1], parts[2:]
+    if kind not in FAULT_KINDS:
+        raise ArtibusError(f"{head}: unknown fault '{parts[0]}' (faults: {', '.join(FAULT_KINDS)})")
+    positional, keys = FAULT_KINDS[kind]
+    f = Fault(kind, target, text=text.strip())
+    values = {}
+    for i, p in enumerate(rest):
+        key, eq, value = p.partition("=")
+        if not eq:
+            if key == "recover" and "recover" in keys:
+                values["recover"] = "0"
+            elif i == 0 and positional:
+                values[positional] = key
+            else:
+                raise ArtibusError(f"{head}: unexpected '{p}' (expected {FAULT_SYNTAX})")
+        elif key not in keys:
+            raise ArtibusError(f"{head}: {kind} takes no option '{key}'"
+                               + (f" (options: {', '.join(sorted(keys))})" if keys else ""))
+        else:
+            values[key] = value
+    if positional and positional not in values and kind != "corrupt":
+        raise ArtibusError(f"{head}: {kind} needs its {positional}, e.g. "
+                           + ("loss:SensorG2_Angle:0.1" if kind == "loss" else "latency:Module2ECU_Cmd:0.02"))
+
+    def number(key, lo, hi, unit=""):
+        try:
+            v = float(values[key])
+        except ValueError:
+            v = float("nan")
+        if not (math.isfinite(v) and lo <= v <= hi):
+            raise ArtibusError(f"{head}: {key} = {values[key]!r}: expected a number in [{lo:g}, {hi:g}]{unit}")
+        return v
+
+    if "rate" in values:
+        f.rate = number("rate", 0.0, 1.0)
+    if "delay" in values:
+        f.delay = number("delay", 0.0, 3600.0, " s")
+    if "jitter" in values:
+        f.jitter = number("jitter", 0.0, 3600.0, " s")
+    if "recover" in values:
+        f.recover = number("recover", 0.0, 3600.0, " s")
+    if "seed" in values:
+        try:
+            f.seed = int(values["seed"])
+            if f.seed < 0:
+                raise ValueError
+        except ValueError:
+            raise ArtibusError(f"{head}: seed = {values['seed']!r}: expected an integer >= 0") from None
+    if kind == "corrupt":
+        f.mode = values.get("mode", "crc").lower()
+        if f.mode not in CORRUPT_MODES:
+            raise ArtibusError(f"{head}: corrupt mode '{values['mode']}': expected {', '.join(CORRUPT_MODES)}")
+    if at:
+        m = re.fullmatch(rf"\s*({_FLOAT})\s*(?:-\s*({_FLOAT})\s*)?", window)
+        if m is None:
+            raise ArtibusError(f"{head}: window '@{window}': expected @T0 or @T0-T1 in s")
+        f.start = float(m.group(1))
+        if m.group(2) is not None:
+            f.end = float(m.group(2))
+            if not f.end > f.start:
+                raise ArtibusError(f"{head}: window '@{window}': the end must be after the start")
+    return f
+
+
+class _FaultState:
+    """A fault bound to the network: its messages and its own random numbers."""
+
+    def __init__(self, fault, messages):
+        import numpy as np
+        self.fault = fault
+        self.messages = messages          # the _Messages it acts on
+        self.rng = np.random.default_rng(fault.seed)
+
+    def active(self, t):
+        f = self.fault
+        return f.start - 1e-9 <= t < f.end - 1e-9
+
+
+@dataclass
+class _Node:
+    """A sending node's state under silent/busoff faults."""
+    name: str
+    off_until: float = -math.inf       # sends nothing before this time (bus-off)
+    burst_pending: bool = False
+    burst_at: float = math.nan         # time its error burst started
+
+
 @dataclass
 class _Receiver:
     unit: object         # the receiving runner Unit
@@ -240,19 +391,33 @@ class _Message:
     routes: list
     fixed: dict          # signals no connection feeds: their start values (DBC GenSigStartValue, else 0)
     counter: int = 0     # next counter to send
-    last_counter: int = None   # of the last frame accepted
-    sent: int = 0
-    rejected: int = 0
+    last_counter: int = None   # the receivers' reference counter (last accepted, or resynchronised)
+    good_tick: int = None      # tick of the last accepted frame
+    produced: int = 0    # frames the sender made (one per cycle)
+    sent: int = 0        # frames on the wire
+    lost: int = 0        # loss fault: not sent
+    suppressed: int = 0  # silent or bus-off sender: not sent
+    delayed: int = 0     # latency fault: sent late
+    corrupted: int = 0   # corrupt fault: sent with a bad CRC or counter
+    overwritten: int = 0  # in the receive buffer, overwritten by a newer frame before the receivers read it
+    rejected: int = 0    # failed the receivers' E2E check (never used as data)
+    why: dict = field(default_factory=lambda: {"crc": 0, "repeated": 0, "sequence": 0})
     bits: int = 0
+    since: list = field(default_factory=list)   # per tick: cycles since the last accepted frame
+    longest: int = 0     # the longest such run, and the time it reached it
+    longest_at: float = float("nan")
+    faults: list = field(default_factory=list)  # the _FaultStates acting on it
+    node: str = ""       # its sender
 
 
 class Network:
     """The CAN path of one run (see the module's docstring)."""
 
-    def __init__(self, bench, dbc_file, links, interface="virtual", log=None):
+    def __init__(self, bench, dbc_file, links, interface="virtual", log=None, faults=None):
         """links: the runner's Links of the connections the bench routes over
-        CAN, each with its Connection (``link.connection``). Validates
-        everything before anything is opened or written."""
+        CAN, each with its Connection (``link.connection``); faults: Faults or
+        their text forms (``parse_fault``). Validates everything before
+        anything is opened or written."""
         where = bench.file
         spec = bench.can
         self.where = where
@@ -314,11 +479,59 @@ class Network:
             self.messages.append(_Message(m, int(m.dbc.attributes["E2EDataID"].value), int(round(ratio)),
                                           mine, fixed))
         self._by_id = {m.msg.frame_id: m for m in self.messages}
+        for m in self.messages:
+            m.node = m.msg.senders[0] if m.msg.senders else ""
+        self._bind_faults(faults or [])
         self.tamper = None     # tests: f(can.Message) -> can.Message, between sending and receiving
         self.frames = 0
+        self.error_frames = 0
         self.ticks = 0
-        self.observed = {}     # identifier -> longest time from the tick to the end of the frame, s
+        self.observed = {}     # identifier -> longest time from queuing to the end of the frame, s
+        self._seq = 0          # production order of frames
+        self._at_tick = {}     # tick -> delayed frames queued exactly at it: [(seq, _Message, data, burst)]
+        self._mid = {}         # tick -> delayed frames queued after it, before the next: [(time, seq, m, data)]
+        self._mailbox = {}     # identifier -> frames received since the receivers last read (newest last)
         self._open(interface, log)
+
+    def _bind_faults(self, faults):
+        """Each fault's messages (a message, or every message a node sends)."""
+        names = {m.msg.name: m for m in self.messages}
+        nodes = {}
+        for m in self.messages:
+            nodes.setdefault(m.node, []).append(m)
+        known_nodes = [n.name for n in self.db.nodes]
+        self.faults = []
+        self.nodes = {}
+        for f in faults:
+            f = parse_fault(f) if isinstance(f, str) else f
+            head = f"--can-fault {f}"
+            if f.kind in ("silent", "busoff"):
+                if f.target not in known_nodes:
+                    hint = (f" ({f.target} is a message; its sender is {names[f.target].node})"
+                            if f.target in names else "")
+                    raise ArtibusError(f"{head}: {self.dbc_label} has no node '{f.target}'{hint} "
+                                       f"(nodes: {', '.join(known_nodes)})")
+                msgs = nodes.get(f.target, [])
+                if not msgs:
+                    raise ArtibusError(f"{head}: node {f.target} sends no message in {self.dbc_label} "
+                                       f"(senders: {', '.join(nodes)})")
+                if f.kind == "busoff":
+                    if f.target in self.nodes:
+                        raise ArtibusError(f"{head}: node {f.target} already has a busoff fault")
+                    self.nodes[f.target] = _Node(f.target)
+            elif f.target in names:
+                msgs = [names[f.target]]
+            elif f.target in nodes:
+                msgs = nodes[f.target]
+            else:
+                raise ArtibusError(f"{head}: {self.dbc_label} has no message or sending node '{f.target}' "
+                                   f"(messages: {', '.join(names)}; nodes: {', '.join(nodes)})")
+            if f.kind == "latency" and f.delay + f.jitter <= 0:
+                raise ArtibusError(f"{head}: a latency of 0 s changes nothing")
+            state = _FaultState(f, msgs)
+            self.faults.append(state)
+            for m in msgs:
+                m.faults.append(state)
 
     def _open(self, interface, log):
         import can
@@ -354,7 +567,7 @@ class Network:
 
     # --- one tick ------------------------------------------------------------------
 
-    def _encode(self, m, t):
+    def _encode(self, m, t, counter=None):
         values = dict(m.fixed)
         for r in m.routes:
             if r.signal.name == COUNTER_SIGNAL:     # routed to receivers only: the network fills it
@@ -366,23 +579,42 @@ class Network:
                                    f"{r.source} = {v:.6g} {s.unit or ''} at t = {t:g} s is outside "
                                    f"the signal's range [{s.minimum:g}, {s.maximum:g}]")
             values[s.name] = v
-        values[COUNTER_SIGNAL] = m.counter
+        values[COUNTER_SIGNAL] = m.counter if counter is None else counter
         values[CRC_SIGNAL] = 0
         try:
             data = bytearray(m.msg.encode(values, scaling=True, strict=True))
         except Exception as e:
             raise ArtibusError(f"{self.dbc_label}: message {m.msg.name}: {e} (t = {t:g} s)") from None
         data[0] = e2e_crc(data, m.data_id)
-        return bytes(data)
+        return data
 
-    def _deliver(self, m, data):
-        """CRC and counter checked; the signals decoded into the receivers'
-        inputs. A frame failing a check is not used."""
+    def _deliver(self, m, data, k=None):
+        """The receivers' E2E check, then the signals decoded into their inputs.
+        As an AUTOSAR E2E profile 2 receiver with MaxDeltaCounterInit = 1: a
+        wrong CRC is rejected; a counter equal to the reference counter
+        (repeated) is rejected; a counter ahead by more than the cycles since
+        the last accepted frame (at most 15) is a wrong sequence, rejected, and
+        becomes the reference (re-synchronisation; no SyncCounter). A rejected
+        frame is never used: the receivers keep the last good value."""
         counter = data[1] & 0x0F
-        if e2e_crc(data, m.data_id) != data[0] or counter == m.last_counter:
+        why = None
+        if e2e_crc(data, m.data_id) != data[0]:
+            why = "crc"
+        elif m.last_counter is not None:
+            delta = (counter - m.last_counter) % 16
+            allowed = 15 if k is None or m.good_tick is None else min(max((k - m.good_tick) // m.ratio, 1), 15)
+            if delta == 0:
+                why = "repeated"
+            elif delta > allowed:
+                why = "sequence"
+                m.last_counter = counter
+        if why is not None:
             m.rejected += 1
+            m.why[why] += 1
             return False
         m.last_counter = counter
+        if k is not None:
+            m.good_tick = k
         decoded = m.msg.decode(bytes(data), scaling=True, decode_choices=False)
         for r in m.routes:
             v = decoded[r.signal.name]
@@ -401,12 +633,14 @@ class Network:
 
     def settle(self):
         """Initialisation: the receivers get the senders' values through the
-        codec (quantised as on the bus), nothing is sent."""
+        codec (quantised as on the bus), nothing is sent. The value counts as
+        the frame of the cycle before the first tick."""
         for m in self.messages:
             data = self._encode(m, float("nan"))
             m.last_counter = None
             self._deliver(m, data)
             m.last_counter = None
+            m.good_tick = -m.ratio
 
     def start(self, t0):
         """Before the first tick: the writers' time origin is the run's start."""
@@ -414,55 +648,175 @@ class Network:
         if self.writer is not None:
             self.writer.log_event(f"artibus: simulated time in s from t = {t0:g} s (the run's start)", t0)
 
-    def tick(self, k, t):
-        """The network's k-th tick at simulated time t."""
+    def _produce(self, m, k, t):
+        """The frame message m's sender makes at tick k, with the faults acting
+        on it: None when it is not on the wire at this tick (lost, suppressed,
+        or delayed: then filed for later), else (seq, m, data, burst)."""
+        m.produced += 1
+        seq = self._seq
+        self._seq += 1
+        lost = suppressed = burst = False
+        corrupt, delay = None, 0.0
+        for fs in m.faults:
+            f = fs.fault
+            if not fs.active(t):
+                continue
+            if f.kind == "loss":
+                lost |= bool(fs.rng.random() < f.rate)
+            elif f.kind == "latency":
+                delay = max(delay, f.delay + (float(fs.rng.uniform(0.0, f.jitter)) if f.jitter > 0 else 0.0))
+            elif f.kind == "corrupt":
+                if f.rate >= 1.0 or fs.rng.random() < f.rate:
+                    corrupt = f.mode
+            elif f.kind == "silent":
+                suppressed = True
+            elif f.kind == "busoff":
+                node = self.nodes[f.target]
+                if not node.burst_pending and node.off_until == -math.inf:
+                    node.burst_pending, node.off_until = True, math.inf    # this frame starts the burst
+                    burst = True
+                elif t < node.off_until - 1e-9:
+                    suppressed = True
+        counter = m.counter
+        if corrupt == "repeat":          # the previous frame's counter again; the counter does not advance
+            counter = (m.counter - 1) % 16
+        elif corrupt == "skip":          # the counter jumps over one value
+            counter = (m.counter + 1) % 16
+            m.counter = (m.counter + 2) % 16
+        else:
+            m.counter = (m.counter + 1) % 16
+        data = self._encode(m, t, counter)
+        if corrupt is not None:
+            m.corrupted += 1
+            if corrupt == "crc":         # a payload bit flipped after the sender's CRC
+                data[-1] ^= 0x01
+        if burst:
+            return seq, m, bytes(data), True
+        if lost:
+            m.lost += 1
+            return None
+        if suppressed:
+            m.suppressed += 1
+            return None
+        if delay > 0.0:
+            m.delayed += 1
+            kq = k + delay / self.period
+            if abs(kq - round(kq)) < 1e-6:
+                self._at_tick.setdefault(int(round(kq)), []).append((seq, m, bytes(data), False))
+            else:
+                self._mid.setdefault(int(math.floor(kq)), []).append((t + delay, seq, m, bytes(data)))
+            return None
+        return seq, m, bytes(data), False
+
+    def _transmit(self, m, data, stamp, bits):
+        """One frame on the bus at simulated time `stamp` (end of its EOF),
+        received back into the receivers' buffer and logged."""
+        import can
+        msg = can.Message(timestamp=stamp, arbitration_id=m.msg.frame_id, is_extended_id=False,
+                          dlc=len(data), data=data)
+        self.bus.send(msg if self.tamper is None else self.tamper(msg))
+        rx = self.bus.recv(timeout=0.0 if self.interface == "virtual" else 1.0)
+        while rx is not None and rx.arbitration_id not in self._by_id:   # others' traffic on a real bus
+            rx = self.bus.recv(timeout=1.0)
+        if rx is None:
+            raise ArtibusError(f"--can {self.interface}: frame 0x{msg.arbitration_id:03X} sent at "
+                               f"t = {stamp:g} s did not come back")
+        if self.interface != "virtual":
+            rx.timestamp = msg.timestamp if rx.arbitration_id == msg.arbitration_id else stamp
+        m.sent += 1
+        m.bits += bits
+        self.frames += 1
+        self._mailbox.setdefault(rx.arbitration_id, []).append(rx)
+        if self.writer is not None:
+            self.writer.on_message_received(rx)
+
+    def _burst(self, m, data, t, busy):
+        """Bus-off: the node's frame fails BUSOFF_ATTEMPTS times in a row (each
+        attempt the frame up to its ACK slot, then an error frame); its
+        transmit error counter reaches 256 and it leaves the bus. Returns the
+        bits the burst took."""
         import can
         tau = 1.0 / self.bitrate
-        sent, busy = [], 0
+        bits = BUSOFF_ATTEMPTS * (frame_bits(m.msg.frame_id, data) - 10 + ERROR_FRAME_BITS)
+        node = self.nodes[m.node]
+        end = t + (busy + bits) * tau
+        fault = next(fs.fault for fs in m.faults if fs.fault.kind == "busoff")
+        node.burst_pending = False
+        node.off_until = math.inf if fault.recover is None else end + RECOVERY_BITS * tau + fault.recover
+        node.burst_at = t + busy * tau
+        self.error_frames += BUSOFF_ATTEMPTS
+        m.suppressed += 1
+        if self.writer is not None:
+            self.writer.on_message_received(can.Message(timestamp=node.burst_at, arbitration_id=m.msg.frame_id,
+                                                        is_error_frame=True, is_extended_id=False, dlc=0))
+        return bits
+
+    def tick(self, k, t):
+        """The network's k-th tick at simulated time t: the frames queued at t
+        go on the wire in order of identifier (older first within one), the
+        receivers read their buffers (the newest frame of each message), then
+        the frames queued late (latency) before the next tick are sent."""
+        tau = 1.0 / self.bitrate
+        queue = self._at_tick.pop(k, [])
         for m in self.messages:
-            if k % m.ratio:
+            if k % m.ratio == 0:
+                item = self._produce(m, k, t)
+                if item is not None:
+                    queue.append(item)
+        queue.sort(key=lambda e: (e[1].msg.frame_id, e[0]))
+        busy = 0
+        for seq, m, data, burst in queue:
+            if burst:
+                busy += self._burst(m, data, t, busy)
                 continue
-            data = self._encode(m, t)
             bits = frame_bits(m.msg.frame_id, data)
             busy += bits
-            m.bits += bits
-            m.sent += 1
-            m.counter = (m.counter + 1) % 16
             end = (busy - 3) * tau                   # end of its EOF, the frames before it queued ahead
             self.observed[m.msg.frame_id] = max(self.observed.get(m.msg.frame_id, 0.0), end)
-            msg = can.Message(timestamp=t + end, arbitration_id=m.msg.frame_id, is_extended_id=False,
-                              dlc=len(data), data=data)
-            sent.append(msg)
-            self.bus.send(msg if self.tamper is None else self.tamper(msg))
+            self._transmit(m, data, t + end, bits)
         self.ticks += 1
-        self.frames += len(sent)
-        for msg in sent:
-            rx = self.bus.recv(timeout=0.0 if self.interface == "virtual" else 1.0)
-            while rx is not None and rx.arbitration_id not in self._by_id:   # others' traffic on a real bus
-                rx = self.bus.recv(timeout=1.0)
-            if rx is None:
-                raise ArtibusError(f"--can {self.interface}: frame 0x{msg.arbitration_id:03X} sent at "
-                                   f"t = {t:g} s did not come back")
-            if self.interface != "virtual":
-                rx.timestamp = msg.timestamp if rx.arbitration_id == msg.arbitration_id else t
-            self._deliver(self._by_id[rx.arbitration_id], rx.data)
-            if self.writer is not None:
-                self.writer.on_message_received(rx)
+        for m in self.messages:                     # the receivers read their buffers
+            frames = self._mailbox.pop(m.msg.frame_id, None)
+            if frames:
+                m.overwritten += len(frames) - 1
+                self._deliver(m, frames[-1].data, k)
+            since = (k - m.good_tick) // m.ratio
+            m.since.append(since)
+            if since > m.longest:
+                m.longest, m.longest_at = since, t
+        free = t + busy * tau                       # frames queued between this tick and the next
+        for q, seq, m, data in sorted(self._mid.pop(k, []), key=lambda e: (e[0], e[1])):
+            bits = frame_bits(m.msg.frame_id, data)
+            start = max(q, free)
+            free = start + bits * tau
+            self.observed[m.msg.frame_id] = max(self.observed.get(m.msg.frame_id, 0.0), free - 3 * tau - q)
+            self._transmit(m, data, free - 3 * tau, bits)
+
+    def since_series(self):
+        """{message: array over the ticks of the cycles since its last accepted
+        frame, after that tick's delivery}."""
+        import numpy as np
+        return {m.msg.name: np.array(m.since, dtype=float) for m in self.messages}
 
     # --- figures ---------------------------------------------------------------------
 
     def report(self, duration):
-        """Bus load of the frames sent over `duration` s, worst-case response times."""
+        """Bus load of the frames sent over `duration` s, worst-case response
+        times, and per message what the faults did."""
         bits = sum(m.bits for m in self.messages)
         wcrt = response_times([(m.msg.frame_id, m.msg.length, m.ratio * self.period) for m in self.messages],
                               self.bitrate)
         return {
-            "bitrate": self.bitrate, "frames": self.frames, "bits": bits,
+            "bitrate": self.bitrate, "frames": self.frames, "bits": bits, "error_frames": self.error_frames,
             "load": bits / (self.bitrate * duration) if duration > 0 else float("nan"),
             "worst_load": sum(worst_case_bits(m.msg.length) / (m.ratio * self.period) for m in self.messages)
                           / self.bitrate,
+            "faults": [str(fs.fault) for fs in self.faults],
             "messages": [dict(name=m.msg.name, id=m.msg.frame_id, dlc=m.msg.length, period=m.ratio * self.period,
-                              sent=m.sent, rejected=m.rejected, wcrt=wcrt[m.msg.frame_id],
+                              node=m.node, produced=m.produced, sent=m.sent, lost=m.lost, suppressed=m.suppressed,
+                              delayed=m.delayed, corrupted=m.corrupted, overwritten=m.overwritten,
+                              rejected=m.rejected, rejected_why=dict(m.why), longest=m.longest,
+                              longest_at=m.longest_at, wcrt=wcrt[m.msg.frame_id],
                               observed=self.observed.get(m.msg.frame_id, float("nan")))
                          for m in self.messages],
         }
@@ -476,6 +830,19 @@ class Network:
             lines.append(f"    0x{m['id']:03X} {m['name']:18s} {m['dlc']} B every {m['period'] * 1e3:g} ms: "
                          f"worst-case response {m['wcrt'] * 1e3:.3f} ms (observed {m['observed'] * 1e3:.3f} ms), "
                          f"{m['sent']} sent, {m['rejected']} rejected")
+        if r["faults"]:
+            lines.append(f"    faults: {'; '.join(r['faults'])}"
+                         + (f"; {r['error_frames']} error frames (bus-off bursts)" if r["error_frames"] else ""))
+            lines.append(f"    {'message':18s} {'made':>6s} {'sent':>6s} {'lost':>5s} {'silent':>6s} {'late':>5s} "
+                         f"{'corrupt':>7s} {'overwr':>6s} {'rejected':>8s} {'(crc/rep/seq)':>13s}  "
+                         f"longest run of cycles without a good frame")
+            for m in r["messages"]:
+                w = m["rejected_why"]
+                why = f"({w['crc']}/{w['repeated']}/{w['sequence']})"
+                gap = f"{m['longest']}, reached at t = {m['longest_at']:.2f} s" if m["longest"] else "0"
+                lines.append(f"    {m['name']:18s} {m['produced']:6d} {m['sent']:6d} {m['lost']:5d} "
+                             f"{m['suppressed']:6d} {m['delayed']:5d} {m['corrupted']:7d} {m['overwritten']:6d} "
+                             f"{m['rejected']:8d} {why:>13s}  {gap}")
         if self.log_path is not None:
             lines.append(f"    log: {self.log_path}")
         return "\n".join(lines)
@@ -528,23 +895,38 @@ def read_log(path):
 
 def decode_log(path, dbc):
     """Rows (time s, message, signal, value, unit, e2e) of every frame of a log
-    that the DBC knows; e2e is 'ok', 'crc' or 'counter' (the frame would not
-    be used by the receivers)."""
+    that the DBC knows; e2e is 'ok', or why a receiver checking every frame of
+    the log would reject it (never use it): 'crc', 'repeated' (counter equal
+    to the last), 'sequence' (counter ahead by more than the cycles elapsed
+    since the last good frame, from the timestamps and the cycle time) -- the
+    check of ``Network._deliver``."""
     from cantools.autosar.end_to_end import compute_profile2_crc
     db = load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
-    rows, last = [], {}
+    rows, last, good = [], {}, {}
     for frame in read_log(path):
         try:
             m = db.get_message_by_frame_id(frame.arbitration_id)
         except KeyError:
             continue
         data = bytes(frame.data)
+        if len(data) != m.length:
+            raise ArtibusError(f"{path}: frame 0x{frame.arbitration_id:03X} at t = {frame.timestamp:g} s: "
+                               f"{len(data)} bytes, message {m.name} has {m.length}")
         data_id = int(m.dbc.attributes["E2EDataID"].value)
         counter = data[1] & 0x0F
-        e2e = ("crc" if compute_profile2_crc(data, data_id) != data[0] else
-               "counter" if last.get(m.frame_id) == counter else "ok")
-        if e2e != "crc":
-            last[m.frame_id] = counter
+        e2e = "ok"
+        if compute_profile2_crc(data, data_id) != data[0]:
+            e2e = "crc"
+        elif m.frame_id in last:
+            delta = (counter - last[m.frame_id]) % 16
+            cycles = round((frame.timestamp - good[m.frame_id]) / (m.cycle_time / 1000.0))
+            if delta == 0:
+                e2e = "repeated"
+            elif delta > min(max(cycles, 1), 15):
+                e2e = "sequence"
+                last[m.frame_id] = counter
+        if e2e == "ok":
+            last[m.frame_id], good[m.frame_id] = counter, frame.timestamp
         for name, v in m.decode(data, scaling=True, decode_choices=False).items():
             rows.append((frame.timestamp, m.name, name, v, m.get_signal_by_name(name).unit or "", e2e))
     return rows

@@ -9,6 +9,7 @@
   artibus simulate FMU [options]       run one FMU alone, write CSV
   artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp
   artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
+  artibus replay LOG --bench BENCH     a recorded log (.csv, .blf, .asc) drives a bench; model against measured
   artibus demo [-o DIR]                the main job (for now): the Urbino 18 pusher on an S-curve
 """
 import argparse
@@ -114,7 +115,8 @@ def cmd_run(args):
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, args.variant), **user}
         with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
-                               algorithm=args.algorithm, can=args.can, can_log=args.can_log) as sim:
+                               algorithm=args.algorithm, can=args.can, can_log=args.can_log,
+                               can_faults=args.can_fault) as sim:
             result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
             if sim.can is not None:
                 print(sim.can.summary(result.time[-1] - result.time[0]))
@@ -137,9 +139,59 @@ def cmd_run(args):
                 for k in kpis:
                     print(f"    {k.name}: {k.cell()} {k.unit}" + (f"   (paper: {k.paper})" if k.paper else ""))
                 summary.append((name, out_dir, kpis))
+                if args.can_fault:
+                    _fault_free_kpis(bench, args, overrides, out_dir, kpis)
     if args.all and args.report:
         from artibus.report import write_index
         print(write_index(Path(args.report), summary))
+    return 0
+
+
+def _fault_free_kpis(bench, args, overrides, out_dir, kpis):
+    """The same bench without the faults: its KPIs next to the faulty run's,
+    printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free)."""
+    from artibus import runner
+    from artibus.benches import write_report
+    with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
+                           algorithm=args.algorithm, can=args.can) as sim:
+        result = sim.run(stop_time=args.stop_time)
+        free = write_report(sim.bench.name, result, out_dir / "fault-free", sim.wall)
+    faults = "; ".join(args.can_fault)
+    print(f"{sim.bench.name}: KPIs with faults ({faults}) against the fault-free run:")
+    rows = ["kpi,unit,fault_free,with_faults,difference"]
+    for a, b in zip(free, kpis):
+        diff = (b.value - a.value) if isinstance(a.value, (int, float)) and isinstance(b.value, (int, float)) else float("nan")
+        print(f"    {b.name}: {a.cell()} -> {b.cell()} {b.unit} (difference {diff:+.4g})")
+        rows.append(f'"{b.name}",{b.unit},{a.value!r},{b.value!r},{diff!r}')
+    out = out_dir / "kpi_faults.csv"
+    tmp = out.with_name(out.name + ".part")
+    tmp.write_text("\n".join(rows) + "\n")
+    tmp.replace(out)
+    print(f"{sim.bench.name}: {out}")
+
+
+def cmd_replay(args):
+    from artibus import replay, runner
+    rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
+                        overrides=_parse_set(args.set), steering_map_name=args.steering_map)
+    r = rep.result
+    out = Path(args.output or f"{Path(args.log).stem}_replay.csv")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    part = out.with_name(out.name + ".part" + out.suffix)
+    runner.save(r, part)
+    part.replace(out)
+    print(f"replay of {args.log} into {args.bench}: {out}: {len(r.rows)} rows, {r.time[-1] - r.time[0]:g} s")
+    for inp, (sig, unit) in rep.drive.items():
+        print(f"    {inp} <- {sig}" + (" (seed 003 App. A steering map)" if rep.profile.steering
+                                         and inp == rep.profile.steering[0] else ""))
+    if rep.errors:
+        print("model against measured (RMS, max):")
+        for label, rms, mx, unit in rep.errors:
+            print(f"    {label}: {rms:.3f} {unit} RMS, {mx:.3f} {unit} max")
+    if args.report:
+        imgs = replay.write_report(rep, args.report, f"{Path(args.log).name} replayed into {args.bench}")
+        for i in imgs + ["errors.csv"]:
+            print(f"    {Path(args.report) / i}")
     return 0
 
 
@@ -275,6 +327,11 @@ def build_parser():
                    help="for a bench that routes connections over CAN: python-can's virtual bus "
                         "(the default) or a real interface, e.g. socketcan:vcan0")
     s.add_argument("--can-log", metavar="FILE.blf|FILE.asc", help="write the CAN traffic (simulated time)")
+    s.add_argument("--can-fault", action="append", metavar="SPEC",
+                   help="inject a fault into the CAN network (repeatable): loss:MSG|NODE:RATE[:seed=N], "
+                        "latency:MSG|NODE:DELAY_S[:jitter=S][:seed=N], corrupt:MSG|NODE:crc|repeat|skip[:rate=R], "
+                        "silent:NODE, busoff:NODE[:recover[=DELAY_S]]; each may end in @T0 or @T0-T1 (s). "
+                        "With --report, the fault-free run's KPIs are printed and written beside the faulty ones")
     s.set_defaults(func=cmd_run)
     s = sub.add_parser("can", help="CAN tools: decode a log")
     can_sub = s.add_subparsers(dest="can_verb", required=True)
@@ -283,6 +340,18 @@ def build_parser():
     c.add_argument("--dbc", help="default: ssp/can/Bus36m.dbc")
     c.add_argument("--csv", metavar="OUT", help="write CSV instead of printing")
     c.set_defaults(func=cmd_can_decode)
+    s = sub.add_parser("replay", help="drive a bench from a recorded log, compare with measured responses")
+    s.add_argument("log", help="a .csv (time_s and signal columns) or a CAN log (.blf, .asc)")
+    s.add_argument("--bench", required=True, help="a bench whose driven inputs are unconnected (e.g. Urbino18_Replay)")
+    s.add_argument("--map", action="append", metavar="SIGNAL[unit]=COMP.INPUT",
+                   help="feed a log signal to an input (repeatable; adds to or replaces the bench's replay profile)")
+    s.add_argument("--dbc", help="for a CAN log: default the bench's DBC, else ssp/can/Bus36m.dbc")
+    s.add_argument("--steering-map", help="a parameter set c[0..3] (seed 003 App. A), default the bench's")
+    s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
+    s.add_argument("--stop-time", type=float, help="default: the end of the driving signals")
+    s.add_argument("-o", "--output", help="results CSV (default <log>_replay.csv)")
+    s.add_argument("--report", metavar="DIR", help="plots of model against measured and errors.csv")
+    s.set_defaults(func=cmd_replay)
     s = sub.add_parser("bode", help="frequency response through the co-simulation (sine tests)")
     s.add_argument("bench", help="a bench name or the path of an .ssp")
     s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")

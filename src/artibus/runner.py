@@ -198,13 +198,17 @@ class Simulation:
     """A bench, set up and ready to run."""
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
-                 stimuli=None, can=None, can_log=None):
+                 stimuli=None, can=None, can_log=None, can_faults=None):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
         the start of each of the component's steps. can: the interface of a
         bench that routes connections over CAN ("virtual", the default, or
-        "INTERFACE:CHANNEL"), can_log: a .blf or .asc file for its traffic
-        (see artibus.can)."""
+        "INTERFACE:CHANNEL"), can_log: a .blf or .asc file for its traffic,
+        can_faults: faults injected into it (artibus.can.Fault or their text
+        forms, see artibus.can.parse_fault). A CAN bench's result has a column
+        ``can.<message>.sinceGood`` per message: the cycles since the
+        receivers last accepted a frame of it, as of the inputs in the same
+        row."""
         self.can = None
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
@@ -218,12 +222,12 @@ class Simulation:
         try:
             with zipfile.ZipFile(self.ssp) as z:
                 z.extractall(self._tmp)
-            self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log)
+            self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults)
         except BaseException:
             self.close()
             raise
 
-    def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None):
+    def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None, can_faults=None):
         units = {}
         for path, c in self.bench.components.items():
             fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
@@ -292,7 +296,7 @@ class Simulation:
                                    f, o, f"{c.end[0]}.{c.end[1]}", c))
             if c.can is None:                 # a connection routed over CAN goes through self.can
                 b.links_in.append(self.links[-1])
-        self._setup_can(where, can_interface, can_log)
+        self._setup_can(where, can_interface, can_log, can_faults)
         # direct feedthrough from the model descriptions
         for u in self.units:
             inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
@@ -353,7 +357,7 @@ class Simulation:
             if cols:
                 self._rec.append((u, np.array(idx), np.array(cols)))
 
-    def _setup_can(self, where, interface, log):
+    def _setup_can(self, where, interface, log, faults=None):
         """The CAN network of a bench that routes connections over CAN (see artibus.can)."""
         self.can_links = [l for l in self.links if l.connection.can is not None]
         spec = self.bench.can
@@ -363,12 +367,12 @@ class Simulation:
                 raise ArtibusError(f"{where}:{c.can['line']}: Connection {c.start[0]}.{c.start[1]} -> "
                                    f"{c.end[0]}.{c.end[1]} is routed over CAN but the System has no "
                                    f"org.artibus.can annotation naming the DBC")
-            if interface is not None or log is not None:
-                raise ArtibusError(f"--can/--can-log: {where} routes no connection over CAN")
+            if interface is not None or log is not None or faults:
+                raise ArtibusError(f"--can/--can-log/--can-fault: {where} routes no connection over CAN")
             return
         from artibus import can as can_mod
         self.can = can_mod.Network(self.bench, can_mod.dbc_in(self._tmp, spec), self.can_links,
-                                   interface or "virtual", log)
+                                   interface or "virtual", log, faults)
         r = self.can.period / self.base_step
         if abs(r - round(r)) > 1e-9 or round(r) < 1:
             raise ArtibusError(f"{where}:{spec['line']}: the CAN tick {self.can.period} s is not a "
@@ -519,7 +523,22 @@ class Simulation:
         self.wall = _time.perf_counter() - wall0
         if self.can is not None:
             self.can.finish()
+            return self._with_can_columns(rec.result())
         return rec.result()
+
+    def _with_can_columns(self, result):
+        """can.<message>.sinceGood: row i > 0 holds the value after the last tick
+        before it (the one whose frames the inputs recorded in row i got)."""
+        table = result.array()
+        n = len(table)
+        tick = np.maximum(np.arange(n) - 1, 0) // self.can_ratio
+        cols, names = [], []
+        for name, series in self.can.since_series().items():
+            col = series[np.minimum(tick, len(series) - 1)] if len(series) else np.zeros(n)
+            col[0] = 0.0
+            cols.append(col)
+            names.append(f"can.{name}.sinceGood")
+        return Result.from_array(result.names + names, np.column_stack([table] + cols))
 
     def close(self):
         if getattr(self, "can", None) is not None:

@@ -1,0 +1,345 @@
+"""Log replay (issue 12): a recorded log drives a bench in place of its driver,
+and the responses the log also carries are compared with the model's, as
+seed 003, section V does (Figs. 9-11).
+
+- A log is a CSV (comment lines ``#``, a header row with ``time_s`` and one
+  column per signal, empty cells where a signal has no sample) or a CAN log
+  (.blf, .asc) decoded through a DBC: its signals are ``Signal`` or
+  ``Message.Signal``; only frames that pass the receivers' E2E check
+  (``artibus.can.decode_log``: CRC, counter) are used, each from the start of
+  the cycle it was sent in (the frame's time rounded down to its message's
+  cycle time: frames are sent within their cycle).
+- Each driving signal feeds a component input (``--map SIGNAL=COMP.INPUT``,
+  or the bench's replay profile below), held from one sample to the next
+  (zero-order hold) and sampled at the start of the component's step; an input
+  the bench connects is cut from its source (its connection, or its route over
+  CAN) for the replay. Units: a CSV column's unit is given in the map
+  (``alpha[deg]=Bus.gammaF``) or the profile, a CAN signal's is the DBC's;
+  both are converted to the input's unit.
+- A replay profile (PROFILES, by bench) names the driving signals, a static map
+  of a sensor to the input (seed 003 Appendix A: the steering sensor's angle
+  to the effective steering angle, a polynomial per bus as a parameter set),
+  the start state taken from the log's first samples (seed 003: "the model
+  outputs were initialized with the first measurement data points"), and the
+  measured responses compared with the model's.
+"""
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from artibus import ROOT, ArtibusError
+
+DEG = math.pi / 180
+
+
+@dataclass
+class Series:
+    """One signal of a log: sample times (s), values (in `unit`)."""
+    name: str
+    time: np.ndarray
+    value: np.ndarray
+    unit: str = ""
+
+    def hold(self):
+        """f(t): the last sample at or before t (the first before it)."""
+        t, v = self.time, self.value
+
+        def f(x):
+            i = int(np.searchsorted(t, x + 1e-9, side="right")) - 1
+            return float(v[max(i, 0)])
+        return f
+
+
+def read_csv_log(path):
+    """{column: Series} of a CSV log; empty cells are missing samples."""
+    path = Path(path)
+    if not path.is_file():
+        raise ArtibusError(f"{path}: no such file")
+    lines = [l for l in path.read_text().splitlines() if l.strip() and not l.lstrip().startswith("#")]
+    if not lines:
+        raise ArtibusError(f"{path}: no header row")
+    header = [h.strip() for h in lines[0].split(",")]
+    if header[0] not in ("time_s", "time"):
+        raise ArtibusError(f"{path}: the first column must be time_s (the time in s), not '{header[0]}'")
+    cols = [[] for _ in header]
+    for n, line in enumerate(lines[1:], start=2):
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise ArtibusError(f"{path}: data row {n - 1}: {len(cells)} cells, the header has {len(header)}")
+        for i, c in enumerate(cells):
+            c = c.strip()
+            try:
+                cols[i].append(float(c) if c else math.nan)
+            except ValueError:
+                raise ArtibusError(f"{path}: data row {n - 1}, column {header[i]}: '{c}' is not a number") from None
+    t = np.array(cols[0])
+    if len(t) == 0 or not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0):
+        raise ArtibusError(f"{path}: column time_s must be finite and non-decreasing")
+    out = {}
+    for name, c in zip(header[1:], cols[1:]):
+        v = np.array(c)
+        ok = np.isfinite(v)
+        out[name] = Series(name, t[ok], v[ok])
+    return out
+
+
+def read_can_log(path, dbc):
+    """{Signal and Message.Signal: Series} of the frames of a .blf/.asc log that
+    pass the E2E check, each valid from the start of its cycle."""
+    from artibus import can
+    db = can.load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
+    rows = can.decode_log(path, db)
+    data = {}
+    for t, msg, sig, v, unit, e2e in rows:
+        if e2e != "ok" or sig in (can.CRC_SIGNAL, can.COUNTER_SIGNAL):
+            continue
+        cycle = db.get_message_by_name(msg).cycle_time / 1000.0
+        data.setdefault((msg, sig, unit), []).append((math.floor(t / cycle + 1e-6) * cycle, v))
+    out = {}
+    for (msg, sig, unit), samples in data.items():
+        a = np.array(samples, dtype=float)
+        s = Series(f"{msg}.{sig}", a[:, 0], a[:, 1], unit)
+        out[f"{msg}.{sig}"] = s
+        out.setdefault(sig, s)
+    return out
+
+
+def read_log(path, dbc=None):
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        return read_csv_log(path)
+    if suffix in (".blf", ".asc"):
+        return read_can_log(path, dbc or ROOT / "ssp" / "can" / "Bus36m.dbc")
+    raise ArtibusError(f"{path}: a log is .csv, .blf or .asc")
+
+
+# --- replay profiles ----------------------------------------------------------------
+
+def steering_map(name_or_path):
+    """The coefficients c[0..3] (deg) of a seed 003 Appendix A steering map."""
+    from artibus.parameters import find_ssv, read_parameters
+    f = find_ssv(name_or_path)
+    p = read_parameters(f)
+    try:
+        return [float(p[f"c[{i}]"]) for i in range(4)]
+    except KeyError as e:
+        raise ArtibusError(f"{f}: a steering map needs c[0] .. c[3] (missing {e})") from None
+
+
+def map_steering(alpha_deg, c):
+    """seed 003, Appendix A: gammaF [deg] = c3 a^3 + c2 a^2 + c1 a + c0."""
+    a = np.asarray(alpha_deg, dtype=float)
+    return ((c[3] * a + c[2]) * a + c[1]) * a + c[0]
+
+
+def _kinematic_start(log, params):
+    """seed 003, section V: start state from the first samples: the joint angle
+    beta1, the wagon's heading theta1 and its axle P1 (DGPS); the tractor's
+    heading theta0 = theta1 + beta1 (eq. 3) and its rear axle
+    P0 = P1 + L1 u(theta1) + Lh1 u(theta0) (joint Lh1 behind P0, P1 L1 behind the joint)."""
+    L1, Lh1 = float(params["L[1]"]), float(params["Lh[1]"])
+    b1 = log["beta1_sensor_deg"].value[0] * DEG
+    th1 = log["theta1_dgps_deg"].value[0] * DEG
+    x1, y1 = log["x1_dgps_m"].value[0], log["y1_dgps_m"].value[0]
+    th0 = th1 + b1
+    return {"Bus.beta_start[1]": b1, "Bus.theta_start": th0,
+            "Bus.x_start": x1 + L1 * math.cos(th1) + Lh1 * math.cos(th0),
+            "Bus.y_start": y1 + L1 * math.sin(th1) + Lh1 * math.sin(th0)}
+
+
+@dataclass
+class Profile:
+    drive: dict                     # input -> (log signal, its unit)
+    steering: tuple = None          # (input, steering-map parameter set): the signal is alpha_sensor in deg
+    compare: list = field(default_factory=list)   # (label, log signal, unit, model output)
+    path: tuple = None              # (log x, log y, model x, model y)
+    start: object = None            # f(log, bench parameters of the plant) -> overrides
+
+
+PROFILES = {
+    # seed 003, section V: inputs gammaF (from the steering sensor, App. A) and v1 (tachometer);
+    # compared: beta1 (sensor), theta1 and the path of P1 (DGPS)
+    "Urbino18_Replay": Profile(
+        drive={"Bus.gammaF": ("alpha_sensor_deg", "deg"), "Bus.v": ("v1_tacho_mps", "m/s")},
+        steering=("Bus.gammaF", "Urbino18SteeringMap"),
+        compare=[("joint angle beta1", "beta1_sensor_deg", "deg", "Bus.beta[1]"),
+                 ("wagon heading theta1", "theta1_dgps_deg", "deg", "Bus.theta[1]")],
+        path=("x1_dgps_m", "y1_dgps_m", "Bus.x[1]", "Bus.y[1]"),
+        start=_kinematic_start),
+}
+
+
+def _parse_map(items):
+    """--map SIGNAL[unit]=COMP.INPUT -> {input: (signal, unit or None)}."""
+    out = {}
+    for item in items or []:
+        sig, eq, inp = item.partition("=")
+        sig, inp = sig.strip(), inp.strip()
+        if not eq or not sig or "." not in inp:
+            raise ArtibusError(f"--map {item}: expected SIGNAL=COMP.INPUT or SIGNAL[unit]=COMP.INPUT")
+        unit = None
+        if sig.endswith("]") and "[" in sig:
+            sig, _, unit = sig[:-1].partition("[")
+        out[inp] = (sig, unit)
+    return out
+
+
+@dataclass
+class Replay:
+    result: object
+    errors: list          # (label, rms, max, unit)
+    log: dict
+    profile: Profile
+    drive: dict
+
+
+def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None, steering_map_name=None):
+    """Run `bench` driven by the log. Returns a Replay (result, errors)."""
+    from artibus import can as can_mod, ssp
+    from artibus.runner import Simulation, _unit_of
+    log_path = Path(log_path)
+    bench_ssp = ssp.ssp_path(bench)
+    b = ssp.read(bench_ssp)
+    name = b.name
+    profile = PROFILES.get(name, Profile(drive={}))
+    drive = dict(profile.drive)
+    drive.update(_parse_map(maps))
+    if not drive:
+        raise ArtibusError(f"replay into {name}: no driving signal: give --map SIGNAL=COMP.INPUT "
+                           f"(benches with a replay profile: {', '.join(PROFILES)})")
+    if dbc is None and b.can is not None and log_path.suffix.lower() in (".blf", ".asc"):
+        dbc = _bench_dbc(bench_ssp, b)
+    log = read_log(log_path, dbc)
+    # every driving signal must be in the log, every input a Real input of the bench
+    for inp, (sig, unit) in drive.items():
+        if sig not in log or len(log[sig].time) == 0:
+            raise ArtibusError(f"{log_path}: no signal '{sig}' (needed for {inp} of {name}); the log has: "
+                               f"{', '.join(sorted(log)) or 'nothing'}")
+        comp, _, var = inp.rpartition(".")
+        if comp not in b.components:
+            raise ArtibusError(f"--map {sig}={inp}: no component '{comp}' in {b.file} "
+                               f"(components: {', '.join(b.components)})")
+    params = b.components[next(iter(b.components))].parameters
+    plant = drive and b.components[next(iter(drive)).rpartition(".")[0]].parameters
+    over = dict(overrides or {})
+    needed = [s for _, s, _, _ in profile.compare] + (list(profile.path[:2]) if profile.path else [])
+    if profile.start is not None:
+        missing = [s for s in ("beta1_sensor_deg", "theta1_dgps_deg", "x1_dgps_m", "y1_dgps_m")
+                   if s not in log or len(log[s].value) == 0]
+        if missing:
+            raise ArtibusError(f"{log_path}: no signal {', '.join(repr(m) for m in missing)} for the start "
+                               f"state of {name} (seed 003: initialised from the first measured samples)")
+        over.update({k: v for k, v in profile.start(log, plant or params).items() if k not in over})
+    for inp in drive:                 # the runner adds a stimulus to the input's value: start it at 0
+        over[inp] = 0.0
+    t_end = min(log[s].time[-1] for s, _ in drive.values())
+    stop = stop_time if stop_time is not None else t_end
+    cmap = None
+    if profile.steering is not None:
+        cmap = steering_map(steering_map_name or profile.steering[1])
+    stimuli, replace = {}, []
+    with Simulation(bench_ssp, overrides=over, record=None, stimuli=None) as probe:
+        units = {u.path: u for u in probe.units}
+        for inp, (sig, unit) in drive.items():
+            comp, _, var = inp.rpartition(".")
+            v = units[comp].fmu.vars.get(var)
+            if v is None or v.causality != "input" or v.type != "Real":
+                raise ArtibusError(f"--map {sig}={inp}: not a Real input of {comp} in {b.file}")
+            s = log[sig]
+            su = unit if unit is not None else s.unit
+            values = s.value
+            if cmap is not None and inp == profile.steering[0]:
+                values, su = map_steering(values, cmap), "deg"       # seed 003, App. A
+            k = can_mod._conversion(su, _unit_of(units[comp].fmu.md, v) or "", f"{log_path}: signal {sig} -> {inp}")
+            stimuli[inp] = Series(sig, s.time, k * values).hold()
+            if any(l.name == inp for l in probe.links):
+                replace.append(inp)
+        record = list(dict.fromkeys([o for *_, o in profile.compare]
+                                    + (list(profile.path[2:]) if profile.path else []) + list(drive)))
+    if replace:
+        raise ArtibusError(f"replay into {name}: {', '.join(replace)} connected in the bench; a replay bench "
+                           f"leaves the driven inputs unconnected (e.g. Urbino18_Replay)")
+    with Simulation(bench_ssp, overrides=over, record=record or None, stimuli=stimuli) as sim:
+        result = sim.run(stop_time=stop)
+    errors = compare(result, log, profile)
+    return Replay(result, errors, log, profile, drive)
+
+
+def _bench_dbc(bench_ssp, b):
+    import tempfile
+    import zipfile
+    tmp = Path(tempfile.mkdtemp(prefix="artibus-replay-"))
+    with zipfile.ZipFile(bench_ssp) as z:
+        z.extract(b.can["source"], tmp)
+    return tmp / b.can["source"]
+
+
+def compare(result, log, profile):
+    """Model against measured at the measured samples (within the run): RMS and
+    largest error of each compared signal, and of the path (distance of the
+    model's point from the measured one at each fix)."""
+    out = []
+    t = result.time
+    for label, sig, unit, output in profile.compare:
+        if sig not in log:
+            continue
+        s = log[sig]
+        keep = s.time <= t[-1] + 1e-9
+        model = np.interp(s.time[keep], t, result[output])
+        k = DEG if unit == "deg" else 1.0
+        e = (model - s.value[keep] * k) / k
+        if unit == "deg" and "heading" in label:
+            e = (e + 180.0) % 360.0 - 180.0
+        out.append((label, float(np.sqrt(np.mean(e ** 2))), float(np.max(np.abs(e))), unit))
+    if profile.path is not None and profile.path[0] in log:
+        sx, sy = log[profile.path[0]], log[profile.path[1]]
+        keep = sx.time <= t[-1] + 1e-9
+        mx = np.interp(sx.time[keep], t, result[profile.path[2]])
+        my = np.interp(sx.time[keep], t, result[profile.path[3]])
+        d = np.hypot(mx - sx.value[keep], my - sy.value[keep])
+        out.append(("path of P1 (distance at the fixes)", float(np.sqrt(np.mean(d ** 2))), float(np.max(d)), "m"))
+    return out
+
+
+def write_report(rep, out_dir, title):
+    """PNGs (model against measured: joint angle, heading, path; seed 003
+    Figs. 9-11) and errors.csv in out_dir."""
+    from artibus import report
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    r, log, p = rep.result, rep.log, rep.profile
+    panels = []
+    for label, sig, unit, output in p.compare:
+        if sig in log:
+            k = 1 / DEG if unit == "deg" else 1.0
+            panels.append((f"{label} [{unit}]", {"model": r[output] * k}))
+    images = []
+    if panels:
+        import matplotlib.pyplot as plt
+        fig, axes = plt.subplots(len(panels), 1, figsize=(9, 3 * len(panels)), sharex=True)
+        for ax, (ylabel, series), (label, sig, unit, output) in zip(np.atleast_1d(axes), panels,
+                                                                    [c for c in p.compare if c[1] in log]):
+            ax.plot(r.time, series["model"], label="model (replayed inputs)")
+            ax.plot(log[sig].time, log[sig].value, ".", ms=2 if len(log[sig].time) > 200 else 5, label=f"measured ({sig})")
+            ax.set_ylabel(ylabel)
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize=8)
+        np.atleast_1d(axes)[-1].set_xlabel("time [s]")
+        fig.suptitle(title, fontsize=9)
+        fig.tight_layout()
+        fig.savefig(out / "angles.png", dpi=110)
+        plt.close(fig)
+        images.append("angles.png")
+    if p.path is not None and p.path[0] in log:
+        report.birds_eye(out / "path.png", {"model P1": (r[p.path[2]], r[p.path[3]]),
+                                            "measured P1 (DGPS fixes)": (log[p.path[0]].value, log[p.path[1]].value)},
+                         title=title)
+        images.append("path.png")
+    rows = ["quantity,rms,max,unit"] + [f'"{l}",{a:.6g},{b:.6g},{u}' for l, a, b, u in rep.errors]
+    part = out / "errors.csv.part"
+    part.write_text("\n".join(rows) + "\n")
+    part.replace(out / "errors.csv")
+    return images
