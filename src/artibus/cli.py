@@ -173,7 +173,8 @@ def _fault_free_kpis(bench, args, overrides, out_dir, kpis):
 def cmd_replay(args):
     from artibus import replay, runner
     rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
-                        overrides=_parse_set(args.set), steering_map_name=args.steering_map)
+                        overrides=_parse_set(args.set), steering_map_name=args.steering_map,
+                        variants=args.variant)
     r = rep.result
     out = Path(args.output or f"{Path(args.log).stem}_replay.csv")
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -184,10 +185,11 @@ def cmd_replay(args):
     for inp, (sig, unit) in rep.drive.items():
         print(f"    {inp} <- {sig}" + (" (seed 003 App. A steering map)" if rep.profile.steering
                                          and inp == rep.profile.steering[0] else ""))
-    if rep.errors:
-        print("model against measured (RMS, max):")
-        for label, rms, mx, unit in rep.errors:
-            print(f"    {label}: {rms:.3f} {unit} RMS, {mx:.3f} {unit} max")
+    for name, _, errors in replay.runs(rep):
+        if errors:
+            print(f"{name} against measured (RMS, max):")
+            for label, rms, mx, unit in errors:
+                print(f"    {label}: {rms:.3f} {unit} RMS, {mx:.3f} {unit} max")
     if args.report:
         imgs = replay.write_report(rep, args.report, f"{Path(args.log).name} replayed into {args.bench}")
         for i in imgs + ["errors.csv"]:
@@ -342,9 +344,13 @@ def build_parser():
     c.set_defaults(func=cmd_can_decode)
     s = sub.add_parser("replay", help="drive a bench from a recorded log, compare with measured responses")
     s.add_argument("log", help="a .csv (time_s and signal columns) or a CAN log (.blf, .asc)")
-    s.add_argument("--bench", required=True, help="a bench whose driven inputs are unconnected (e.g. Urbino18_Replay)")
+    s.add_argument("--bench", required=True,
+                   help="the bench to drive (e.g. Urbino18_Replay; a CAN log into a bench with routes over CAN "
+                        "feeds every routed input); a driven input the bench connects is cut from its source")
+    s.add_argument("--variant", action="append", metavar="NAME", help="a variant of the bench (as for run)")
     s.add_argument("--map", action="append", metavar="SIGNAL[unit]=COMP.INPUT",
-                   help="feed a log signal to an input (repeatable; adds to or replaces the bench's replay profile)")
+                   help="feed a log signal to an input (repeatable; adds to or replaces the bench's replay profile; "
+                        "a CAN signal as MESSAGE.SIGNAL, e.g. SensorA1_Angle.RoadWheelAngleA1=Bus.delta[1])")
     s.add_argument("--dbc", help="for a CAN log: default the bench's DBC, else ssp/can/Bus36m.dbc")
     s.add_argument("--steering-map", help="a parameter set c[0..3] (seed 003 App. A), default the bench's")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")

@@ -13,7 +13,16 @@ seed 003, section V does (Figs. 9-11).
   or the bench's replay profile below), held from one sample to the next
   (zero-order hold) and sampled at the start of the component's step; an input
   the bench connects is cut from its source (its connection, or its route over
-  CAN) for the replay. Units: a CSV column's unit is given in the map
+  CAN) for the replay (``runner.Simulation(cut=...)``).
+- A CAN log replayed into a bench that routes connections over CAN replaces
+  the network: every routed input (data signals and the alive counters the
+  receivers check) is fed from the log's frames of its route's message and
+  signal, the frame of cycle k from the start of cycle k on, as the network
+  delivers it; with every route cut the run has no network. What else the
+  bench connects stays in the loop (a driver, the mechanics), unless ``--map``
+  feeds it too (e.g. ``SensorA1_Angle.RoadWheelAngleA1=Bus.delta[1]``: the
+  front wheels at the sensor's recorded angle). The log's signals that were
+  sent from a plant output are compared with that output. Units: a CSV column's unit is given in the map
   (``alpha[deg]=Bus.gammaF``) or the profile, a CAN signal's is the DBC's;
   both are converted to the input's unit.
 - A replay profile (PROFILES, by bench) names the driving signals, a static map
@@ -36,11 +45,13 @@ DEG = math.pi / 180
 
 @dataclass
 class Series:
-    """One signal of a log: sample times (s), values (in `unit`)."""
+    """One signal of a log: sample times (s), values (in `unit`); period: how
+    long the last sample holds (a CAN message's cycle; 0 for a CSV column)."""
     name: str
     time: np.ndarray
     value: np.ndarray
     unit: str = ""
+    period: float = 0.0
 
     def hold(self):
         """f(t): the last sample at or before t (the first before it)."""
@@ -87,22 +98,25 @@ def read_csv_log(path):
 
 def read_can_log(path, dbc):
     """{Signal and Message.Signal: Series} of the frames of a .blf/.asc log that
-    pass the E2E check, each valid from the start of its cycle."""
+    pass the E2E check, each valid from the start of its cycle; a message's
+    alive counter only as Message.AliveCounter (the counter of each accepted
+    frame, what a route of it delivers)."""
     from artibus import can
     db = can.load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
     rows = can.decode_log(path, db)
     data = {}
     for t, msg, sig, v, unit, e2e in rows:
-        if e2e != "ok" or sig in (can.CRC_SIGNAL, can.COUNTER_SIGNAL):
+        if e2e != "ok" or sig == can.CRC_SIGNAL:
             continue
         cycle = db.get_message_by_name(msg).cycle_time / 1000.0
-        data.setdefault((msg, sig, unit), []).append((math.floor(t / cycle + 1e-6) * cycle, v))
+        data.setdefault((msg, sig, unit, cycle), []).append((math.floor(t / cycle + 1e-6) * cycle, v))
     out = {}
-    for (msg, sig, unit), samples in data.items():
+    for (msg, sig, unit, cycle), samples in data.items():
         a = np.array(samples, dtype=float)
-        s = Series(f"{msg}.{sig}", a[:, 0], a[:, 1], unit)
+        s = Series(f"{msg}.{sig}", a[:, 0], a[:, 1], unit, cycle)
         out[f"{msg}.{sig}"] = s
-        out.setdefault(sig, s)
+        if sig != can.COUNTER_SIGNAL:
+            out.setdefault(sig, s)
     return out
 
 
@@ -150,6 +164,25 @@ def _kinematic_start(log, params):
             "Bus.y_start": y1 + L1 * math.sin(th1) + Lh1 * math.sin(th0)}
 
 
+def _omega1_tacho(log, params, cmap):
+    """seed 003, eq. 51: the wagon's angular velocity from the on-board signals,
+    omega_1tacho. Eq. 51 couples the tractor's omega_0tacho = v0 tan(gammaF) / L0
+    to the wagon by J_1(beta_1sensor, 0, 0); the log records the wagon axle's
+    speed v1, so the same coupling solved for it: omega_1tacho = kappa_1 v1
+    with kappa_1 = sin(delta_1) / (L1 cos(delta_1)) (eq. 20, gamma_1 = 0) and
+    delta_1 = beta_1sensor - atan(Lh1 tan(gammaF) / L0) (eq. 17). gammaF from
+    the steering sensor through the Appendix A map. At the steering samples,
+    the other signals held. Returns a Series in rad/s."""
+    L0, L1, Lh1 = (float(params[n]) for n in ("L0", "L[1]", "Lh[1]"))
+    a = log["alpha_sensor_deg"]
+    t = a.time
+    gF = np.radians(map_steering(a.value, cmap))
+    b1 = np.radians([log["beta1_sensor_deg"].hold()(x) for x in t])
+    v1 = np.array([log["v1_tacho_mps"].hold()(x) for x in t])
+    d1 = b1 - np.arctan(Lh1 * np.tan(gF) / L0)                        # eq. 17
+    return Series("omega1_tacho (eq. 51)", t, np.sin(d1) / (L1 * np.cos(d1)) * v1, "rad/s")
+
+
 @dataclass
 class Profile:
     drive: dict                     # input -> (log signal, its unit)
@@ -157,6 +190,10 @@ class Profile:
     compare: list = field(default_factory=list)   # (label, log signal, unit, model output)
     path: tuple = None              # (log x, log y, model x, model y)
     start: object = None            # f(log, bench parameters of the plant) -> overrides
+    # input -> (f(log, plant parameters, steering map) -> Series in the input's unit, the Boolean
+    # parameter that switches it on, what the run is then called): computed from the log, fed only
+    # when a variant or --set switches it on; the bench as it stands is then run too, for the report
+    derived: dict = field(default_factory=dict)
 
 
 PROFILES = {
@@ -168,7 +205,9 @@ PROFILES = {
         compare=[("joint angle beta1", "beta1_sensor_deg", "deg", "Bus.beta[1]"),
                  ("wagon heading theta1", "theta1_dgps_deg", "deg", "Bus.theta[1]")],
         path=("x1_dgps_m", "y1_dgps_m", "Bus.x[1]", "Bus.y[1]"),
-        start=_kinematic_start),
+        start=_kinematic_start,
+        # seed 003, sec. V, Fig. 11: the prediction model (variant prediction: j = 1, predictionModel)
+        derived={"Bus.omegaMeas": (_omega1_tacho, "Bus.predictionModel", "prediction model")}),
 }
 
 
@@ -194,10 +233,33 @@ class Replay:
     log: dict
     profile: Profile
     drive: dict
+    label: str = "model"  # what the run is (e.g. "prediction model")
+    base: object = None   # (label, result, errors) of the bench as it stands, when a derived input ran
 
 
-def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None, steering_map_name=None):
-    """Run `bench` driven by the log. Returns a Replay (result, errors)."""
+def _route_profile(b):
+    """A CAN log into a bench that routes connections over CAN: every routed
+    input from its route's Message.Signal (unit: the DBC's); every routed data
+    signal compared with the output that sent it."""
+    from artibus import can as can_mod
+    drive, compare, seen = {}, [], set()
+    for c in b.connections:
+        if c.can is None:
+            continue
+        sig = f"{c.can['message']}.{c.can['signal']}"
+        drive[f"{c.end[0]}.{c.end[1]}"] = (sig, None)
+        if c.can["signal"] != can_mod.COUNTER_SIGNAL and sig not in seen:
+            seen.add(sig)
+            compare.append((f"{sig} ({c.start[0]}.{c.start[1]})", sig, None, f"{c.start[0]}.{c.start[1]}"))
+    return drive, compare
+
+
+def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None, steering_map_name=None,
+           variants=None, record=None, offsets=None):
+    """Run `bench` driven by the log. Returns a Replay (result, errors).
+    variants: the bench's variants (as ``artibus run --variant``); record:
+    more outputs to record; offsets: {input: constant} added to a driven
+    input, in the input's unit (sensitivity to a sensor offset)."""
     from artibus import can as can_mod, ssp
     from artibus.runner import Simulation, _unit_of
     log_path = Path(log_path)
@@ -206,11 +268,18 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
     name = b.name
     profile = PROFILES.get(name, Profile(drive={}))
     drive = dict(profile.drive)
+    can_log = log_path.suffix.lower() in (".blf", ".asc")
+    if b.can is not None and can_log and any(c.can is not None for c in b.connections):
+        routed, compared = _route_profile(b)
+        drive.update(routed)
+        profile = Profile(drive=dict(profile.drive), steering=profile.steering,
+                          compare=list(profile.compare) + compared, path=profile.path, start=profile.start)
     drive.update(_parse_map(maps))
     if not drive:
         raise ArtibusError(f"replay into {name}: no driving signal: give --map SIGNAL=COMP.INPUT "
-                           f"(benches with a replay profile: {', '.join(PROFILES)})")
-    if dbc is None and b.can is not None and log_path.suffix.lower() in (".blf", ".asc"):
+                           f"(benches with a replay profile: {', '.join(PROFILES)}, or a CAN log into a "
+                           f"bench that routes connections over CAN)")
+    if dbc is None and b.can is not None and can_log:
         dbc = _bench_dbc(bench_ssp, b)
     log = read_log(log_path, dbc)
     # every driving signal must be in the log, every input a Real input of the bench
@@ -222,10 +291,13 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
         if comp not in b.components:
             raise ArtibusError(f"--map {sig}={inp}: no component '{comp}' in {b.file} "
                                f"(components: {', '.join(b.components)})")
+    for inp in offsets or {}:
+        if inp not in drive:
+            raise ArtibusError(f"offset on {inp}: not an input the log drives in {name}")
     params = b.components[next(iter(b.components))].parameters
     plant = drive and b.components[next(iter(drive)).rpartition(".")[0]].parameters
-    over = dict(overrides or {})
-    needed = [s for _, s, _, _ in profile.compare] + (list(profile.path[:2]) if profile.path else [])
+    over = dict(ssp.variant_overrides(bench_ssp, variants)) if variants else {}
+    over.update(overrides or {})
     if profile.start is not None:
         missing = [s for s in ("beta1_sensor_deg", "theta1_dgps_deg", "x1_dgps_m", "y1_dgps_m")
                    if s not in log or len(log[s].value) == 0]
@@ -235,12 +307,13 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
         over.update({k: v for k, v in profile.start(log, plant or params).items() if k not in over})
     for inp in drive:                 # the runner adds a stimulus to the input's value: start it at 0
         over[inp] = 0.0
-    t_end = min(log[s].time[-1] for s, _ in drive.values())
+    # the last sample holds for its period (a CAN message's cycle)
+    t_end = min(log[s].time[-1] + log[s].period for s, _ in drive.values())
     stop = stop_time if stop_time is not None else t_end
     cmap = None
     if profile.steering is not None:
         cmap = steering_map(steering_map_name or profile.steering[1])
-    stimuli, replace = {}, []
+    stimuli, cut = {}, []
     with Simulation(bench_ssp, overrides=over, record=None, stimuli=None) as probe:
         units = {u.path: u for u in probe.units}
         for inp, (sig, unit) in drive.items():
@@ -254,18 +327,38 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
             if cmap is not None and inp == profile.steering[0]:
                 values, su = map_steering(values, cmap), "deg"       # seed 003, App. A
             k = can_mod._conversion(su, _unit_of(units[comp].fmu.md, v) or "", f"{log_path}: signal {sig} -> {inp}")
-            stimuli[inp] = Series(sig, s.time, k * values).hold()
-            if any(l.name == inp for l in probe.links):
-                replace.append(inp)
+            stimuli[inp] = Series(sig, s.time, k * values + float((offsets or {}).get(inp, 0.0))).hold()
+            if any(c.end == (comp, var) for c in b.connections):
+                cut.append(inp)
+        label, derived = "model", []
+        for inp, (fn, switch, what) in profile.derived.items():
+            if over.get(switch) in (True, 1, "true"):
+                comp, _, var = inp.rpartition(".")
+                try:
+                    s = fn(log, plant or params, cmap)
+                except KeyError as e:
+                    raise ArtibusError(f"{log_path}: no signal {e} for {inp} of the {what} ({switch})") from None
+                stimuli[inp] = s.hold()
+                over[inp] = 0.0
+                label = what
+                derived.append((inp, switch))
         record = list(dict.fromkeys([o for *_, o in profile.compare]
-                                    + (list(profile.path[2:]) if profile.path else []) + list(drive)))
-    if replace:
-        raise ArtibusError(f"replay into {name}: {', '.join(replace)} connected in the bench; a replay bench "
-                           f"leaves the driven inputs unconnected (e.g. Urbino18_Replay)")
-    with Simulation(bench_ssp, overrides=over, record=record or None, stimuli=stimuli) as sim:
+                                    + (list(profile.path[2:]) if profile.path else []) + list(drive)
+                                    + list(record or [])))
+    with Simulation(bench_ssp, overrides=over, record=record or None, stimuli=stimuli, cut=cut) as sim:
         result = sim.run(stop_time=stop)
     errors = compare(result, log, profile)
-    return Replay(result, errors, log, profile, drive)
+    base = None
+    if derived:       # the bench as it stands (e.g. the integrating model), for the report
+        plain = {k: v for k, v in over.items() if k not in dict(derived) and k not in {s for _, s in derived}}
+        for k in ssp.variant_overrides(bench_ssp, variants) if variants else {}:
+            if k not in (overrides or {}) and k in plain:
+                del plain[k]
+        with Simulation(bench_ssp, overrides=plain, record=record or None,
+                        stimuli={k: f for k, f in stimuli.items() if k not in dict(derived)}, cut=cut) as sim:
+            r0 = sim.run(stop_time=stop)
+        base = ("model", r0, compare(r0, log, profile))
+    return Replay(result, errors, log, profile, drive, label, base)
 
 
 def _bench_dbc(bench_ssp, b):
@@ -275,6 +368,12 @@ def _bench_dbc(bench_ssp, b):
     with zipfile.ZipFile(bench_ssp) as z:
         z.extract(b.can["source"], tmp)
     return tmp / b.can["source"]
+
+
+def _to_si(unit):
+    """factor from a log's unit to the FMUs' SI unit (rad, m/s, ...)."""
+    from artibus import can as can_mod
+    return can_mod.UNITS.get(unit or "", ("", 1.0))[1]
 
 
 def compare(result, log, profile):
@@ -289,7 +388,8 @@ def compare(result, log, profile):
         s = log[sig]
         keep = s.time <= t[-1] + 1e-9
         model = np.interp(s.time[keep], t, result[output])
-        k = DEG if unit == "deg" else 1.0
+        unit = s.unit if unit is None else unit
+        k = _to_si(unit)
         e = (model - s.value[keep] * k) / k
         if unit == "deg" and "heading" in label:
             e = (e + 180.0) % 360.0 - 180.0
@@ -304,27 +404,36 @@ def compare(result, log, profile):
     return out
 
 
+def runs(rep):
+    """[(label, result, errors)] of a replay: the bench as it stands first
+    (when a derived input ran too), then the replay's own run. Error labels
+    of a run other than the bench as it stands carry its name in brackets."""
+    out = [rep.base] if rep.base is not None else []
+    own = rep.errors if rep.base is None else [(f"{l} [{rep.label}]", a, b, u) for l, a, b, u in rep.errors]
+    return out + [(rep.label, rep.result, own)]
+
+
 def write_report(rep, out_dir, title):
     """PNGs (model against measured: joint angle, heading, path; seed 003
-    Figs. 9-11) and errors.csv in out_dir."""
+    Figs. 9-11; with a prediction model, the integrating model beside it, as
+    Fig. 11) and errors.csv in out_dir."""
     from artibus import report
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    r, log, p = rep.result, rep.log, rep.profile
-    panels = []
-    for label, sig, unit, output in p.compare:
-        if sig in log:
-            k = 1 / DEG if unit == "deg" else 1.0
-            panels.append((f"{label} [{unit}]", {"model": r[output] * k}))
+    log, p = rep.log, rep.profile
+    every = runs(rep)
+    shown = [c for c in p.compare if c[1] in log]
     images = []
-    if panels:
+    if shown:
         import matplotlib.pyplot as plt
-        fig, axes = plt.subplots(len(panels), 1, figsize=(9, 3 * len(panels)), sharex=True)
-        for ax, (ylabel, series), (label, sig, unit, output) in zip(np.atleast_1d(axes), panels,
-                                                                    [c for c in p.compare if c[1] in log]):
-            ax.plot(r.time, series["model"], label="model (replayed inputs)")
+        fig, axes = plt.subplots(len(shown), 1, figsize=(9, 3 * len(shown)), sharex=True)
+        for ax, (label, sig, unit, output) in zip(np.atleast_1d(axes), shown):
+            unit = log[sig].unit if unit is None else unit
+            for name, r, _ in every:
+                ax.plot(r.time, r[output] / _to_si(unit), "-." if name != "model" else "-",
+                        label=f"{name} (replayed inputs)")
             ax.plot(log[sig].time, log[sig].value, ".", ms=2 if len(log[sig].time) > 200 else 5, label=f"measured ({sig})")
-            ax.set_ylabel(ylabel)
+            ax.set_ylabel(f"{label} [{unit}]")
             ax.grid(True, alpha=0.3)
             ax.legend(fontsize=8)
         np.atleast_1d(axes)[-1].set_xlabel("time [s]")
@@ -334,11 +443,12 @@ def write_report(rep, out_dir, title):
         plt.close(fig)
         images.append("angles.png")
     if p.path is not None and p.path[0] in log:
-        report.birds_eye(out / "path.png", {"model P1": (r[p.path[2]], r[p.path[3]]),
-                                            "measured P1 (DGPS fixes)": (log[p.path[0]].value, log[p.path[1]].value)},
-                         title=title)
+        curves = {f"{name} P1": (r[p.path[2]], r[p.path[3]]) for name, r, _ in every}
+        curves["measured P1 (DGPS fixes)"] = (log[p.path[0]].value, log[p.path[1]].value)
+        report.birds_eye(out / "path.png", curves, title=title)
         images.append("path.png")
-    rows = ["quantity,rms,max,unit"] + [f'"{l}",{a:.6g},{b:.6g},{u}' for l, a, b, u in rep.errors]
+    rows = ["quantity,rms,max,unit"] + [f'"{l}",{a:.6g},{b:.6g},{u}' for _, _, errs in every
+                                        for l, a, b, u in errs]
     part = out / "errors.csv.part"
     part.write_text("\n".join(rows) + "\n")
     part.replace(out / "errors.csv")

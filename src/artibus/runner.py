@@ -198,10 +198,14 @@ class Simulation:
     """A bench, set up and ready to run."""
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
-                 stimuli=None, can=None, can_log=None, can_faults=None):
+                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
-        the start of each of the component's steps. can: the interface of a
+        the start of each of the component's steps. cut: inputs ("comp.input")
+        whose connection the run leaves out, a direct one or a route over
+        CAN (for a replay: a stimulus then feeds them alone, on their start
+        value or an override); when every route over CAN is cut, the run has
+        no network. can: the interface of a
         bench that routes connections over CAN ("virtual", the default, or
         "INTERFACE:CHANNEL"), can_log: a .blf or .asc file for its traffic,
         can_faults: faults injected into it (artibus.can.Fault or their text
@@ -222,12 +226,14 @@ class Simulation:
         try:
             with zipfile.ZipFile(self.ssp) as z:
                 z.extractall(self._tmp)
-            self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults)
+            self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
+                        set(cut or ()))
         except BaseException:
             self.close()
             raise
 
-    def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None, can_faults=None):
+    def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None, can_faults=None,
+               cut=frozenset()):
         units = {}
         for path, c in self.bench.components.items():
             fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
@@ -267,9 +273,21 @@ class Simulation:
         for path, values in self.parameters.items():
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.")
 
-        # connections
+        # connections (those into a cut input left out)
+        connected = {f"{c.end[0]}.{c.end[1]}" for c in self.bench.connections}
+        for name in sorted(cut):
+            comp, _, var = name.rpartition(".")
+            v = units[comp].fmu.vars.get(var) if comp in units else None
+            if v is None or v.causality != "input":
+                raise ArtibusError(f"cut {name}: not an input of a component of {where}")
+            if name not in connected:
+                raise ArtibusError(f"cut {name}: the input is not connected in {where}")
+        self.cut = sorted(cut)
+        routed_before = any(c.can is not None for c in self.bench.connections)
         self.links = []
         for c in self.bench.connections:
+            if f"{c.end[0]}.{c.end[1]}" in cut:
+                continue
             label = f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}"
             a, b = units[c.start[0]], units[c.end[0]]
             va, vb = a.fmu.vars.get(c.start[1]), b.fmu.vars.get(c.end[1])
@@ -296,7 +314,7 @@ class Simulation:
                                    f, o, f"{c.end[0]}.{c.end[1]}", c))
             if c.can is None:                 # a connection routed over CAN goes through self.can
                 b.links_in.append(self.links[-1])
-        self._setup_can(where, can_interface, can_log, can_faults)
+        self._setup_can(where, can_interface, can_log, can_faults, routed_before)
         # direct feedthrough from the model descriptions
         for u in self.units:
             inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
@@ -357,10 +375,16 @@ class Simulation:
             if cols:
                 self._rec.append((u, np.array(idx), np.array(cols)))
 
-    def _setup_can(self, where, interface, log, faults=None):
-        """The CAN network of a bench that routes connections over CAN (see artibus.can)."""
+    def _setup_can(self, where, interface, log, faults=None, routed=True):
+        """The CAN network of a bench that routes connections over CAN (see artibus.can);
+        none when every route was cut (routed: the bench routes some)."""
         self.can_links = [l for l in self.links if l.connection.can is not None]
         spec = self.bench.can
+        if spec is not None and routed and not self.can_links:
+            if interface is not None or log is not None or faults:
+                raise ArtibusError(f"--can/--can-log/--can-fault: every connection {where} routes over CAN "
+                                   f"is cut: the run has no network")
+            return
         if spec is None:
             if self.can_links:
                 c = self.can_links[0].connection

@@ -105,7 +105,9 @@ static int rhs(double t, const double *y, double *ydot, void *user) {
     if (kin_rates(&s->chain, gammaF_at(comp, t), beta, D->v, &r))
         return 1;                       /* beyond the jack-knife bound: retry a smaller step */
     const int j = D->j;
-    ydot[0] = r.omega[j];                                   /* eq. 22 */
+    /* eq. 22; the prediction model (seed 003, sec. V, Fig. 11): the measured
+       angular velocity (omega_1tacho, eq. 51) in place of the model's */
+    ydot[0] = D->predictionModel ? D->omegaMeas : r.omega[j];
     ydot[1] = r.vel[j] * cos(y[0] + s->chain.gamma[j]);
     ydot[2] = r.vel[j] * sin(y[0] + s->chain.gamma[j]);
     for (int i = 1; i <= s->chain.N; i++) ydot[2 + i] = r.betaDot[i];   /* eq. 16 */
