@@ -90,7 +90,7 @@ def test_jacobi_equals_fmpy_simulate_ssp(tmp_path):
             np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=f"{c}.{n}")
 
 
-def test_nested_system_and_composed_transformations(tmp_path):
+def nested_bench(tmp_path):
     """Lead -> (x2 +0.01) -> system connector -> (x0.5) -> Follow inside a sub-system."""
     inner = (f'<ssd:System name="Sub"><ssd:Connectors><ssd:Connector name="steer" kind="input"><ssc:Real/>'
              f'</ssd:Connector></ssd:Connectors><ssd:Elements>'
@@ -99,7 +99,12 @@ def test_nested_system_and_composed_transformations(tmp_path):
              + connection(None, "steer", "Follow", "gammaF", 'factor="0.5"')
              + '</ssd:Connections></ssd:System>')
     elements = component("Lead", [("beta[1]", "output")]) + inner
-    ssp = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Sub", "steer", 'factor="2.0" offset="0.01"'))
+    return make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Sub", "steer", 'factor="2.0" offset="0.01"'))
+
+
+def test_nested_system_and_composed_transformations(tmp_path):
+    """Lead -> (x2 +0.01) -> system connector -> (x0.5) -> Follow inside a sub-system."""
+    ssp = nested_bench(tmp_path)
     r = run(ssp, step=0.05, overrides={"Sub.Follow.testSteerAmp": 0.0})
     np.testing.assert_allclose(r["Sub.Follow.kappa[0]"], np.tan(r["Lead.beta[1]"] + 0.005) / L0, rtol=1e-12)
 

@@ -13,7 +13,7 @@ import pytest
 from artibus import ROOT, ArtibusError, fmu_path, ssp
 from artibus.runner import Simulation, core_library_path
 
-from test_runner import L0, LEAD_FOLLOW, NS, QUIET, component, connection, make_ssp
+from test_runner import L0, LEAD_FOLLOW, NS, QUIET, component, connection, make_ssp, nested_bench
 
 pytestmark = pytest.mark.skipif(not core_library_path().is_file(),
                                 reason=f"{core_library_path()} not built (cmake target artibus_core)")
@@ -85,14 +85,7 @@ def test_two_fmu_bench_with_a_transformation(tmp_path, algorithm, factor, offset
 
 
 def test_nested_system_composed_transformations(tmp_path):
-    inner = (f'<ssd:System name="Sub"><ssd:Connectors><ssd:Connector name="steer" kind="input"><ssc:Real/>'
-             f'</ssd:Connector></ssd:Connectors><ssd:Elements>'
-             + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")])
-             + '</ssd:Elements><ssd:Connections>'
-             + connection(None, "steer", "Follow", "gammaF", 'factor="0.5"')
-             + '</ssd:Connections></ssd:System>')
-    elements = component("Lead", [("beta[1]", "output")]) + inner
-    path = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Sub", "steer", 'factor="2.0" offset="0.01"'))
+    path = nested_bench(tmp_path)
     core, python = both(path, step=0.05, overrides={"Sub.Follow.testSteerAmp": 0.0})
     assert_bit_for_bit(core, python)
     np.testing.assert_allclose(core["Sub.Follow.kappa[0]"], np.tan(core["Lead.beta[1]"] + 0.005) / L0, rtol=1e-12)
