@@ -4,6 +4,7 @@ patterns are computed here from the faults' definitions (the same seed drawn
 with numpy, the window's ticks, the E2E rules) and checked against the
 receivers' inputs, the runner's stale record and the log read back with
 python-can and cantools."""
+import csv
 import math
 import subprocess
 import sys
@@ -142,6 +143,17 @@ def test_kpis_with_faults_next_to_fault_free(tmp_path):
     assert len(dev) == 2 and all(b < 1.0 for _, b in dev)
     assert any(float(a) != float(b) for _, a, b, _ in rows if a != "nan")
     assert (out / "fault-free" / "index.html").is_file() and (out / "index.html").is_file()
+    # the receivers' fallback in the report and its KPIs: module 3's ECU, which uses G2, falls
+    # back where 3 frames in a row were lost; no receiver does without the faults
+    with open(out / "kpi_faults.csv", newline="") as f:
+        table = list(csv.DictReader(f))
+    worst = {row["kpi"].split(":")[0]: (float(row["fault_free"]), float(row["with_faults"]))
+             for row in table if "worst fallback state" in row["kpi"]}
+    assert set(worst) == {"ECU2", "ECU3", "Act2", "Act3"}
+    assert all(a == 0.0 for a, _ in worst.values())
+    assert worst["ECU3"][1] >= 1.0 and worst["ECU2"][1] == 0.0
+    assert (out / "fallback.png").is_file() and "fallback.png" in (out / "index.html").read_text()
+    assert "bus load" in (out / "can_bus.txt").read_text()
 
 
 # --- corrupted frames: never used -----------------------------------------------------

@@ -426,7 +426,7 @@ REPORTS = {
     "Bus36m_Circle": bus36m_circle,
     "Bus36m_Circle_Guided": lambda r, out: bus36m_circle(r, out, "guided"),
     "Bus36m_Circle_GuidedForceMin": lambda r, out: bus36m_circle(r, out, "guided+forcemin"),
-    "Bus36m_Circle_CAN": lambda r, out: bus36m_circle(r, out, "guided+forcemin"),
+    "Bus36m_Circle_CAN": lambda r, out: bus36m_circle_can(r, out),
     "Bus36m_Circle_GuidedAll": lambda r, out: bus36m_circle(r, out, "guided all"),
     "MultiAxle_StepSteer": multiaxle_step_steer,
     "Scania18m_LaneChange": scania18m_lane_change,
@@ -436,6 +436,35 @@ REPORTS = {
     "Scania18m_Damping": damping.report,
     "Scania18m_OpenLoop": kc.report,
 }
+
+
+def bus36m_circle_can(r, out):
+    """seed 000's circle with the steering on CAN: the circle's KPIs, and what
+    the receivers saw: each one's fallback state (0 normal, 1 holding, 2
+    ramping, 3 straight) and each message's longest run without a good frame."""
+    kpis, images, notes = bus36m_circle(r, out, "guided+forcemin")
+    receivers = [n[:-len(".fallback")] for n in r.names if n.endswith(".fallback")]
+    t = r.time
+    for c in receivers:
+        fb = r[f"{c}.fallback"]
+        on = fb > 0
+        kpis.append(Kpi(f"{c}: worst fallback state (0 normal, 1 holding, 2 ramping, 3 straight)",
+                        float(np.max(fb)), "-", "0 without faults", "issue 12"))
+        kpis.append(Kpi(f"{c}: time in fallback", float(np.sum(on)) * (t[1] - t[0]), "s"))
+        kpis.append(Kpi(f"{c}: fallback entered at", float(t[np.argmax(on)]) if on.any() else math.nan, "s"))
+    lost = [n for n in r.names if n.startswith("can.") and n.endswith(".sinceGood")]
+    for n in lost:
+        kpis.append(Kpi(f"{n[4:-len('.sinceGood')]}: longest run of cycles without a good frame",
+                        float(np.max(r[n])), "cycles"))
+    if receivers:
+        report.signals(out / "fallback.png", t, [
+            ("fallback state", {c: r[f"{c}.fallback"] for c in receivers}),
+            ("cycles since a good frame", {n[4:-len(".sinceGood")]: r[n] for n in lost}),
+        ], title="What the receivers saw: fallback states and stale messages")
+        images.append(("fallback.png", "Each receiver's fallback state and each message's cycles since its "
+                                       "last good frame (E2E check)."))
+    return kpis, images, notes + " The steering signals travel over CAN (ssp/can/Bus36m.dbc); the bus summary " \
+                                 "(load, response times, frames) is printed by the run and in can_bus.txt."
 
 
 def generic(r, out):

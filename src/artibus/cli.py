@@ -118,8 +118,10 @@ def cmd_run(args):
                                algorithm=args.algorithm, can=args.can, can_log=args.can_log,
                                can_faults=args.can_fault) as sim:
             result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
+            can_summary = None
             if sim.can is not None:
-                print(sim.can.summary(result.time[-1] - result.time[0]))
+                can_summary = sim.can.summary(result.time[-1] - result.time[0])
+                print(can_summary)
             name = sim.bench.name
             if args.report:
                 out_dir = Path(args.report) / name if args.all else Path(args.report)
@@ -135,6 +137,8 @@ def cmd_run(args):
             if out_dir is not None:
                 from artibus.benches import write_report
                 kpis = write_report(name, result, out_dir, sim.wall)
+                if can_summary is not None:
+                    (out_dir / "can_bus.txt").write_text(can_summary + "\n")
                 print(f"{name}: report {out_dir / 'index.html'}")
                 for k in kpis:
                     print(f"    {k.name}: {k.cell()} {k.unit}" + (f"   (paper: {k.paper})" if k.paper else ""))
