@@ -91,6 +91,15 @@ static inline double test_sine(double amp, double period, double t) {
     return (amp != 0.0 && t < period) ? amp * sin(2 * M_PI * t / period) : 0.0;
 }
 
+/* A discrete controller (an ECU) samples at t0 + k Ts; a communication step
+ * [t, t + h) takes every sample instant in it, from the inputs held over the
+ * step. True while sample k falls in the step, its instant in *tk:
+ *     for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) ...      */
+static inline int sample_due(double t0, long long k, double Ts, double t, double h, double *tk) {
+    *tk = t0 + (double)k * Ts;
+    return *tk < t + h - 1e-9 * Ts;
+}
+
 /* ---- logging (messages name the variable and the value) ----------------- */
 
 /* logEvents: only when debug logging of that category is on */

@@ -53,12 +53,9 @@ static void report(ModelInstance *comp, double t) {
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = D->Ts;
     const double cmd[2] = { D->cmd[1], D->cmd[2] };
-    for (;;) {
-        const double tk = S->t0 + (double)S->k * Ts;
-        if (!(tk < t + h - 1e-9 * Ts)) break;          /* samples in [t, t + h) */
+    for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         act_sample(&S->a, cmd, D->alive);
         report(comp, tk);
-        S->k++;
     }
     comp->v.time = t + h;
     return fmi2OK;

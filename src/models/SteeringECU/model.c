@@ -93,12 +93,9 @@ static void report(ModelInstance *comp, double t) {
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = D->Ts;
     const EcuInputs in = inputs(comp);
-    for (;;) {
-        const double tk = S->t0 + (double)S->k * Ts;
-        if (!(tk < t + h - 1e-9 * Ts)) break;          /* samples in [t, t + h) */
+    for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         ecu_sample(&S->e, &in);
         report(comp, tk);
-        S->k++;
     }
     comp->v.time = t + h;
     return fmi2OK;

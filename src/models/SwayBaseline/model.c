@@ -59,15 +59,12 @@ static void report(ModelInstance *comp, unsigned fault, double t) {
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = S->b.p.Ts;
-    for (;;) {
-        const double tk = S->t0 + (double)S->k * Ts;
-        if (!(tk < t + h - 1e-9 * Ts)) break;          /* samples in [t, t + h) */
+    for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         const double was = S->b.ssc;
         report(comp, sb_sample(&S->b, D->v, D->Lambda, D->LambdaDot), tk);
         if (S->b.ssc != was)
             log_event(comp, "t = %.6g s: sway control %s (v = %g m/s, LambdaDot = %g rad/s)", tk,
                       S->b.ssc != 0.0 ? "on" : "off", D->v, D->LambdaDot);
-        S->k++;
     }
     comp->v.time = t + h;
     return fmi2OK;

@@ -97,9 +97,7 @@ static void report(ModelInstance *comp, unsigned fault, double t, double gamma1,
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = S->g.p.Ts;
-    for (;;) {
-        const double tk = S->t0 + (double)S->k * Ts;
-        if (!(tk < t + h - 1e-9 * Ts)) break;          /* samples in [t, t + h) */
+    for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         const double gamma1 = gamma1_at(comp, tk);
         if (D->backwards != S->backwards) {
             log_event(comp, "t = %.6g s: driving direction now %s: lags restart from the steady "
@@ -117,7 +115,6 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
             fault |= tg_pm_sample(&S->pm, &S->g, gamma1, D->v, d1, d2);
         }
         report(comp, fault, tk, gamma1, D->v);
-        S->k++;
     }
     comp->v.time = t + h;
     return fmi2OK;
