@@ -1,0 +1,69 @@
+"""MultiAxle_StepSteer: seed 004, Figs. 3-4. The KPIs of one run (a function
+of the result alone); the report is a study: step responses at several speeds
+and the frequency response, zero-side-slip steering (ZS) against front-axle
+steering (FWS), each a run of this bench (FWS: the plant ignores the tag
+axle's angle) (artibus.benches)."""
+from artibus import report
+from artibus.report import Kpi
+
+SPEEDS = (5.0, 10.0, 20.0, 30.0)
+DELTA1 = 0.02                       # the bench's step (Steering.testSteerAmp)
+
+TEXT = ("Vehicle data: ssp/parameters/Bus15mTagAxle.ssv (estimates: seed 004 gives none). "
+        "Zero-side-slip steering trades yaw-rate gain at speed for zero side-slip.")
+
+
+def kpis(r):
+    """One run's step response: the side-slip after the step and the yaw-rate gain."""
+    return [Kpi("side-slip at the end of the run", r["Vehicle.beta"][-1], "rad", "", "seed 004, eq. 3"),
+            Kpi("yaw-rate gain", r["Vehicle.w_r"][-1] / DELTA1, "1/s")]
+
+
+def figures(r, out):
+    report.signals(out / "step.png", r.time, [
+        ("yaw rate [rad/s]", {"w_r": r["Vehicle.w_r"]}), ("lateral acc. [m/s2]", {"a_y": r["Vehicle.a_y"]}),
+        ("side-slip [rad]", {"beta": r["Vehicle.beta"]})], title="Front step steer 0.02 rad")
+    return [("step.png", "Step response of this run.")]
+
+
+def _variant(u, zs):
+    o = {"Vehicle.u": u, "Steering.u": u}
+    if not zs:
+        o["Vehicle.steerable[3]"] = False
+    return o
+
+
+def study(r, out):
+    from artibus import bode, runner
+    runs = {(u, zs): runner.run("MultiAxle_StepSteer", overrides=_variant(u, zs)) for u in SPEEDS for zs in (True, False)}
+    kpis = []
+    for u in SPEEDS:
+        for zs in (True, False):
+            rr = runs[(u, zs)]
+            name = "ZS" if zs else "FWS"
+            kpis.append(Kpi(f"{name} at {u:g} m/s: side-slip after 10 s", rr["Vehicle.beta"][-1], "rad",
+                            "0 (zero side-slip steering)" if zs else "", "seed 004, eq. 3",
+                            abs(rr["Vehicle.beta"][-1]) < 1e-6 if zs else None))
+            kpis.append(Kpi(f"{name} at {u:g} m/s: yaw-rate gain", rr["Vehicle.w_r"][-1] / DELTA1, "1/s"))
+    t = runs[(20.0, True)].time
+    panels = []
+    for sig, label in (("Vehicle.w_r", "yaw rate [rad/s]"), ("Vehicle.a_y", "lateral acc. [m/s2]"),
+                       ("Vehicle.beta", "side-slip [rad]")):
+        series = {}
+        for u in SPEEDS:
+            series[f"ZS {u:g} m/s"] = runs[(u, True)][sig]
+            series[f"FWS {u:g} m/s"] = runs[(u, False)][sig]
+        panels.append((label, series))
+    report.signals(out / "step.png", t, panels, title="Front step steer 0.02 rad: ZS (K(u) delta1 on the tag axle) vs FWS")
+    freqs = [0.1, 0.2, 0.5, 1.0, 2.0, 3.0]
+    resp = {}
+    for zs in (True, False):
+        o = {**_variant(20.0, zs), "Steering.testSteerAmp": 0.0}
+        f = bode.frequency_response("MultiAxle_StepSteer", "Steering.delta1", ["Vehicle.w_r", "Vehicle.a_y"],
+                                    freqs, 0.01, overrides=o)
+        for k, v in f.items():
+            resp[f"{'ZS' if zs else 'FWS'} {k.split('.')[-1]}"] = v
+    bode.plot(out / "bode.png", resp, "Frequency response at 20 m/s, per rad of delta1 (sine tests through the co-simulation)")
+    images = [("step.png", "Step responses at 5, 10, 20 and 30 m/s (seed 004, Fig. 3)."),
+              ("bode.png", "Yaw rate and lateral acceleration per front steering angle at 20 m/s (seed 004, Fig. 4).")]
+    return kpis, images, TEXT
