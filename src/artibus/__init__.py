@@ -26,5 +26,18 @@ def fmu_path(name):
     """Path of a built FMU, ``<fmu_dir>/<name>.fmu``."""
     path = fmu_dir() / f"{name}.fmu"
     if not path.is_file():
+        import difflib
+        known = sorted(p.stem for p in fmu_dir().glob("*.fmu"))
+        close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
+        if close:
+            raise ArtibusError(f"{name}: no such FMU (did you mean {' or '.join(repr(c) for c in close)}?)")
         raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
     return path
+
+
+def __getattr__(name):
+    """artibus.sweep(...): a sweep of a bench on Dask (the module artibus.sweep is callable)."""
+    if name == "sweep":
+        import importlib
+        return importlib.import_module("artibus.sweep")
+    raise AttributeError(f"module 'artibus' has no attribute {name!r}")
