@@ -17,16 +17,18 @@
 
 /* ---- allowed states per function (FMI 2.0, table in 4.2.4) --------------- */
 #define ANY_BUT_FATAL (S_INSTANTIATED | S_INIT_MODE | S_STEP_COMPLETE | S_STEP_FAILED | \
-                       S_TERMINATED | S_ERROR)
+                       S_TERMINATED | S_ERROR | S_EVENT_MODE | S_CONT_TIME_MODE)
 #define M_SetDebugLogging   ANY_BUT_FATAL
 #define M_FreeInstance      (ANY_BUT_FATAL | S_FATAL)
 #define M_SetupExperiment   S_INSTANTIATED
 #define M_EnterInit         S_INSTANTIATED
 #define M_ExitInit          S_INIT_MODE
-#define M_Terminate         (S_STEP_COMPLETE | S_STEP_FAILED)
+#define M_Terminate         (S_STEP_COMPLETE | S_STEP_FAILED | S_EVENT_MODE | S_CONT_TIME_MODE)
 #define M_Reset             ANY_BUT_FATAL
-#define M_Get               (S_INIT_MODE | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR)
-#define M_Set               (S_INSTANTIATED | S_INIT_MODE | S_STEP_COMPLETE)
+#define M_Get               (S_INIT_MODE | S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR | \
+                             S_EVENT_MODE | S_CONT_TIME_MODE)
+#define M_Set               (S_INSTANTIATED | S_INIT_MODE | S_STEP_COMPLETE | S_EVENT_MODE | \
+                             S_CONT_TIME_MODE)
 #define M_FMUstate          ANY_BUT_FATAL
 #define M_DoStep            S_STEP_COMPLETE
 #define M_Status            (S_STEP_COMPLETE | S_STEP_FAILED | S_TERMINATED | S_ERROR)
@@ -44,6 +46,8 @@ static const char *state_name(InstanceState s) {
     case S_TERMINATED:    return "terminated";
     case S_ERROR:         return "error";
     case S_FATAL:         return "fatal";
+    case S_EVENT_MODE:    return "event mode";
+    case S_CONT_TIME_MODE: return "continuous-time mode";
     }
     return "?";
 }
@@ -181,10 +185,16 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
     ModelInstance *comp = functions->allocateMemory(1, sizeof(ModelInstance));
     if (!comp) return NULL;
     comp->cb = *functions;
+    comp->type = fmuType;
     comp->instanceName = fmu_strdup(comp, instanceName ? instanceName : "");
     const char *why = NULL;
     if (!instanceName || !*instanceName) why = "instanceName must not be empty";
+#ifdef MODEL_NX
+    else if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange)
+        why = "fmuType must be fmi2CoSimulation or fmi2ModelExchange";
+#else
     else if (fmuType != fmi2CoSimulation) why = "this FMU supports co-simulation only (fmuType must be fmi2CoSimulation)";
+#endif
     else if (!guid || strcmp(guid, MODEL_GUID) != 0) why = "GUID does not match the model description";
     if (why || !comp->instanceName) {
         if (why) log_error(comp, "fmi2Instantiate: %s (GUID given: '%s', expected '%s')",
@@ -242,7 +252,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     model_outputs(comp);
     comp->dirty = false;
     comp->restart = comp->forget = true;
-    comp->v.state = S_STEP_COMPLETE;
+    comp->v.state = comp->type == fmi2ModelExchange ? S_EVENT_MODE : S_STEP_COMPLETE;
     log_event(comp, "initialized at t = %g", comp->v.time);
     return status;
 }
@@ -285,7 +295,8 @@ static fmi2Status refresh(ModelInstance *comp) {
         fmi2Status status = model_init(comp);
         if (status > fmi2Warning) return status;
     }
-    if (comp->v.state & (S_INIT_MODE | S_STEP_COMPLETE)) model_outputs(comp);
+    if (comp->v.state & (S_INIT_MODE | S_STEP_COMPLETE | S_EVENT_MODE | S_CONT_TIME_MODE))
+        model_outputs(comp);
     comp->dirty = false;
     return fmi2OK;
 }
@@ -322,7 +333,7 @@ static fmi2Status settable(ModelInstance *comp, const char *fn, const VarInfo *v
         ok = true;
         break;
     case C_PARAMETER:
-        ok = v->variability == V_TUNABLE ? true
+        ok = v->variability == V_TUNABLE ? !(s & S_CONT_TIME_MODE)   /* ME: in event mode */
            : v->variability == V_FIXED ? (s & (S_INSTANTIATED | S_INIT_MODE)) != 0
            : false;
         break;
@@ -568,3 +579,179 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
     ENTER("fmi2GetStringStatus", M_Status);
     return leave(comp, log_error(comp, "fmi2GetStringStatus: no string status is provided"));
 }
+
+/* ---- Model Exchange (FMI 2.0, chapter 3) -------------------------------------
+ * Only for models whose model description has <ModelExchange> (MODEL_NX from
+ * gen_vars.py): the plants. The states, derivatives and event indicators come
+ * from the model's hooks (fmu.h), the same right-hand side its own integrator
+ * uses in co-simulation. A co-simulation-only FMU answers each with fmi2Error. */
+
+#define M_EnterEventMode    (S_EVENT_MODE | S_CONT_TIME_MODE)
+#define M_NewDiscrete       S_EVENT_MODE
+#define M_EnterContTime     S_EVENT_MODE
+#define M_CompletedStep     S_CONT_TIME_MODE
+#define M_SetTime           (S_EVENT_MODE | S_CONT_TIME_MODE)
+#define M_SetStates         S_CONT_TIME_MODE
+#define M_GetStates         (S_INIT_MODE | S_EVENT_MODE | S_CONT_TIME_MODE | S_TERMINATED | S_ERROR)
+#define M_GetNominals       (S_INSTANTIATED | S_EVENT_MODE | S_CONT_TIME_MODE | S_TERMINATED | S_ERROR)
+
+#ifdef MODEL_NX
+
+#define ME_ENTER(fn, mask)                                                          \
+    ENTER(fn, mask);                                                                \
+    if (comp->type != fmi2ModelExchange)                                            \
+        return leave(comp, log_error(comp, "%s: a Model Exchange function, but the "  \
+                                           "instance was instantiated for co-simulation", fn))
+
+/* the caller's array length must be the model description's */
+static fmi2Status me_size(ModelInstance *comp, const char *fn, const void *p, size_t n,
+                          size_t expected, const char *what) {
+    if (n != expected)
+        return log_error(comp, "%s: %s = %zu, but the model has %zu", fn, what, n, expected);
+    if (n > 0 && !p) return log_error(comp, "%s: the array argument is NULL", fn);
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    ME_ENTER("fmi2EnterEventMode", M_EnterEventMode);
+    comp->v.state = S_EVENT_MODE;
+    return fmi2OK;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    ME_ENTER("fmi2NewDiscreteStates", M_NewDiscrete);
+    if (!info) return leave(comp, log_error(comp, "fmi2NewDiscreteStates: argument 'fmi2eventInfo' is NULL"));
+    if (refresh(comp) > fmi2Warning) return leave(comp, fmi2Error);
+    bool terminate = false;
+    double tNext = INFINITY;
+    const fmi2Status status = model_event_update(comp, &terminate, &tNext);
+    if (status > fmi2Warning) return leave(comp, status);
+    info->newDiscreteStatesNeeded = fmi2False;
+    info->terminateSimulation = terminate ? fmi2True : fmi2False;
+    info->nominalsOfContinuousStatesChanged = fmi2False;
+    info->valuesOfContinuousStatesChanged = fmi2False;
+    info->nextEventTimeDefined = isfinite(tNext) ? fmi2True : fmi2False;
+    info->nextEventTime = isfinite(tNext) ? tNext : 0.0;
+    return status;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    ME_ENTER("fmi2EnterContinuousTimeMode", M_EnterContTime);
+    comp->v.state = S_CONT_TIME_MODE;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    ME_ENTER("fmi2CompletedIntegratorStep", M_CompletedStep);
+    if (!enterEventMode || !terminateSimulation)
+        return leave(comp, log_error(comp, "fmi2CompletedIntegratorStep: NULL argument"));
+    *enterEventMode = fmi2False;            /* no step events: every event is a state or time event */
+    *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    ME_ENTER("fmi2SetTime", M_SetTime);
+    if (!isfinite(time))
+        return leave(comp, log_error(comp, "fmi2SetTime: time = %g is not finite", time));
+    if (comp->v.time != time) {
+        comp->v.time = time;
+        comp->dirty = true;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    ME_ENTER("fmi2SetContinuousStates", M_SetStates);
+    if (me_size(comp, "fmi2SetContinuousStates", x, nx, MODEL_NX, "nx")) return leave(comp, fmi2Error);
+    for (size_t i = 0; i < nx; i++)
+        if (!isfinite(x[i]))
+            return leave(comp, log_error(comp, "fmi2SetContinuousStates: x[%zu] (%s) = %g is not a "
+                                               "finite number", i, X_NAME[i], x[i]));
+    model_set_x(comp, x);
+    comp->dirty = true;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
+    ME_ENTER("fmi2GetDerivatives", M_GetStates);
+    if (me_size(comp, "fmi2GetDerivatives", dx, nx, MODEL_NX, "nx")) return leave(comp, fmi2Error);
+    if (refresh(comp) > fmi2Warning) return leave(comp, fmi2Error);
+    if (model_derivatives(comp, dx) > fmi2Warning) return leave(comp, fmi2Error);
+    for (size_t i = 0; i < nx; i++)
+        if (!isfinite(dx[i]))
+            return leave(comp, log_error(comp, "fmi2GetDerivatives: the derivative of %s is %g at "
+                                               "t = %.17g", X_NAME[i], dx[i], comp->v.time));
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t ni) {
+    ME_ENTER("fmi2GetEventIndicators", M_GetStates);
+    if (me_size(comp, "fmi2GetEventIndicators", z, ni, MODEL_NZ, "ni")) return leave(comp, fmi2Error);
+    if (refresh(comp) > fmi2Warning) return leave(comp, fmi2Error);
+    if (ni > 0) model_event_indicators(comp, z);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    ME_ENTER("fmi2GetContinuousStates", M_GetStates);
+    if (me_size(comp, "fmi2GetContinuousStates", x, nx, MODEL_NX, "nx")) return leave(comp, fmi2Error);
+    if (refresh(comp) > fmi2Warning) return leave(comp, fmi2Error);
+    model_get_x(comp, x);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    ME_ENTER("fmi2GetNominalsOfContinuousStates", M_GetNominals);
+    if (me_size(comp, "fmi2GetNominalsOfContinuousStates", x_nominal, nx, MODEL_NX, "nx"))
+        return leave(comp, fmi2Error);
+    for (size_t i = 0; i < nx; i++) x_nominal[i] = X_NOMINAL[i];
+    return fmi2OK;
+}
+
+#else   /* a co-simulation-only FMU */
+
+#define NOT_ME(fn, mask)                                                             \
+    ENTER(fn, mask);                                                                 \
+    return leave(comp, log_error(comp, "%s: this FMU has no Model Exchange interface "  \
+                                       "(a sampled controller: co-simulation only)", fn))
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) { NOT_ME("fmi2EnterEventMode", ANY_BUT_FATAL); }
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    (void)info;
+    NOT_ME("fmi2NewDiscreteStates", ANY_BUT_FATAL);
+}
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { NOT_ME("fmi2EnterContinuousTimeMode", ANY_BUT_FATAL); }
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
+    NOT_ME("fmi2CompletedIntegratorStep", ANY_BUT_FATAL);
+}
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    (void)time;
+    NOT_ME("fmi2SetTime", ANY_BUT_FATAL);
+}
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    (void)x; (void)nx;
+    NOT_ME("fmi2SetContinuousStates", ANY_BUT_FATAL);
+}
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
+    (void)dx; (void)nx;
+    NOT_ME("fmi2GetDerivatives", ANY_BUT_FATAL);
+}
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t ni) {
+    (void)z; (void)ni;
+    NOT_ME("fmi2GetEventIndicators", ANY_BUT_FATAL);
+}
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    (void)x; (void)nx;
+    NOT_ME("fmi2GetContinuousStates", ANY_BUT_FATAL);
+}
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    (void)x_nominal; (void)nx;
+    NOT_ME("fmi2GetNominalsOfContinuousStates", ANY_BUT_FATAL);
+}
+
+#endif

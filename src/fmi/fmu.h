@@ -30,7 +30,11 @@ typedef enum {
     S_STEP_FAILED    = 1 << 3,
     S_TERMINATED     = 1 << 4,
     S_ERROR          = 1 << 5,
-    S_FATAL          = 1 << 6
+    S_FATAL          = 1 << 6,
+    /* Model Exchange (spec 3.2.3); instantiated, initialization mode,
+       terminated, error and fatal are shared with co-simulation */
+    S_EVENT_MODE     = 1 << 7,
+    S_CONT_TIME_MODE = 1 << 8
 } InstanceState;
 
 /* log categories, in the order of <LogCategories> in every model description */
@@ -51,6 +55,8 @@ typedef struct ModelInstance {
     char *instanceName;
     char *resourceDir;      /* file system path of the FMU's resources/, or NULL */
     fmi2CallbackFunctions cb;
+    fmi2Type type;          /* fmi2CoSimulation, or fmi2ModelExchange (models whose
+                               model description has <ModelExchange>) */
     bool logOn[LOG_NCATEGORIES];
     double stopTime;        /* +INFINITY unless fmi2SetupExperiment defined it */
     double tolerance;       /* 0 unless fmi2SetupExperiment defined it */
@@ -83,6 +89,25 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h);
 
 /* Release comp->solver (fmi2Reset, fmi2FreeInstance). */
 void model_free(ModelInstance *comp);
+
+/* ---- Model Exchange: supplied by the models whose model description has
+ * <ModelExchange> (the plants); MODEL_NX states and MODEL_NZ event
+ * indicators, in the order of <Derivatives> (model_vars.h lists it). The
+ * derivatives are the right-hand side the model's own integrator uses in
+ * model_do_step; model_outputs also sets the derivative variables. --------- */
+
+/* the continuous states into x[MODEL_NX] */
+void model_get_x(ModelInstance *comp, double x[]);
+/* set the continuous states from x[MODEL_NX] (finite, checked by the layer) */
+void model_set_x(ModelInstance *comp, const double x[]);
+/* dx/dt at v.time from the states and the inputs; fmi2Error (logged) where
+   the right-hand side is not defined there */
+fmi2Status model_derivatives(ModelInstance *comp, double dx[]);
+/* the event indicators z[MODEL_NZ] (a state event where one changes sign) */
+void model_event_indicators(ModelInstance *comp, double z[]);
+/* at an event (fmi2NewDiscreteStates): *terminate = true to stop the
+   simulation there (logged why); *tNext the next time event, INFINITY if none */
+fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext);
 
 /* The built-in test stimulus of a model run alone (`fmpy simulate`): one
  * sine period amp sin(2 pi t / period), an S-curve on a steering input, then

@@ -31,6 +31,8 @@ C_TYPE = {"Real": "double", "Integer": "int", "Enumeration": "int",
 TYPE_ENUM = {"Real": "T_REAL", "Integer": "T_INTEGER", "Enumeration": "T_INTEGER",
              "Boolean": "T_BOOLEAN", "String": "T_STRING"}
 NAME_RE = re.compile(r"^([A-Za-z_][A-Za-z0-9_.]*)(?:\[(\d+)\])?$")
+# a derivative in the structured convention, der(NAME) or der(NAME[i]): field der_NAME
+DER_RE = re.compile(r"^der\(([A-Za-z_][A-Za-z0-9_.]*)(?:\[(\d+)\])?\)$")
 
 
 class ModelDescriptionError(Exception):
@@ -62,7 +64,7 @@ def read(xml_path):
     seen = {}
     for sv in root.find("ModelVariables").findall("ScalarVariable"):
         name = sv.get("name")
-        m = NAME_RE.match(name)
+        m = NAME_RE.match(name) or DER_RE.match(name)
         if not m:
             raise ModelDescriptionError(
                 f"{xml_path}: ScalarVariable name '{name}' is not NAME or NAME[i]")
@@ -80,13 +82,49 @@ def read(xml_path):
         if start is None and causality in ("parameter", "input"):
             raise ModelDescriptionError(f"{xml_path}: {causality} '{name}' has no start value")
         model["vars"].append({
-            "name": name, "base": c_ident(m.group(1)),
+            "name": name,
+            "base": ("der_" if name.startswith("der(") else "") + c_ident(m.group(1)),
             "index": int(m.group(2)) if m.group(2) is not None else None,
             "type": typ, "vr": vr, "causality": causality, "variability": variability,
             "start": start, "min": typ_el.get("min"), "max": typ_el.get("max"),
             "description": sv.get("description", ""),
+            "derivative": typ_el.get("derivative"), "nominal": typ_el.get("nominal"),
         })
+    read_model_exchange(root, model, cs, xml_path)
     return model
+
+
+def read_model_exchange(root, model, cs, xml_path):
+    """<ModelExchange>: the continuous states, in the order of
+    <ModelStructure><Derivatives> (FMI 2.0, 2.2.8), and the event indicators."""
+    me = root.find("ModelExchange")
+    model["me"] = None
+    if me is None:
+        return
+    if me.get("modelIdentifier") != cs.get("modelIdentifier"):
+        raise ModelDescriptionError(
+            f"{xml_path}: <ModelExchange> and <CoSimulation> must share one modelIdentifier")
+    ders = root.find("ModelStructure/Derivatives")
+    unknowns = [] if ders is None else ders.findall("Unknown")
+    states = []
+    for u in unknowns:
+        dv = model["vars"][int(u.get("index")) - 1]
+        if dv["type"] != "Real" or dv["derivative"] is None:
+            raise ModelDescriptionError(
+                f"{xml_path}: <Derivatives> lists '{dv['name']}', which declares no derivative=")
+        sv = model["vars"][int(dv["derivative"]) - 1]
+        if sv["type"] != "Real" or sv["variability"] != "continuous":
+            raise ModelDescriptionError(
+                f"{xml_path}: '{dv['name']}' is the derivative of '{sv['name']}', "
+                "which is not a continuous Real")
+        states.append((sv, dv))
+    declared = sum(1 for v in model["vars"] if v["derivative"] is not None)
+    if declared != len(states):
+        raise ModelDescriptionError(
+            f"{xml_path}: {declared} variables declare derivative=, "
+            f"<Derivatives> lists {len(states)}")
+    model["me"] = {"states": states,
+                   "nz": int(root.get("numberOfEventIndicators", "0"))}
 
 
 def fields(model):
@@ -128,6 +166,14 @@ def write_header(model, path):
     for v in model["vars"]:
         suffix = "" if v["index"] is None else f"_{v['index']}"
         lines.append(f"#define VR_{v['base']}{suffix} {v['vr']}u  /* {v['name']} */")
+    me = model["me"]
+    if me:
+        lines += ["", "/* Model Exchange: the continuous states x[i] in the order of "
+                  "<Derivatives>, and the event indicators */",
+                  f"#define MODEL_NX {len(me['states'])}",
+                  f"#define MODEL_NZ {me['nz']}"]
+        for i, (sv, dv) in enumerate(me["states"]):
+            lines.append(f"/*   x[{i}] = {sv['name']}, dx[{i}] = {dv['name']} */")
     lines += ["", "#endif", ""]
     with open(path, "w") as fh:
         fh.write("\n".join(lines))
@@ -189,6 +235,12 @@ def write_source(model, path):
                 raise ModelDescriptionError(f"start value of '{v['name']}' is too long")
             lines.append(f"    strcpy({f}, {c_string(v['start'])});")
     lines += ["}", ""]
+    me = model["me"]
+    if me:
+        names = ", ".join(c_string(sv["name"]) for sv, _ in me["states"])
+        noms = ", ".join(c_double(sv["nominal"] or "1") for sv, _ in me["states"])
+        lines += [f"const char *const X_NAME[MODEL_NX] = {{ {names} }};",
+                  f"const double X_NOMINAL[MODEL_NX] = {{ {noms} }};", ""]
     with open(path, "w") as fh:
         fh.write("\n".join(lines))
 

@@ -40,6 +40,13 @@ const VarInfo *vars_find(VarType type, unsigned vr);
 /* all variables to their start values (the rest to zero) */
 void vars_set_start_values(ModelData *d);
 
+#ifdef MODEL_NX
+/* Model Exchange: the continuous states' names and nominal values, in the
+   order of <Derivatives> in the model description */
+extern const char *const X_NAME[MODEL_NX];
+extern const double X_NOMINAL[MODEL_NX];
+#endif
+
 #ifdef __cplusplus
 }
 #endif

@@ -172,6 +172,13 @@ void model_outputs(ModelInstance *comp) {
         D->FjointY[k] = on ? o.FjY[k] : 0.0;
     }
     D->v = hypot(s->zd[0], s->zd[1]);
+    /* the Model Exchange states and their second derivatives */
+    for (int i = 0; i < DYN_MAX_Q; i++) {
+        const int on = i < dyn_nq(&p);
+        D->z[i + 1] = on ? s->z[i] : 0.0;
+        D->zd[i + 1] = on ? s->zd[i] : 0.0;
+        D->zdd[i + 1] = on ? zdd[i] : 0.0;
+    }
 }
 
 /* ODE state y = [z, z'] */
@@ -224,4 +231,55 @@ void model_free(ModelInstance *comp) {
     ode_free(sv->ode);
     free(sv);
     comp->solver = NULL;
+}
+
+/* ---- Model Exchange: x = [z_1 .. z_6, z'_1 .. z'_6], the CVODE state of
+ * doStep ([z, z'] of length 2 nq) padded to DYN_MAX_Q, with the same
+ * right-hand side rhs() at this instant */
+
+void model_get_x(ModelInstance *comp, double x[]) {
+    const ModelState *s = &comp->v.s;
+    for (int i = 0; i < DYN_MAX_Q; i++) {
+        x[i] = s->z[i];
+        x[DYN_MAX_Q + i] = s->zd[i];
+    }
+}
+
+void model_set_x(ModelInstance *comp, const double x[]) {
+    ModelState *s = &comp->v.s;
+    const int nq = 2 + D->nModules;
+    for (int i = 0; i < DYN_MAX_Q; i++) {      /* beyond nModules: 0 */
+        s->z[i] = i < nq ? x[i] : 0.0;
+        s->zd[i] = i < nq ? x[DYN_MAX_Q + i] : 0.0;
+    }
+}
+
+fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
+    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+    Solver sv = { comp, NULL, { 0 } };
+    make_params(comp, &sv.p);
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) sv.p.Fz[a] = D->Fz[a];
+    const ModelState *s = &comp->v.s;
+    const int nq = dyn_nq(&sv.p);
+    double y[2 * DYN_MAX_Q], ydot[2 * DYN_MAX_Q];
+    memcpy(y, s->z, sizeof(double) * (size_t)nq);
+    memcpy(y + nq, s->zd, sizeof(double) * (size_t)nq);
+    if (rhs(comp->v.time, y, ydot, &sv))
+        return log_error(comp, "t = %.17g: the mass matrix of the equations of motion is not "
+                               "positive definite", comp->v.time);
+    for (int i = 0; i < 2 * DYN_MAX_Q; i++) dx[i] = 0.0;
+    for (int i = 0; i < nq; i++) {
+        dx[i] = ydot[i];
+        dx[DYN_MAX_Q + i] = ydot[nq + i];
+    }
+    return fmi2OK;
+}
+
+void model_event_indicators(ModelInstance *comp, double z[]) { (void)comp; (void)z; }
+
+fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+    (void)comp;
+    *terminate = false;
+    *tNext = INFINITY;
+    return fmi2OK;
 }

@@ -76,6 +76,8 @@ fmi2Status model_init(ModelInstance *comp) {
     return fmi2OK;
 }
 
+static int derivs(ModelInstance *comp, const KinChain *c, double t, const double *y, double *ydot);
+
 void model_outputs(ModelInstance *comp) {
     KinChain c;
     make_chain(comp, &c);
@@ -93,36 +95,73 @@ void model_outputs(ModelInstance *comp) {
             D->betaMax[i] = on ? r.betaMax[i] : 0.0;
         }
     }
+    /* the Model Exchange states and their derivatives (eq. 22) */
+    double y[3 + KIN_MAX_WAGONS], ydot[3 + KIN_MAX_WAGONS];
+    model_get_x(comp, y);
+    derivs(comp, &c, comp->v.time, y, ydot);
+    D->thetaj = y[0];
+    D->xj = y[1];
+    D->yj = y[2];
+    D->der_thetaj = ydot[0];
+    D->der_xj = ydot[1];
+    D->der_yj = ydot[2];
 }
 
-/* ODE state y = [theta_j, x_j, y_j, beta_1 .. beta_N] */
-static int rhs(double t, const double *y, double *ydot, void *user) {
-    Solver *s = user;
-    ModelInstance *comp = s->comp;
+/* The right-hand side of the ODE y = [theta_j, x_j, y_j, beta_1 .. beta_N],
+ * for CVODE in doStep and for Model Exchange (whose states are the same, with
+ * beta padded to KIN_MAX_WAGONS). Returns the jack-knifed joint (kin_rates),
+ * 0 if none; ydot is filled either way. */
+static int derivs(ModelInstance *comp, const KinChain *c, double t, const double *y, double *ydot) {
     double beta[KIN_MAX_WAGONS + 1] = { 0 };
-    for (int i = 1; i <= s->chain.N; i++) beta[i] = y[2 + i];
+    for (int i = 1; i <= c->N; i++) beta[i] = y[2 + i];
     KinRates r;
-    if (kin_rates(&s->chain, gammaF_at(comp, t), beta, D->v, &r))
-        return 1;                       /* beyond the jack-knife bound: retry a smaller step */
+    const int jackknife = kin_rates(c, gammaF_at(comp, t), beta, D->v, &r);
     const int j = D->j;
     /* eq. 22; the prediction model (seed 003, sec. V, Fig. 11): the measured
        angular velocity (omega_1tacho, eq. 51) in place of the model's */
     ydot[0] = D->predictionModel ? D->omegaMeas : r.omega[j];
-    ydot[1] = r.vel[j] * cos(y[0] + s->chain.gamma[j]);
-    ydot[2] = r.vel[j] * sin(y[0] + s->chain.gamma[j]);
-    for (int i = 1; i <= s->chain.N; i++) ydot[2 + i] = r.betaDot[i];   /* eq. 16 */
+    ydot[1] = r.vel[j] * cos(y[0] + c->gamma[j]);
+    ydot[2] = r.vel[j] * sin(y[0] + c->gamma[j]);
+    for (int i = 1; i <= c->N; i++) ydot[2 + i] = r.betaDot[i];   /* eq. 16 */
+    return jackknife;
+}
+
+static int rhs(double t, const double *y, double *ydot, void *user) {
+    Solver *s = user;
+    /* beyond the jack-knife bound: retry a smaller step */
+    return derivs(s->comp, &s->chain, t, y, ydot) ? 1 : 0;
+}
+
+/* g_i = cos(delta_i) - margin: crosses zero where joint i jack-knifes;
+   g has KIN_MAX_WAGONS entries, 1 beyond N (for Model Exchange) */
+static void indicators(ModelInstance *comp, const KinChain *c, double t, const double *y, double *g) {
+    double beta[KIN_MAX_WAGONS + 1] = { 0 };
+    for (int i = 1; i <= c->N; i++) beta[i] = y[2 + i];
+    KinRates r;
+    kin_rates(c, gammaF_at(comp, t), beta, D->v, &r);
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++)
+        g[i - 1] = i <= c->N ? cos(r.delta[i]) - JACKKNIFE_MARGIN : 1.0;
+}
+
+static int roots(double t, const double *y, double *g, void *user) {
+    Solver *s = user;
+    double all[KIN_MAX_WAGONS];
+    indicators(s->comp, &s->chain, t, y, all);
+    for (int i = 0; i < s->chain.N; i++) g[i] = all[i];     /* CVODE has N root functions */
     return 0;
 }
 
-/* g_i = cos(delta_i) - margin: crosses zero where joint i jack-knifes */
-static int roots(double t, const double *y, double *g, void *user) {
-    Solver *s = user;
-    double beta[KIN_MAX_WAGONS + 1] = { 0 };
-    for (int i = 1; i <= s->chain.N; i++) beta[i] = y[2 + i];
+/* the jack-knife of joint i at time t, as co-simulation (an error: the step
+   fails) and Model Exchange (a warning: the simulation terminates) report it */
+static void jackknife_message(ModelInstance *comp, const KinChain *c, int i, double t, bool error) {
     KinRates r;
-    kin_rates(&s->chain, gammaF_at(s->comp, t), beta, s->comp->v.d.v, &r);
-    for (int i = 1; i <= s->chain.N; i++) g[i - 1] = cos(r.delta[i]) - JACKKNIFE_MARGIN;
-    return 0;
+    kin_rates(c, gammaF_at(comp, t), D->beta, D->v, &r);
+#define JACKKNIFE_MSG "jack-knife at joint %d at t = %.6f s: beta[%d] = %.4f deg reached betaMax[%d] = " \
+                      "%.4f deg (virtual steering angle delta_%d at 90 deg, eq. 17); not integrated further"
+    if (error)
+        log_error(comp, JACKKNIFE_MSG, i, t, i, D->beta[i] * DEG, i, r.betaMax[i] * DEG, i);
+    else
+        log_warning(comp, JACKKNIFE_MSG, i, t, i, D->beta[i] * DEG, i, r.betaMax[i] * DEG, i);
 }
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
@@ -156,12 +195,8 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     if (res == ODE_ROOT) {
         for (int i = 1; i <= N; i++) {
             if (!found[i - 1]) continue;
-            KinRates r;
-            kin_rates(&s->chain, gammaF_at(comp, tret), D->beta, D->v, &r);
-            return log_error(comp, "jack-knife at joint %d at t = %.6f s: beta[%d] = %.4f deg reached "
-                                   "betaMax[%d] = %.4f deg (virtual steering angle delta_%d at 90 deg, "
-                                   "eq. 17); not integrated further", i, tret, i, D->beta[i] * DEG,
-                             i, r.betaMax[i] * DEG, i);
+            jackknife_message(comp, &s->chain, i, tret, true);
+            return fmi2Error;
         }
     }
     return fmi2Error;   /* CVODE failure, already logged with its flag and time */
@@ -173,4 +208,62 @@ void model_free(ModelInstance *comp) {
     ode_free(s->ode);
     free(s);
     comp->solver = NULL;
+}
+
+/* ---- Model Exchange: x = [theta_j, x_j, y_j, beta_1 .. beta_4], the CVODE
+ * state of doStep with beta padded to KIN_MAX_WAGONS (beyond N: 0, constant) */
+
+void model_get_x(ModelInstance *comp, double x[]) {
+    const int j = D->j;
+    x[0] = D->theta[j];
+    x[1] = D->x[j];
+    x[2] = D->y[j];
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++) x[2 + i] = i <= D->N ? D->beta[i] : 0.0;
+}
+
+void model_set_x(ModelInstance *comp, const double x[]) {
+    const int j = D->j;
+    D->theta[j] = x[0];
+    D->x[j] = x[1];
+    D->y[j] = x[2];
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++) D->beta[i] = i <= D->N ? x[2 + i] : 0.0;
+}
+
+fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
+    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+    KinChain c;
+    make_chain(comp, &c);
+    double x[3 + KIN_MAX_WAGONS];
+    model_get_x(comp, x);
+    for (int i = 0; i < 3 + KIN_MAX_WAGONS; i++) dx[i] = 0.0;
+    /* beyond the jack-knife bound (the integrator may try a step there before
+       it locates the event) the equations still give finite rates */
+    derivs(comp, &c, comp->v.time, x, dx);
+    return fmi2OK;
+}
+
+void model_event_indicators(ModelInstance *comp, double z[]) {
+    KinChain c;
+    make_chain(comp, &c);
+    double x[3 + KIN_MAX_WAGONS];
+    model_get_x(comp, x);
+    indicators(comp, &c, comp->v.time, x, z);
+}
+
+/* a jack-knife ends the simulation, as it ends a co-simulation step */
+fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+    *tNext = INFINITY;
+    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+    KinChain c;
+    make_chain(comp, &c);
+    double x[3 + KIN_MAX_WAGONS], g[KIN_MAX_WAGONS];
+    model_get_x(comp, x);
+    indicators(comp, &c, comp->v.time, x, g);
+    for (int i = 1; i <= D->N; i++) {
+        if (g[i - 1] > 0.0) continue;
+        jackknife_message(comp, &c, i, comp->v.time, false);
+        *terminate = true;
+        return fmi2Warning;
+    }
+    return fmi2OK;
 }

@@ -83,6 +83,14 @@ void model_outputs(ModelInstance *comp) {
     ma_derivatives(&veh, &mm, u, delta, D->M_d, x, xdot, &D->a_y);
     ma_forces(&veh, u, x, delta, alpha, FY);
     D->beta = D->v / u;
+    /* the derivatives of the Model Exchange states (the same right-hand side) */
+    double dx[MODEL_NX];
+    model_derivatives(comp, dx);
+    D->der_w_r = dx[0];
+    D->der_v = dx[1];
+    D->der_p = dx[2];
+    D->der_x = dx[5];
+    D->der_y = dx[6];
     for (int i = 1; i <= MA_MAX_AXLES; i++) {
         D->alpha[i] = i <= D->n ? alpha[i] : 0.0;
         D->F_Y[i] = i <= D->n ? FY[i] : 0.0;
@@ -163,4 +171,40 @@ void model_free(ModelInstance *comp) {
     ode_free(s->ode);
     free(s);
     comp->solver = NULL;
+}
+
+/* ---- Model Exchange: x = [w_r, v, p, phi, psi, x, y], the CVODE state of
+ * doStep, and the same right-hand side rhs() with the inputs of this instant */
+
+void model_get_x(ModelInstance *comp, double x[]) {
+    x[0] = D->w_r; x[1] = D->v; x[2] = D->p; x[3] = D->phi;
+    x[4] = D->psi; x[5] = D->x; x[6] = D->y;
+}
+
+void model_set_x(ModelInstance *comp, const double x[]) {
+    D->w_r = x[0]; D->v = x[1]; D->p = x[2]; D->phi = x[3];
+    D->psi = x[4]; D->x = x[5]; D->y = x[6];
+}
+
+fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
+    Solver s;
+    s.comp = comp;
+    make_vehicle(comp, &s.veh);
+    ma_prepare(&s.veh, &s.mm);
+    s.u = speed(comp);
+    s.Md = D->M_d;
+    steering(comp, comp->v.time, s.delta);
+    double x[7];
+    model_get_x(comp, x);
+    return rhs(comp->v.time, x, dx, &s) ? fmi2Error : fmi2OK;
+}
+
+void model_event_indicators(ModelInstance *comp, double z[]) { (void)comp; (void)z; }
+
+/* the built-in test step steer is a time event */
+fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+    *terminate = false;
+    const double ts = D->testSteerTime;
+    *tNext = D->testSteerAmp != 0.0 && comp->v.time < ts - step_tol(comp) ? ts : INFINITY;
+    return fmi2OK;
 }
