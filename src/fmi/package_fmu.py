@@ -1,0 +1,561 @@
+#!/usr/bin/env python3
+"""Assemble an FMU's tree and zip it (called by add_fmu in CMakeLists.txt after linking).
+
+The tree <build>/fmu/<Name>/ already holds binaries/linux64/<Name>.so. This adds
+
+  modelDescription.xml     the repository's modelDescription/<Name>.xml (the single source,
+                           kept whole) with author, version (pyproject.toml's), copyright,
+                           license, generationTool, DisplayUnits (the table DISPLAY_UNITS
+                           below) and, where sources/ is shipped, <SourceFiles>;
+  model.png                src/models/<Name>/model.png (made by scripts/make_icons.py);
+  documentation/index.html from the model description and src/models/<Name>/README.md;
+  documentation/licenses/  artibus's LICENSE and the notices of the libraries inside;
+  sources/                 the C sources, where the model needs nothing beyond the C library;
+  resources/               the add_fmu RESOURCES;
+  binaries/win64/<Name>.dll  when --win64-dir holds it (the mingw build);
+
+then writes the archive (entries in a fixed order with a fixed time stamp, so the same
+inputs give the same bytes) through a temporary file, so a reader never sees half an FMU.
+
+Only the Python standard library is used: this runs inside the CMake build.
+
+usage: package_fmu.py --name N --root SRC --xml XML --gen GENDIR --tree TREE --fmu OUT.fmu
+                      [--sources S...] [--resources R...] [--win64-dir DIR]
+"""
+
+import argparse
+import html
+import math
+import os
+import re
+import shutil
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+import zipfile
+
+AUTHOR = "the artibus authors"
+COPYRIGHT = "Copyright (c) 2026, the artibus authors"
+
+#: unit -> (display unit, factor, offset): display value = factor * value + offset (FMI 2.0,
+#: 2.2.2). Each display unit is added to the unit's <Unit> and set as displayUnit= on the
+#: variables of that unit, except those whose description matches the pattern beside it
+#: (a display unit that would make the variable read oddly: a lateral or piston velocity
+#: or a slip-blend speed is no road speed in km/h).
+DISPLAY_UNITS = {
+    "rad": ("deg", 180.0 / math.pi, 0.0, None),
+    "rad/s": ("deg/s", 180.0 / math.pi, 0.0, None),
+    "m/s": ("km/h", 3.6, 0.0, re.compile(r"lateral|piston|slip angle", re.I)),
+    "N": ("kN", 1e-3, 0.0, None),
+    "N.m": ("kN.m", 1e-3, 0.0, None),
+}
+
+#: libraries a binary may contain: (marker bytes in the binary, licence file, what)
+SUNDIALS_MARKERS = (b"CVodeCreate", b"cvode_mem", b"arkode_mem", b"ERKStepCreate")
+LICENSE_FILES = {
+    "artibus": ("LICENSE", "artibus-BSD-2-Clause.txt"),
+    "SUNDIALS": ("licenses/SUNDIALS-BSD-3-Clause.txt", "SUNDIALS-BSD-3-Clause.txt"),
+    "Eigen": ("licenses/Eigen-MPL-2.0.txt", "Eigen-MPL-2.0.txt"),
+}
+LICENSE_TEXT = {
+    "artibus": "BSD-2-Clause",
+    "SUNDIALS": "SUNDIALS (BSD-3-Clause), linked statically",
+    "Eigen": "Eigen (MPL-2.0), header-only, compiled in",
+}
+
+INCLUDE_RE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
+
+
+def project_version(root):
+    """version = "..." of [project] in pyproject.toml (tomllib is 3.11+, so by hand)."""
+    text = open(os.path.join(root, "pyproject.toml"), encoding="utf-8").read()
+    section = re.search(r"^\[project\]\s*$(.*?)(?=^\[|\Z)", text, re.M | re.S)
+    m = re.search(r'^version\s*=\s*"([^"]+)"', section.group(1) if section else "", re.M)
+    if not m:
+        sys.exit("package_fmu.py: no version in [project] of pyproject.toml")
+    return m.group(1)
+
+
+# ---------------------------------------------------------------------------
+# which files the model is made of, and what they need
+
+
+def includes(path):
+    with open(path, encoding="utf-8") as f:
+        return INCLUDE_RE.findall(f.read())
+
+
+def closure(root, name, sources):
+    """The model's C files and every local header they include (transitively), as
+    repository-relative paths, and the system headers named."""
+    inc_dirs = [os.path.join(root, d) for d in
+                ("src/fmi", f"src/models/{name}", "src/models/common", "include/fmi2")]
+    todo = [os.path.normpath(os.path.join(root, s)) for s in sources]
+    todo.append(os.path.join(root, "src/fmi/fmi2Functions.c"))
+    files, system = set(), set()
+    while todo:
+        path = todo.pop()
+        if path in files:
+            continue
+        files.add(path)
+        for kind, inc in includes(path):
+            if inc == "model_vars.h":
+                continue
+            cands = [os.path.join(os.path.dirname(path), inc)] + [os.path.join(d, inc) for d in inc_dirs]
+            found = next((os.path.normpath(c) for c in cands if os.path.isfile(c)), None)
+            if kind == '"' and found:
+                todo.append(found)
+            else:
+                system.add(inc)
+    return sorted(os.path.relpath(f, root) for f in files), system
+
+
+def needs_beyond_libc(files, system):
+    """A reason the model cannot be shipped as C sources alone, or None."""
+    for f in files:
+        if not f.endswith((".c", ".h")):
+            return f"{f} is not C"
+        if os.path.basename(f) == "ode.h":
+            return "it integrates with SUNDIALS (ode.h)"
+    for inc in system:
+        if "/" in inc or not inc.endswith(".h"):
+            return f"it includes <{inc}>"
+    return None
+
+
+def uses_eigen(root, files):
+    return any(inc.startswith("Eigen/") for f in files for _, inc in includes(os.path.join(root, f)))
+
+
+# ---------------------------------------------------------------------------
+# modelDescription.xml
+
+
+def parse(xml_path):
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
+    return ET.parse(xml_path, parser)
+
+
+def add_display_units(md):
+    """DisplayUnits on <UnitDefinitions> and displayUnit= on the variables that read well in
+    them. Returns {variable name: display unit}."""
+    units = {u.get("name"): u for u in md.iter("Unit")}
+    used = {}
+    for sv in md.iter("ScalarVariable"):
+        real = sv.find("Real")
+        if real is None or real.get("unit") not in DISPLAY_UNITS or real.get("displayUnit"):
+            continue
+        unit = real.get("unit")
+        dname, _, _, skip = DISPLAY_UNITS[unit]
+        if unit not in units or (skip and skip.search(sv.get("description", ""))):
+            continue
+        real.set("displayUnit", dname)
+        used.setdefault(unit, set()).add(sv.get("name"))
+    for unit in used:
+        dname, factor, offset, _ = DISPLAY_UNITS[unit]
+        u = units[unit]
+        if any(d.get("name") == dname for d in u.findall("DisplayUnit")):
+            continue
+        d = ET.SubElement(u, "DisplayUnit", {"name": dname, "factor": repr(factor)})
+        if offset:
+            d.set("offset", repr(offset))
+    return {n: DISPLAY_UNITS[u][0] for u, names in used.items() for n in names}
+
+
+def indent_unit_children(md):
+    """Keep the written layout: a <Unit> given on one line stays on one line."""
+    for u in md.iter("Unit"):
+        for child in u:
+            child.tail = None
+
+
+def set_metadata(md, version, libraries):
+    md.set("author", AUTHOR)
+    md.set("version", version)
+    md.set("copyright", COPYRIGHT)
+    lic = "BSD-2-Clause (artibus)"
+    extra = [LICENSE_TEXT[lib] for lib in libraries if lib != "artibus"]
+    if extra:
+        lic += "; the binaries also contain " + " and ".join(extra)
+    md.set("license", lic + ": see documentation/licenses/")
+    md.set("generationTool", f"artibus {version}")
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    if epoch:
+        md.set("generationDateAndTime", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(int(epoch))))
+    elif "generationDateAndTime" in md.attrib:
+        del md.attrib["generationDateAndTime"]
+
+
+def add_source_files(md, c_files):
+    """<SourceFiles> in each interface element (FMI 2.0, 2.3 / 3.2.1 / 4.3.1)."""
+    for kind in ("ModelExchange", "CoSimulation"):
+        el = md.find(kind)
+        if el is None:
+            continue
+        for old in el.findall("SourceFiles"):
+            el.remove(old)
+        sf = ET.Element("SourceFiles")
+        # SourceFiles precedes the other children of the interface element in the XSD
+        el.insert(0, sf)
+        sf.text = "\n      "
+        for i, f in enumerate(c_files):
+            e = ET.SubElement(sf, "File", {"name": f})
+            e.tail = "\n      " if i + 1 < len(c_files) else "\n    "
+        sf.tail = "\n  " if len(el) == 1 else "\n    "
+        if len(el) == 1:
+            el.text = "\n    "
+
+
+def write_xml(tree, path):
+    tree.write(path, encoding="UTF-8", xml_declaration=True)
+    with open(path, "ab") as f:
+        f.write(b"\n")
+
+
+# ---------------------------------------------------------------------------
+# documentation/index.html
+
+
+def inline_md(text):
+    """escape, then `code`, **bold**, [text](url)"""
+    out = []
+    for i, part in enumerate(re.split(r"(`[^`]*`)", text)):
+        if i % 2:
+            out.append("<code>" + html.escape(part[1:-1]) + "</code>")
+            continue
+        s = html.escape(part, quote=False)
+        s = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", s)
+        s = re.sub(r"\[([^\]]+)\]\(([^)\s]+)\)", r'<a href="\2">\1</a>', s)
+        out.append(s)
+    return "".join(out)
+
+
+def markdown(text):
+    """A small subset of Markdown: #-headings (shifted one level down), paragraphs, - and 1.
+    lists, ``` code blocks, inline code, bold, links."""
+    out, para, lst = [], [], None
+    lines = text.splitlines()
+
+    def flush():
+        nonlocal para, lst
+        if para:
+            out.append("<p>" + inline_md(" ".join(para)) + "</p>")
+            para = []
+        if lst:
+            tag, items = lst
+            out.append(f"<{tag}>" + "".join(f"<li>{inline_md(' '.join(it))}</li>" for it in items) + f"</{tag}>")
+            lst = None
+
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        s = line.strip()
+        if s.startswith("```"):
+            flush()
+            code = []
+            i += 1
+            while i < len(lines) and not lines[i].strip().startswith("```"):
+                code.append(lines[i])
+                i += 1
+            out.append("<pre><code>" + html.escape("\n".join(code)) + "</code></pre>")
+        elif not s:
+            flush()
+        elif m := re.match(r"(#{1,5})\s+(.*)", s):
+            flush()
+            level = min(len(m.group(1)) + 1, 6)
+            out.append(f"<h{level}>{inline_md(m.group(2))}</h{level}>")
+        elif m := re.match(r"([-*]|\d+\.)\s+(.*)", s):
+            tag = "ol" if m.group(1)[0].isdigit() else "ul"
+            if para:
+                out.append("<p>" + inline_md(" ".join(para)) + "</p>")
+                para = []
+            if lst and lst[0] != tag:
+                flush()
+            if not lst:
+                lst = (tag, [])
+            lst[1].append([m.group(2)])
+        elif lst and line.startswith((" ", "\t")):
+            lst[1][-1].append(s)
+        else:
+            if lst:
+                flush()
+            para.append(s)
+        i += 1
+    flush()
+    return "\n".join(out)
+
+
+CSS = """body{font-family:sans-serif;max-width:72em;margin:1em auto;padding:0 1em;color:#222}
+h1{display:flex;align-items:center;gap:.5em}h1 img{width:64px;height:64px}
+table{border-collapse:collapse;margin:.5em 0 1.5em}td,th{border:1px solid #ccc;padding:2px 6px;vertical-align:top;text-align:left}
+th{background:#eee}td.num{text-align:right;white-space:nowrap}code,td.name{font-family:monospace}
+td.name{white-space:nowrap}pre{background:#f4f4f4;padding:.5em;overflow-x:auto}.du{color:#666}"""
+
+CAUSALITY_TITLES = (
+    ("parameter", "Parameters"),
+    ("calculatedParameter", "Calculated parameters"),
+    ("input", "Inputs"),
+    ("output", "Outputs"),
+    ("local", "Local variables"),
+    ("independent", "Independent variable"),
+)
+
+
+def fmt_display(value, unit, md_units):
+    """the value in its display unit, e.g. 0.75 rad -> "(42.97 deg)" """
+    if not value or unit not in md_units:
+        return ""
+    try:
+        x = float(value)
+    except ValueError:
+        return ""
+    dname, factor, offset = md_units[unit]
+    y = factor * x + offset
+    return f' <span class="du">({y:.6g} {html.escape(dname)})</span>'
+
+
+def documentation(md, name, readme, libraries, platforms, source_files, version, why_not):
+    e = html.escape
+    units = {}
+    for u in md.iter("Unit"):
+        for d in u.findall("DisplayUnit"):
+            units[(u.get("name"), d.get("name"))] = (d.get("name"), float(d.get("factor", "1")),
+                                                      float(d.get("offset", "0")))
+    interfaces = [k for k in ("CoSimulation", "ModelExchange") if md.find(k) is not None]
+    de = md.find("DefaultExperiment")
+    rows = [
+        ("FMI version", md.get("fmiVersion") + " (" + ", ".join(
+            {"CoSimulation": "Co-Simulation", "ModelExchange": "Model Exchange"}[k] for k in interfaces) + ")"),
+        ("version", md.get("version")),
+        ("author", md.get("author")),
+        ("copyright", md.get("copyright")),
+        ("license", md.get("license")),
+        ("generation tool", md.get("generationTool")),
+        ("GUID", md.get("guid")),
+        ("platforms", ", ".join(f"binaries/{p}" for p in platforms)),
+    ]
+    if de is not None:
+        rows.append(("default experiment", ", ".join(f"{k} = {v}" for k, v in de.attrib.items())))
+    rows.append(("sources", f"sources/ ({len(source_files)} C files listed in &lt;SourceFiles&gt;, "
+                 "compile them with sources/ as the include path)" if source_files else
+                 f"not shipped: {e(why_not or '')}"))
+    meta = "".join(f"<tr><th>{e(k)}</th><td>{v if k == 'sources' else e(v or '')}</td></tr>" for k, v in rows)
+
+    lic_items = []
+    for lib in libraries:
+        fname = LICENSE_FILES[lib][1]
+        what = {"artibus": "artibus itself (BSD-2-Clause)",
+                "SUNDIALS": "SUNDIALS CVODE/ARKODE, linked statically into the binaries (BSD-3-Clause)",
+                "Eigen": "Eigen 3, header-only, compiled into the binaries (MPL-2.0; its source: "
+                         "https://gitlab.com/libeigen/eigen)"}[lib]
+        lic_items.append(f'<li><a href="licenses/{fname}">{fname}</a>: {e(what)}</li>')
+
+    sections = []
+    for causality, title in CAUSALITY_TITLES:
+        svs = [sv for sv in md.iter("ScalarVariable") if sv.get("causality", "local") == causality]
+        if not svs:
+            continue
+        body = []
+        for sv in svs:
+            t = next(c for c in sv if isinstance(c.tag, str))
+            unit = t.get("unit", "")
+            disp = t.get("displayUnit", "")
+            du = units.get((unit, disp))
+            dmap = {unit: du} if du else {}
+            start = t.get("start", "")
+            cells = [
+                f'<td class="name">{e(sv.get("name"))}</td>',
+                f"<td>{e(t.tag)}</td>",
+                f"<td>{e(unit)}</td>",
+                f"<td>{e(disp)}</td>",
+                f'<td class="num">{e(start)}{fmt_display(start, unit, dmap)}</td>',
+                f'<td class="num">{e(t.get("min", ""))}{fmt_display(t.get("min"), unit, dmap)}</td>',
+                f'<td class="num">{e(t.get("max", ""))}{fmt_display(t.get("max"), unit, dmap)}</td>',
+                f"<td>{e(sv.get('variability', 'continuous'))}</td>",
+                f"<td>{e(sv.get('description', ''))}</td>",
+            ]
+            body.append("<tr>" + "".join(cells) + "</tr>")
+        sections.append(
+            f'<h2 id="{causality}">{e(title)} ({len(svs)})</h2>\n<table class="variables">'
+            "<tr><th>name</th><th>type</th><th>unit</th><th>display unit</th><th>start</th>"
+            "<th>min</th><th>max</th><th>variability</th><th>description</th></tr>\n"
+            + "\n".join(body) + "</table>")
+
+    readme_html = markdown(readme) if readme else "<p>(no model text)</p>"
+    return f"""<!DOCTYPE html>
+<html lang="en">
+<head><meta charset="utf-8"><title>{e(name)} {e(version)}</title>
+<style>{CSS}</style></head>
+<body>
+<h1><img src="../model.png" alt="">{e(name)}</h1>
+<p>{e(md.get("description", ""))}</p>
+<table class="meta">{meta}</table>
+{readme_html}
+<h2>Licences</h2>
+<p>What this FMU contains and under which licence (the texts are in <code>documentation/licenses/</code>):</p>
+<ul>{"".join(lic_items)}</ul>
+{chr(10).join(sections)}
+<p>Generated by {e(md.get("generationTool") or "artibus")} from modelDescription/{e(name)}.xml
+and src/models/{e(name)}/README.md. Display units: value in display unit = factor &times; value + offset,
+as declared in <code>&lt;UnitDefinitions&gt;</code>.</p>
+</body>
+</html>
+"""
+
+
+# ---------------------------------------------------------------------------
+# the tree and the archive
+
+
+def reset_dir(path):
+    if os.path.isdir(path):
+        shutil.rmtree(path)
+    os.makedirs(path)
+
+
+def copy(src, dst):
+    os.makedirs(os.path.dirname(dst), exist_ok=True)
+    shutil.copyfile(src, dst)
+
+
+def ship_sources(root, name, gen, tree, files):
+    """sources/: the files at their repository paths under sources/ (src/ dropped), the
+    generated model_vars.c/.h and the FMI headers at the top, and for each header the
+    build finds through an include directory (the model's folder, common/) a one-line
+    header at the top that includes it, so sources/ alone is the include path."""
+    dst = os.path.join(tree, "sources")
+    reset_dir(dst)
+    c_files = []
+    top = {}
+    for f in files:
+        rel = f[len("src/"):] if f.startswith("src/") else f
+        if rel.startswith(("fmi/", "include/fmi2/")):
+            rel = os.path.basename(rel)
+        copy(os.path.join(root, f), os.path.join(dst, rel))
+        if rel.endswith(".c"):
+            c_files.append(rel)
+        elif rel.startswith((f"models/{name}/", "models/common/")):
+            top.setdefault(os.path.basename(rel), rel)
+    for g in ("model_vars.c", "model_vars.h"):
+        copy(os.path.join(gen, g), os.path.join(dst, g))
+    c_files.append("model_vars.c")
+    for base, rel in sorted(top.items()):
+        if os.path.exists(os.path.join(dst, base)):
+            continue
+        with open(os.path.join(dst, base), "w", encoding="utf-8") as out:
+            out.write(f'/* artibus: {base} lives in {rel}; the build has its folder on the include path */\n'
+                      f'#include "{rel}"\n')
+    return sorted(c_files, key=lambda c: (c.count("/"), c))
+
+
+def zip_tree(tree, fmu):
+    epoch = int(os.environ.get("SOURCE_DATE_EPOCH", "315532800"))  # 1980-01-01 without it
+    stamp = time.gmtime(max(epoch, 315532800))[:6]
+    entries = []
+    for dirpath, dirnames, filenames in os.walk(tree):
+        dirnames.sort()
+        for fn in sorted(filenames):
+            full = os.path.join(dirpath, fn)
+            entries.append((os.path.relpath(full, tree).replace(os.sep, "/"), full))
+    # modelDescription.xml first, then the rest in path order
+    entries.sort(key=lambda e: (e[0] != "modelDescription.xml", e[0]))
+    os.makedirs(os.path.dirname(os.path.abspath(fmu)), exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=".", suffix=".fmu.tmp", dir=os.path.dirname(os.path.abspath(fmu)))
+    os.close(fd)
+    try:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
+            for arc, full in entries:
+                info = zipfile.ZipInfo(arc, date_time=stamp)
+                info.compress_type = zipfile.ZIP_DEFLATED
+                info.external_attr = (0o755 if arc.startswith("binaries/") else 0o644) << 16
+                with open(full, "rb") as f:
+                    z.writestr(info, f.read())
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, fmu)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--name", required=True)
+    ap.add_argument("--root", required=True, help="the repository")
+    ap.add_argument("--xml", required=True)
+    ap.add_argument("--gen", required=True, help="the folder of the generated model_vars.c/.h")
+    ap.add_argument("--tree", required=True)
+    ap.add_argument("--fmu", required=True)
+    ap.add_argument("--sources", nargs="*", default=[])
+    ap.add_argument("--resources", nargs="*", default=[])
+    ap.add_argument("--win64-dir", default="")
+    a = ap.parse_args(argv)
+    name, root, tree = a.name, os.path.abspath(a.root), os.path.abspath(a.tree)
+    version = project_version(root)
+    model_dir = os.path.join(root, "src", "models", name)
+
+    so = os.path.join(tree, "binaries", "linux64", f"{name}.so")
+    if not os.path.isfile(so):
+        sys.exit(f"package_fmu.py: {so} missing")
+
+    # binaries/win64 from the cross build's folder, when it has this FMU's DLL
+    win_dst = os.path.join(tree, "binaries", "win64")
+    if os.path.isdir(win_dst):
+        shutil.rmtree(win_dst)
+    binaries = [so]
+    if a.win64_dir:
+        dll = os.path.join(a.win64_dir, f"{name}.dll")
+        if os.path.isfile(dll):
+            if os.path.getmtime(dll) < os.path.getmtime(a.xml):
+                print(f"package_fmu.py: warning: {dll} is older than {a.xml}", file=sys.stderr)
+            copy(dll, os.path.join(win_dst, f"{name}.dll"))
+            binaries.append(dll)
+    platforms = sorted(d for d in os.listdir(os.path.join(tree, "binaries")))
+
+    files, system = closure(root, name, a.sources)
+    libraries = ["artibus"]
+    if any(any(m in open(b, "rb").read() for m in SUNDIALS_MARKERS) for b in binaries):
+        libraries.append("SUNDIALS")
+    if uses_eigen(root, files):
+        libraries.append("Eigen")
+    why_not = needs_beyond_libc(files, system)
+
+    tree_md = parse(a.xml)
+    md = tree_md.getroot()
+    set_metadata(md, version, libraries)
+    add_display_units(md)
+    indent_unit_children(md)
+
+    # the plain parts of the tree, rebuilt each time
+    for sub in ("documentation", "resources", "sources"):
+        p = os.path.join(tree, sub)
+        if os.path.isdir(p):
+            shutil.rmtree(p)
+    for res in a.resources:
+        copy(os.path.join(root, res), os.path.join(tree, "resources", os.path.basename(res)))
+    os.makedirs(os.path.join(tree, "resources"), exist_ok=True)
+    c_files = ship_sources(root, name, a.gen, tree, files) if why_not is None else []
+    if c_files:
+        add_source_files(md, c_files)
+    write_xml(tree_md, os.path.join(tree, "modelDescription.xml"))
+
+    icon = os.path.join(model_dir, "model.png")
+    if os.path.isfile(icon):
+        copy(icon, os.path.join(tree, "model.png"))
+    elif os.path.exists(os.path.join(tree, "model.png")):
+        os.unlink(os.path.join(tree, "model.png"))
+    for lib in libraries:
+        src, fname = LICENSE_FILES[lib]
+        copy(os.path.join(root, src), os.path.join(tree, "documentation", "licenses", fname))
+    readme_path = os.path.join(model_dir, "README.md")
+    readme = open(readme_path, encoding="utf-8").read() if os.path.isfile(readme_path) else ""
+    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not)
+    with open(os.path.join(tree, "documentation", "index.html"), "w", encoding="utf-8") as f:
+        f.write(page)
+
+    zip_tree(tree, a.fmu)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

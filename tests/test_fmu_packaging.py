@@ -1,0 +1,364 @@
+"""What every FMU carries for an OEM toolchain (issue 14): the archive's contents
+(binaries, documentation, licence notices, icon), the model description's metadata and
+display units on top of the repository's XML, documentation listing every variable, and,
+for the models that need only the C library, sources that compile to a binary giving the
+same results as the shipped one. Packed by src/fmi/package_fmu.py."""
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+import xml.etree.ElementTree as ET
+import zipfile
+from html.parser import HTMLParser
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+
+from conftest import FMU_NAMES, ROOT, fmu_file
+
+VERSION = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+
+#: the display units an engineer expects, with their factors derived here, not read from the
+#: packer: display value = factor * value (FMI 2.0, 2.2.2)
+EXPECTED_DISPLAY = {
+    ("rad", "deg"): 180.0 / math.pi,
+    ("rad/s", "deg/s"): 180.0 / math.pi,
+    ("m/s", "km/h"): 3600.0 / 1000.0,
+    ("N", "kN"): 1.0 / 1000.0,
+    ("N.m", "kN.m"): 1.0 / 1000.0,
+}
+
+#: the controllers and ECUs of the brief: plain C, so their sources must be inside
+MUST_SHIP_SOURCES = {"TrainGuidance", "ForceMinimization", "DampingController", "SwayBaseline",
+                     "SteeringECU", "SteeringActuator", "ZeroSideslipSteering"}
+
+SYSTEM_LIBS = {"linux-vdso.so.1", "libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}
+
+
+def _model_files(name):
+    return [p for p in (ROOT / "src" / "models" / name).iterdir() if p.is_file()]
+
+
+def _uses_sundials(name):
+    """the model integrates (the shared layer's ode.h, which wraps SUNDIALS)"""
+    return any(p.suffix in (".c", ".cpp", ".h") and '#include "ode.h"' in p.read_text()
+               for p in _model_files(name))
+
+
+def _uses_eigen(name):
+    return any(p.suffix in (".cpp", ".h", ".hpp") and "#include <Eigen/" in p.read_text()
+               for p in _model_files(name))
+
+
+def _names(name):
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        return set(z.namelist())
+
+
+def _read(name, member):
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        return z.read(member)
+
+
+def _packed_md(name):
+    return ET.fromstring(_read(name, "modelDescription.xml"))
+
+
+def _repo_md(name):
+    return ET.parse(ROOT / "modelDescription" / f"{name}.xml").getroot()
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_archive_lists_binaries_documentation_licences_icon(name):
+    names = _names(name)
+    assert f"binaries/linux64/{name}.so" in names
+    assert "documentation/index.html" in names
+    assert "documentation/licenses/artibus-BSD-2-Clause.txt" in names
+    assert "model.png" in names
+    # the notices of what the binary contains: SUNDIALS where its code is linked in (its
+    # symbols in the shared object), Eigen where the model is C++ with Eigen
+    so = _read(name, f"binaries/linux64/{name}.so")
+    assert ("documentation/licenses/SUNDIALS-BSD-3-Clause.txt" in names) == (b"CVodeCreate" in so)
+    assert ("documentation/licenses/Eigen-MPL-2.0.txt" in names) == _uses_eigen(name)
+    if _uses_sundials(name):
+        assert "documentation/licenses/SUNDIALS-BSD-3-Clause.txt" in names
+    # the repository's copies are what is shipped
+    assert _read(name, "documentation/licenses/artibus-BSD-2-Clause.txt") == (ROOT / "LICENSE").read_bytes()
+    for member in names:
+        if member.startswith("documentation/licenses/") and "artibus" not in member:
+            assert _read(name, member) == (ROOT / "licenses" / member.rsplit("/", 1)[1]).read_bytes()
+    # win64 only as the mingw build's DLL, never anything else under binaries/
+    for member in names:
+        if member.startswith("binaries/"):
+            assert member in (f"binaries/linux64/{name}.so", f"binaries/win64/{name}.dll"), member
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_icon_is_the_models_png(name):
+    png = _read(name, "model.png")
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    width, height = int.from_bytes(png[16:20], "big"), int.from_bytes(png[20:24], "big")
+    assert 32 <= width <= 512 and 32 <= height <= 512
+    assert png == (ROOT / "src" / "models" / name / "model.png").read_bytes()
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_metadata(name):
+    md = _packed_md(name)
+    assert md.get("version") == VERSION
+    assert md.get("generationTool") == f"artibus {VERSION}"
+    assert md.get("author")
+    assert "artibus" in md.get("copyright") and re.search(r"\b20\d\d\b", md.get("copyright"))
+    assert "BSD-2-Clause" in md.get("license")
+    assert ("MPL-2.0" in md.get("license")) == _uses_eigen(name)
+    # no build time stamp unless the build asks for a reproducible one
+    if "SOURCE_DATE_EPOCH" not in os.environ:
+        assert md.get("generationDateAndTime") is None
+    fmpy_md = read_model_description(str(fmu_file(name)))
+    assert fmpy_md.version == VERSION and fmpy_md.author == md.get("author")
+
+
+def _strip(el, drop_attrs=("displayUnit",), drop_children=("DisplayUnit", "SourceFiles")):
+    """an element as comparable data, leaving out what the packer adds"""
+    return (el.tag, {k: v for k, v in el.attrib.items() if k not in drop_attrs},
+            (el.text or "").strip(),
+            [_strip(c, drop_attrs, drop_children) for c in el
+             if isinstance(c.tag, str) and c.tag not in drop_children])
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_packed_description_is_the_repository_xml_plus_additions(name):
+    """everything in modelDescription/<Name>.xml is kept as written (another interface
+    element, every variable, the model structure); only metadata, display units and
+    source files are added"""
+    repo, packed = _repo_md(name), _packed_md(name)
+    meta = ("author", "version", "copyright", "license", "generationTool", "generationDateAndTime")
+    for k, v in repo.attrib.items():
+        if k not in meta:
+            assert packed.get(k) == v, k
+    assert _strip(packed, meta + ("displayUnit",)) == _strip(repo, meta + ("displayUnit",))
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_display_units_defined_and_right(name):
+    md = _packed_md(name)
+    display = {}
+    for u in md.iter("Unit"):
+        for d in u.findall("DisplayUnit"):
+            key = (u.get("name"), d.get("name"))
+            assert key in EXPECTED_DISPLAY, key
+            assert float(d.get("factor", "1")) == pytest.approx(EXPECTED_DISPLAY[key], rel=1e-15)
+            assert float(d.get("offset", "0")) == 0.0
+            display[key] = d
+    used = set()
+    n_display = 0
+    for sv in md.iter("ScalarVariable"):
+        real = sv.find("Real")
+        if real is None or real.get("displayUnit") is None:
+            continue
+        key = (real.get("unit"), real.get("displayUnit"))
+        assert key in display, f"{sv.get('name')}: display unit {key} not defined"
+        used.add(key)
+        n_display += 1
+    assert used == set(display), "a DisplayUnit no variable uses"
+    # every angle is shown in degrees
+    for sv in md.iter("ScalarVariable"):
+        real = sv.find("Real")
+        if real is not None and real.get("unit") in ("rad", "rad/s"):
+            assert real.get("displayUnit") in ("deg", "deg/s"), sv.get("name")
+    # FMPy reads them (what a tool's parameter dialogue shows)
+    fmpy_md = read_model_description(str(fmu_file(name)))
+    for unit in fmpy_md.unitDefinitions:
+        for du in unit.displayUnits:
+            assert du.factor == pytest.approx(EXPECTED_DISPLAY[(unit.name, du.name)], rel=1e-15)
+
+
+def test_display_units_only_where_they_read_well():
+    """a road speed in km/h, a lateral or piston velocity not; forces in kN"""
+    def du(name, var):
+        for sv in _packed_md(name).iter("ScalarVariable"):
+            if sv.get("name") == var:
+                return sv.find("Real").get("displayUnit")
+        raise KeyError(var)
+    assert du("BusDynamics", "vx[1]") == "km/h" and du("BusDynamics", "v") == "km/h"
+    assert du("BusDynamics", "vy[1]") is None and du("BusDynamics", "vy_start") is None
+    assert du("MultiAxle3DOF", "v") is None          # lateral velocity there
+    assert du("MultiAxle3DOF", "u") == "km/h"
+    assert du("ArticulationDamper", "Ldot[1]") is None and du("ArticulationDamper", "v0") is None
+    assert du("BusDynamics", "Fy[1]") == "kN" and du("ArticulationDamper", "Mjoint") == "kN.m"
+    assert du("BusDynamics", "artAngle[1]") == "deg"
+
+
+class _Rows(HTMLParser):
+    """the cell texts of every table row"""
+    def __init__(self):
+        super().__init__()
+        self.rows, self._row, self._cell = [], None, None
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "tr":
+            self._row = []
+        elif tag in ("td", "th") and self._row is not None:
+            self._cell = []
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th") and self._cell is not None:
+            self._row.append("".join(self._cell).strip())
+            self._cell = None
+        elif tag == "tr" and self._row is not None:
+            self.rows.append(self._row)
+            self._row = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_documentation_lists_every_variable(name):
+    page = _read(name, "documentation/index.html").decode("utf-8")
+    parser = _Rows()
+    parser.feed(page)
+    rows = {r[0]: r for r in parser.rows if len(r) == 9}
+    header = next(r for r in parser.rows if len(r) == 9 and r[0] == "name")
+    assert header[:5] == ["name", "type", "unit", "display unit", "start"]
+    for sv in _repo_md(name).iter("ScalarVariable"):
+        t = next(c for c in sv if isinstance(c.tag, str))
+        row = rows.get(sv.get("name"))
+        assert row is not None, f"{sv.get('name')} not in index.html"
+        assert row[1] == t.tag
+        assert row[2] == t.get("unit", "")
+        # the value as written, then its display-unit value in brackets where it has one
+        for col, attr in ((4, "start"), (5, "min"), (6, "max")):
+            if t.get(attr) is not None:
+                assert row[col] == t.get(attr) or row[col].startswith(t.get(attr) + " ("), (attr, row)
+        assert row[8] == sv.get("description", "")
+    # the model's own text is in it, and the licences are linked
+    readme = (ROOT / "src" / "models" / name / "README.md").read_text()
+    first_heading = next(line.lstrip("#").strip() for line in readme.splitlines() if line.startswith("#"))
+    assert first_heading.replace("`", "") in re.sub(r"<[^>]+>", "", page)
+    assert 'href="licenses/artibus-BSD-2-Clause.txt"' in page
+    assert "<script" not in page
+
+
+def _ships_sources(name):
+    return not _uses_sundials(name) and not any(p.suffix == ".cpp" for p in _model_files(name))
+
+
+def test_the_controllers_ship_sources():
+    assert MUST_SHIP_SOURCES <= set(FMU_NAMES)
+    for name in FMU_NAMES:
+        has = any(n.startswith("sources/") for n in _names(name))
+        assert has == _ships_sources(name), name
+        assert (name in MUST_SHIP_SOURCES) <= has
+
+
+def _stimulus(md, t):
+    """every Real input moved within its range: a sine around its start value"""
+    cols = []
+    for k, v in enumerate(md.modelVariables):
+        if v.causality != "input" or v.type != "Real":
+            continue
+        start = float(v.start or 0.0)
+        lo = float(v.min) if v.min is not None else -math.inf
+        hi = float(v.max) if v.max is not None else math.inf
+        u = start + 0.1 * (1.0 + abs(start)) * np.sin(2 * np.pi * t / 3.0 + k)
+        cols.append((v.name, np.clip(u, lo, hi)))
+    return cols
+
+
+@pytest.mark.parametrize("name", [n for n in FMU_NAMES if _ships_sources(n)])
+def test_sources_compile_and_give_the_shipped_results(name, tmp_path):
+    """gcc builds sources/ (the files of <SourceFiles>, sources/ as the include path, the
+    build's flags) into a shared library that needs only libc/libm; swapped into a copy of
+    the FMU it gives the shipped binary's results bit for bit"""
+    unzipped = tmp_path / "fmu"
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        z.extractall(unzipped)
+    md = read_model_description(str(fmu_file(name)))
+    files = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
+    assert "fmi2Functions.c" in files and "model_vars.c" in files
+    for f in files:
+        assert (unzipped / "sources" / f).is_file(), f
+    so = tmp_path / f"{name}.so"
+    cmd = ["gcc", "-std=gnu11", "-O3", "-DNDEBUG", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror",
+           "-Wno-unused-parameter", "-I", str(unzipped / "sources"),
+           *[str(unzipped / "sources" / f) for f in files], "-o", str(so), "-lm"]
+    env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    assert out.returncode == 0, out.stderr
+    ldd = subprocess.run(["ldd", str(so)], capture_output=True, text=True, check=True, env=env).stdout
+    libs = {line.split()[0].rsplit("/", 1)[-1] for line in ldd.splitlines() if line.strip()}
+    assert libs <= SYSTEM_LIBS, libs
+
+    rebuilt = tmp_path / f"{name}.fmu"
+    with zipfile.ZipFile(fmu_file(name)) as zin, zipfile.ZipFile(rebuilt, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = so.read_bytes() if item.filename == f"binaries/linux64/{name}.so" else zin.read(item)
+            zout.writestr(item, data)
+
+    stop = min(float(md.defaultExperiment.stopTime), 3.0)
+    step = float(md.defaultExperiment.stepSize or 0.01)
+    t = np.arange(0.0, stop + step, step)
+    cols = _stimulus(md, t)
+    inputs = None
+    if cols:
+        inputs = np.array(list(zip(t, *[c[1] for c in cols])),
+                          dtype=[("time", np.float64)] + [(c[0], np.float64) for c in cols])
+    outputs = [v.name for v in md.modelVariables if v.causality == "output" and v.type != "String"]
+    kw = dict(stop_time=stop, output_interval=step, input=inputs, output=outputs, fmi_type="CoSimulation")
+    shipped = simulate_fmu(str(fmu_file(name)), **kw)
+    ours = simulate_fmu(str(rebuilt), **kw)
+    assert len(shipped) == len(t) or len(shipped) > 10
+    moved = False
+    for v in outputs:
+        a, b = shipped[v], ours[v]
+        assert np.array_equal(a, b), f"{v}: largest difference {np.max(np.abs(a - b))}"
+        moved |= bool(np.ptp(a.astype(float)) > 0)
+    assert moved, "no output moved: the comparison would say nothing"
+
+
+def test_packer_win64_hook_and_reproducible(tmp_path):
+    """ARTIBUS_WIN64_DIR: a folder holding <Name>.dll gives binaries/win64/<Name>.dll, one
+    without it none; the same inputs give the same bytes; SOURCE_DATE_EPOCH gives the
+    generation time"""
+    name = "TrainGuidance"
+    tree = tmp_path / "tree"
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        z.extractall(tree)
+    gen = tmp_path / "gen"
+    gen.mkdir()
+    for f in ("model_vars.c", "model_vars.h"):
+        shutil.copy(tree / "sources" / f, gen / f)
+    win = tmp_path / "win64"
+    win.mkdir()
+    dll = b"MZ not really a DLL, just what the mingw build would leave here"
+    (win / f"{name}.dll").write_bytes(dll)
+    sources = ["src/models/TrainGuidance/model.c", "src/models/TrainGuidance/guidance.c"]
+    env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "SOURCE_DATE_EPOCH")}
+
+    def pack(out, win64="", extra_env=None):
+        subprocess.run([sys.executable, str(ROOT / "src/fmi/package_fmu.py"), "--name", name,
+                        "--root", str(ROOT), "--xml", str(ROOT / "modelDescription" / f"{name}.xml"),
+                        "--gen", str(gen), "--tree", str(tree), "--fmu", str(out),
+                        f"--win64-dir={win64}", "--sources", *sources, "--resources"],
+                       check=True, env={**env, **(extra_env or {})})
+        return out.read_bytes()
+
+    with_dll = pack(tmp_path / "a.fmu", str(win))
+    with zipfile.ZipFile(tmp_path / "a.fmu") as z:
+        assert z.read(f"binaries/win64/{name}.dll") == dll
+        assert "binaries/win64" in z.read("documentation/index.html").decode()
+    without = pack(tmp_path / "b.fmu", str(tmp_path / "empty"))
+    with zipfile.ZipFile(tmp_path / "b.fmu") as z:
+        assert not any(n.startswith("binaries/win64") for n in z.namelist())
+    assert pack(tmp_path / "c.fmu") == without
+    assert with_dll != without
+    pack(tmp_path / "d.fmu", extra_env={"SOURCE_DATE_EPOCH": "1767225600"})
+    with zipfile.ZipFile(tmp_path / "d.fmu") as z:
+        md = ET.fromstring(z.read("modelDescription.xml"))
+    assert md.get("generationDateAndTime") == "2026-01-01T00:00:00Z"
