@@ -31,6 +31,17 @@ GRID = {"Driver.vSet": "2:6.5:0.5", "Driver.R": "12.5:25:2.5"}       # 10 x 6 = 
 SMALL = {"Driver.vSet": "3,5", "Driver.R": "15,20,25"}
 
 
+@pytest.fixture(scope="module", autouse=True)
+def frozen_bench(tmp_path_factory):
+    """The bench packed once into a copy of its own: others rebuilding FMUs or editing
+    the .ssd while these tests run would change its content (and rightly rerun every case)."""
+    global SSP
+    d = tmp_path_factory.mktemp("bench")
+    SSP = str(d / f"{BENCH}.ssp")
+    Path(SSP).write_bytes(ssp.ssp_path(BENCH).read_bytes())
+    yield SSP
+
+
 @pytest.fixture(scope="module")
 def client():
     from dask.distributed import Client, LocalCluster
@@ -46,7 +57,7 @@ def client():
 def _run(out, client, **kw):
     args = dict(grid=SMALL, fixed=FIXED, stop_time=STOP, out=out, client=client, progress=None, kpi=KPI)
     args.update(kw)
-    return artibus.sweep(BENCH, **args)
+    return artibus.sweep(SSP, **args)
 
 
 def same_table(a, b, drop=()):
@@ -65,7 +76,7 @@ def same_table(a, b, drop=()):
 
 
 def _plain_kpis(overrides):
-    r = runner.run(BENCH, overrides={**FIXED, **overrides}, stop_time=STOP)
+    r = runner.run(SSP, overrides={**FIXED, **overrides}, stop_time=STOP)
     return {f"{k.name} [{k.unit}]": k.value for k in benches.kpis(BENCH, r)}
 
 
@@ -94,7 +105,7 @@ def test_grid_of_60_cases_table_plot_and_worst_cases(tmp_path, client):
     assert same_table(pq.read_table(tmp_path / "s" / "results.parquet"), t)
     assert (tmp_path / "s" / "study.png").read_bytes()[:4] == b"\x89PNG"
     worst = (tmp_path / "s" / "worst.txt").read_text().splitlines()
-    cmds = [ln for ln in worst if "artibus run Bus36m_Circle" in ln]
+    cmds = [ln for ln in worst if f"artibus run {SSP}" in ln]
     assert len(cmds) == 10
     top = max(rows, key=lambda r: r[KPI])
     assert f"{top[KPI]:.6g}" in cmds[0] and f"Driver.vSet={top['Driver.vSet']!r}" in cmds[0]
@@ -103,7 +114,7 @@ def test_grid_of_60_cases_table_plot_and_worst_cases(tmp_path, client):
 
 def test_reused_instances_give_a_fresh_instances_results():
     """A worker's FMU instances, reset and initialised again, give what new ones give, bit for bit."""
-    p = str(ssp.ssp_path(BENCH))
+    p = SSP
     a = {**FIXED, "Driver.vSet": 6.0, "Driver.R": 12.5}
     b = {**FIXED, "Driver.vSet": 3.0, "Driver.R": 20.0}
     sw._local.__dict__.clear()
@@ -113,7 +124,7 @@ def test_reused_instances_give_a_fresh_instances_results():
     with pytest.raises(ArtibusError, match="Driver.vSet"):
         sw._simulate(p, {**FIXED, "Driver.vSet": 500.0}, STOP, None)   # out of range: refused
     after_error = sw._simulate(p, b, STOP, None)
-    fresh = runner.run(BENCH, overrides=b, stop_time=STOP)
+    fresh = runner.run(SSP, overrides=b, stop_time=STOP)
     assert again.names == fresh.names
     assert np.array_equal(again.array(), fresh.array())
     assert np.array_equal(after_error.array(), fresh.array())
@@ -140,30 +151,31 @@ def _case_files(out):
     return {f.name: f.stat().st_mtime_ns for f in (Path(out) / "cases").glob("*.parquet")}
 
 
-def test_an_interrupted_sweep_resumes_without_running_a_finished_case_again(tmp_path, client):
+def test_an_interrupted_sweep_resumes_without_running_a_finished_case_again(tmp_path, client, external):
+    """artibus sweep --scheduler (the command line on the external cluster) killed after some cases, run again."""
     out = tmp_path / "s"
-    grid = {"Driver.vSet": "2:6.5:0.5", "Driver.R": "15,20,25"}       # 30 cases
-    cmd = [sys.executable, "-m", "artibus", "sweep", BENCH, "--grid"] + [f"{k}={v}" for k, v in grid.items()] + \
-          ["--set", "Driver.roadBefore=2", "--stop-time", "3", "--workers", "1", "-o", str(out)]
+    grid = {"Driver.vSet": "2:6.5:0.5", "Driver.R": "15,20"}       # 20 cases
+    cmd = [sys.executable, "-m", "artibus", "sweep", SSP, "--grid"] + [f"{k}={v}" for k, v in grid.items()] + \
+          ["--set", "Driver.roadBefore=2", "--stop-time", "3", "--scheduler", external, "-o", str(out)]
     p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
         deadline = time.time() + 90
-        while len(_case_files(out)) < 4 and time.time() < deadline and p.poll() is None:
-            time.sleep(0.05)
+        while len(_case_files(out)) < 3 and time.time() < deadline and p.poll() is None:
+            time.sleep(0.02)
     finally:
         os.killpg(p.pid, signal.SIGKILL)
         p.wait()
     before = _case_files(out)
-    assert 4 <= len(before) < 30, "killed too late: raise the number of cases"
+    assert 3 <= len(before) < 20, "killed too late: raise the number of cases"
     assert not (out / "results.parquet").exists()
     res = _run(out, client, grid=grid, fixed={"Driver.roadBefore": 2})
-    assert res.table.num_rows == 30 and res.failed == 0
-    assert res.ran == 30 - len(before) and res.skipped == len(before)
+    assert res.table.num_rows == 20 and res.failed == 0
+    assert res.ran == 20 - len(before) and res.skipped == len(before)
     after = _case_files(out)
     assert all(after[f] == m for f, m in before.items())      # no finished case ran again
-    assert len(after) == 30
+    assert len(after) == 20
     again = _run(out, client, grid=grid, fixed={"Driver.roadBefore": 2})
-    assert again.ran == 0 and again.skipped == 30 and same_table(again.table, res.table)
+    assert again.ran == 0 and again.skipped == 20 and same_table(again.table, res.table)
 
 
 def _bench_with_variants(path, vset_b):
@@ -172,7 +184,7 @@ def _bench_with_variants(path, vset_b):
                'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"><ssv:Parameters>'
                '<ssv:Parameter name="Driver.vSet"><ssv:Real value="{v}"/></ssv:Parameter>'
                '</ssv:Parameters></ssv:ParameterSet>')
-    src = ssp.ssp_path(BENCH)
+    src = SSP
     path.parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(src) as zi, zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zo:
         for n in zi.namelist():
@@ -205,9 +217,10 @@ def test_a_changed_ssv_reruns_exactly_the_cases_it_touches(tmp_path, client):
     assert rows2[("fast", 15.0)][KPI] == _plain_kpis({"Driver.vSet": 5.5, "Driver.R": 15.0})[KPI]
 
 
-def test_an_external_scheduler_with_two_workers_gives_the_same_table(tmp_path, client):
-    local = _run(tmp_path / "local", client)
-    sched_file = tmp_path / "scheduler.json"
+@pytest.fixture(scope="module")
+def external(tmp_path_factory):
+    """A `dask scheduler` and two `dask worker --nthreads 1` processes on this machine; its address."""
+    sched_file = tmp_path_factory.mktemp("dask") / "scheduler.json"
     dask = str(Path(sys.executable).with_name("dask"))
     procs = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                                "--scheduler-file", str(sched_file)], stdout=subprocess.DEVNULL,
@@ -225,7 +238,7 @@ def test_an_external_scheduler_with_two_workers_gives_the_same_table(tmp_path, c
         with Client(address, timeout="30s") as c:
             c.wait_for_workers(2, timeout=60)
             assert len(c.scheduler_info()["workers"]) == 2
-        remote = _run(tmp_path / "remote", None, scheduler=address)
+        yield address
     finally:
         for p in reversed(procs):
             os.killpg(p.pid, signal.SIGTERM)
@@ -234,7 +247,13 @@ def test_an_external_scheduler_with_two_workers_gives_the_same_table(tmp_path, c
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 os.killpg(p.pid, signal.SIGKILL)
-    assert remote.ran == 6
+                p.wait()
+
+
+def test_an_external_scheduler_with_two_workers_gives_the_same_table(tmp_path, client, external):
+    local = _run(tmp_path / "local", client)
+    remote = _run(tmp_path / "remote", None, scheduler=external)
+    assert local.ran == remote.ran == 6
     assert same_table(remote.table, local.table, drop=["wall_s"])
 
 
@@ -278,7 +297,7 @@ def test_bad_input_is_an_error_naming_it_before_any_case(tmp_path, kw, words):
         args.pop("grid")
     args.update(kw)
     with pytest.raises(ArtibusError) as e:
-        artibus.sweep(BENCH, **args)
+        artibus.sweep(SSP, **args)
     for w in words:
         assert w in str(e.value), (w, str(e.value))
     assert not list((tmp_path / "s" / "cases").glob("*")) if (tmp_path / "s").exists() else True
@@ -304,7 +323,7 @@ def test_latin_hypercube_and_monte_carlo_designs(tmp_path, client):
     assert sw.read_design(f).cases == d.cases                          # the seed fixes it
     mc = _yaml(tmp_path, "method: montecarlo\nn: 8\nseed: 3\nparameters:\n"
                          "  Driver.vSet: {distribution: normal, mean: 4, std: 0.5}\n")
-    res = artibus.sweep(BENCH, design=mc, fixed=FIXED, stop_time=STOP, out=tmp_path / "mc", client=client,
+    res = artibus.sweep(SSP, design=mc, fixed=FIXED, stop_time=STOP, out=tmp_path / "mc", client=client,
                         progress=None, kpi="hinge 1")
     speeds = [r["Driver.vSet"] for r in res.table.to_pylist()]
     assert speeds == [c["Driver.vSet"] for c in sw.read_design(mc).cases] and len(set(speeds)) == 8

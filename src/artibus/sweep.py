@@ -593,7 +593,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
         if keys[i] not in seen:
             seen.add(keys[i])
             unique.append(i)
-    manifest = {"bench": info.name, "method": d.method, "seed": d.seed, "stop_time": stop_time, "step": step,
+    manifest = {"bench": info.name, "run": str(bench), "method": d.method, "seed": d.seed, "stop_time": stop_time, "step": step,
                 "fixed": fixed,
                 "axes": [[n, [str(v) for v in vs]] for n, vs in d.axes] if d.method == "grid" else [],
                 "parameters": sorted({k for c in all_cases for k in c}), "keys": keys,
@@ -701,7 +701,7 @@ def _pick_kpi(table, kpi):
 
 def rerun_command(manifest, row):
     """The command that runs one case alone, with its report."""
-    parts = ["artibus", "run", manifest["bench"]]
+    parts = ["artibus", "run", manifest.get("run", manifest["bench"])]
     for v in _variant_list(row.get("variant")):
         parts += ["--variant", v]
     def text(v):
