@@ -6,4 +6,4 @@ set -euo pipefail
 cd "$(dirname "$0")"
 bash scripts/setup.sh
 .venv/bin/artibus run --all --report out
-.venv/bin/artibus demo -o out/demo
+.venv/bin/artibus demo --report out/demo

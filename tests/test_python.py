@@ -50,7 +50,7 @@ def artibus(*args, cwd):
 
 
 def test_demo_writes_results_and_plot(tmp_path):
-    r = artibus("demo", "-o", str(tmp_path / "out"), cwd=tmp_path)
+    r = artibus("demo", "--report", str(tmp_path / "out"), cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     csv = tmp_path / "out" / "BusKinematics_Urbino18_SCurve.csv"
     png = tmp_path / "out" / "BusKinematics_Urbino18_SCurve.png"
@@ -70,7 +70,7 @@ def test_cli_keeps_partial_results_when_the_fmu_fails(tmp_path):
                 "--set", "testSteerPeriod=200", "--set", "v=-3", "--stop-time", "60",
                 "-o", str(out), cwd=tmp_path)
     assert r.returncode == 1 and "jack-knife" in r.stderr and "Traceback" not in r.stderr
-    partial = tmp_path / "r.csv.partial.csv"
+    partial = tmp_path / "r.partial.csv"         # OUT.partial.csv, as after an interrupt
     rows = partial.read_text().splitlines()
     assert len(rows) > 2
 

@@ -60,3 +60,245 @@ def test_check_output_refuses_bad_places(tmp_path, where):
         check_output(path)
     check_output(tmp_path / "r.csv")
     assert list(tmp_path.iterdir()) == []
+
+
+# --- results written whole ---------------------------------------------------------
+
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+from artibus import fmu_path, runner
+from artibus.simulation import Result
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_runner import LEAD_FOLLOW, component, connection, make_ssp  # noqa: E402
+
+SLOW = ('<ssd:Annotations><ssc:Annotation type="org.artibus.simulation">'
+        '<Simulation xmlns="urn:artibus" stepSize="{}"/></ssc:Annotation></ssd:Annotations>')
+STEER = {"Lead.testSteerAmp": 0.2, "Follow.testSteerAmp": 0.0}   # the leader steers, the follower follows
+
+
+def small_result(n=1000):
+    t = np.arange(n) * 0.01
+    return Result.from_array(["time", "a", "b"], np.column_stack([t, np.sin(t), np.cos(t)]))
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".mat"])
+def test_save_full_disk_leaves_no_torn_file(tmp_path, monkeypatch, suffix):
+    """Issue 15: a full disk left a truncated results file that looked valid. Now
+    the final name is absent (or the previous file kept) and the error is one line.
+    (A full disk midway through the write: test_full_disk_on_a_real_tiny_file_system.)"""
+    out = tmp_path / f"r{suffix}"
+    runner.save(small_result(10), out)
+    before = out.read_bytes()
+
+    def full(fd):      # a file system with delayed allocation reports a full disk when flushing
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(ArtibusError, match=r"r\.(csv|mat): no space left on device"):
+        runner.save(small_result(), out)
+    monkeypatch.undo()
+    assert out.read_bytes() == before                      # the previous results, whole
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
+
+
+def test_full_disk_on_a_real_tiny_file_system(tmp_path):
+    """A 64 kB tmpfs (root only): the real ENOSPC, through the CLI's save."""
+    mnt = tmp_path / "tiny"
+    mnt.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mnt)],
+                                           capture_output=True).returncode != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    try:
+        with pytest.raises(ArtibusError, match="no space left on device"):
+            runner.save(small_result(20000), mnt / "r.csv")
+        assert list(mnt.iterdir()) == []
+    finally:
+        subprocess.run(["umount", str(mnt)])
+
+
+def test_partial_path():
+    assert runner.partial_path("out/r.csv") == Path("out/r.partial.csv")
+    assert runner.partial_path("r.mat") == Path("r.partial.mat")
+
+
+# --- a bounded step plan -----------------------------------------------------------
+
+class _U:
+    def __init__(self, ratio):
+        self.ratio = ratio
+
+
+def test_plan_memory_does_not_grow_with_the_period():
+    """Issue 15: --step 1e-8 --stop-time 1e-6 took 886 MB (1.16 GB here) because the
+    plan held one entry per base step of the plan's period (10^6 with a 0.01 s
+    component). A plan of 10^7 base steps with a period of ~7*10^12 is now built
+    without allocating per step, and each step's entry is the definition's."""
+    units = [_U(1), _U(1_000_003), _U(7), _U(1_000_033)]
+    tracemalloc.start()
+    plan = runner._Plan(units, 10_000_000)
+    entries = [plan[k] for k in (0, 6, 7, 1_000_002, 1_000_003, 9_999_999)]
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert plan.period > 10 ** 12 and plan.table is None
+    assert peak < 100_000, peak
+    for k, (starting, ending, gs) in zip((0, 6, 7, 1_000_002, 1_000_003, 9_999_999), entries):
+        assert starting == [u for u in units if k % u.ratio == 0]
+        assert ending == [u for u in units if (k + 1) % u.ratio == 0]
+        assert gs == [(u, u in starting, u in ending) for u in units if u in starting or u in ending]
+
+
+def test_short_period_plan_is_tabulated_once():
+    units = [_U(1), _U(2), _U(3)]
+    plan = runner._Plan(units, 1000)
+    assert plan.period == 6 and len(plan.table) == 6
+    assert plan[13] is plan[1]
+
+
+@pytest.mark.skipif(not runner.core_library_path().is_file(), reason="the C core is not built")
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_untabulated_plan_bit_for_bit(tmp_path, monkeypatch, algorithm):
+    """The plan given to the C core window by window (as for a period too long to
+    tabulate) and computed step by step in the Python loop gives the tabulated
+    plan's results bit for bit: three rates (0.05, 0.1, 0.15 s), windows of 7 base steps."""
+    outs = [("kappa[0]", "output"), ("beta[1]", "output")]
+    elements = (component("Lead", outs)
+                + component("Follow", [("gammaF", "input")] + outs, SLOW.format(0.1))
+                + component("Third", [("gammaF", "input")] + outs, SLOW.format(0.15)))
+    connections = (connection("Lead", "beta[1]", "Follow", "gammaF", 'factor="-1.5"')
+                   + connection("Follow", "beta[1]", "Third", "gammaF", 'offset="0.02"'))
+    path = make_ssp(tmp_path, elements, connections, stop=3.0)
+    kw = dict(step=0.05, algorithm=algorithm, overrides={**STEER, "Third.testSteerAmp": 0.0})
+
+    def results():
+        out = []
+        for core in (True, False):
+            with runner.Simulation(path, **kw) as sim:
+                out.append(sim.run(core=core).array())
+        return out
+
+    tabulated = results()
+    monkeypatch.setattr(runner, "PLAN_TABLE", 1)
+    monkeypatch.setattr(runner, "CORE_PIECE", 7)
+    windowed = results()
+    assert np.max(np.abs(tabulated[0][:, 1:])) > 1e-3
+    for a, b in zip(tabulated + windowed, [tabulated[0]] * 4):
+        assert a.tobytes() == b.tobytes()
+
+
+# --- the CLI: output checked first, interrupts, concurrent runs ---------------------
+
+def artibus(*args, cwd, env=None, **kw):
+    return subprocess.run([sys.executable, "-m", "artibus", *args], capture_output=True, text=True,
+                          cwd=cwd, env={**os.environ, **(env or {})}, **kw)
+
+
+@pytest.fixture
+def long_bench(tmp_path):
+    """Two BusKinematics at 0.05 s: setting up takes a fraction of a second, each
+    simulated hour many seconds."""
+    return make_ssp(tmp_path, LEAD_FOLLOW["elements"], LEAD_FOLLOW["connections"], stop=10.0)
+
+
+@pytest.mark.parametrize("where", ["dir", "missing", "readonly"])
+def test_bad_output_is_refused_before_the_run(tmp_path, long_bench, where):
+    """Issue 15: -o to a directory or a read-only place ended in a traceback after
+    the whole run, its results lost. Now: one line, before simulating (a run of
+    10^6 s would take hours)."""
+    o = {"dir": tmp_path, "missing": tmp_path / "no" / "r.csv", "readonly": "/proc/r.csv"}[where]
+    t0 = time.perf_counter()
+    r = artibus("run", str(long_bench), "--stop-time", "1e6", "-o", str(o), cwd=tmp_path, timeout=120)
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert r.stderr.startswith(f"artibus: error: -o {o}:") and len(r.stderr.strip().splitlines()) == 1
+    assert time.perf_counter() - t0 < 60
+
+
+def _wait_for(predicate, timeout=60.0):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        got = predicate()
+        if got:
+            return got
+        time.sleep(0.005)
+    return None
+
+
+def _run_in_background(tmp_path, bench, out, stop):
+    tmpdir = tmp_path / "tmpdir"
+    tmpdir.mkdir()
+    proc = subprocess.Popen([sys.executable, "-m", "artibus", "run", str(bench), "--stop-time", str(stop),
+                             "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir)})
+    return proc, tmpdir
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_interrupt_while_simulating_keeps_partial_results(tmp_path, long_bench, sig):
+    """Issue 15: SIGINT while simulating kept nothing, SIGTERM left the unpacked
+    bench behind. Now: OUT.partial.csv with the rows up to then, OUT absent,
+    one line, exit code 128 + signal, no temporary directory left."""
+    out = tmp_path / "out" / "r.csv"
+    out.parent.mkdir()
+    proc, tmpdir = _run_in_background(tmp_path, long_bench, out, 1e5)
+    assert _wait_for(lambda: any(tmpdir.iterdir()))        # the bench unpacked: setting up
+    time.sleep(4.0)                                           # set up, initialised, stepping
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    partial = runner.partial_path(out)
+    assert err.startswith(f"artibus: stopped by {signal.Signals(sig).name}; partial results up to t = ")
+    assert str(partial) in err
+    assert not out.exists() and sorted(p.name for p in out.parent.iterdir()) == [partial.name]
+    table = np.loadtxt(partial, delimiter=",", skiprows=1)
+    assert table.shape[0] > 10 and table[0, 0] == 0.0 and table[-1, 0] < 1e5
+    np.testing.assert_allclose(np.diff(table[:, 0]), 0.05, rtol=1e-6)   # whole rows, every base step
+    assert list(tmpdir.iterdir()) == []
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_interrupt_while_writing_leaves_no_torn_file(tmp_path, long_bench, sig):
+    """Issue 15: a signal while the CSV was written left a truncated CSV under the
+    final name. Now: the final name absent, no temporary file, no temporary directory."""
+    out = tmp_path / "out" / "r.csv"
+    out.parent.mkdir()
+    proc, tmpdir = _run_in_background(tmp_path, long_bench, out, 20000)
+    tmp = _wait_for(lambda: [p for p in out.parent.iterdir() if ".tmp-" in p.name], timeout=300)
+    assert tmp, "the results were never being written"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig, err
+    assert err.strip() == f"artibus: stopped by {signal.Signals(sig).name}; nothing written"
+    assert list(out.parent.iterdir()) == []
+    assert list(tmpdir.iterdir()) == []
+
+
+def test_concurrent_runs_of_a_stale_bench(tmp_path):
+    """Issue 15: runs of a stale bench by name raced on one <bench>.ssp.part (5 of
+    24 died). Four at once, twice, with the bench's .ssp missing (stale): all
+    succeed with identical results, no temporary pack left."""
+    fmus = tmp_path / "fmus"
+    fmus.mkdir()
+    for f in fmu_path("BusDynamics").parent.glob("*.fmu"):
+        shutil.copy(f, fmus / f.name)
+    env = {"ARTIBUS_FMU_DIR": str(fmus)}
+    for round_ in range(2):
+        (fmus / "Scania18m_OpenLoop.ssp").unlink(missing_ok=True)
+        procs = [subprocess.Popen([sys.executable, "-m", "artibus", "run", "Scania18m_OpenLoop",
+                                   "--stop-time", "0.5", "-o", str(tmp_path / f"r{round_}{i}.csv")],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                                  env={**os.environ, **env}) for i in range(4)]
+        for p in procs:
+            _, err = p.communicate(timeout=300)
+            assert p.returncode == 0, err
+        texts = {(tmp_path / f"r{round_}{i}.csv").read_text() for i in range(4)}
+        assert len(texts) == 1 and len(next(iter(texts)).splitlines()) > 10
+    assert sorted(p.name for p in fmus.iterdir() if p.suffix not in (".fmu",)) == ["Scania18m_OpenLoop.ssp"]

@@ -2,23 +2,83 @@
 
   artibus run BENCH [options]          run an SSP bench (a name from `artibus list`, or an .ssp);
                                        --variant NAME selects one of its parameter-set variants
-  artibus bode BENCH --input C.V --output C.V   gain and phase by sine tests through the co-simulation
+  artibus bode BENCH --input C.V --measure C.V  gain and phase by sine tests through the co-simulation
   artibus calibrate                    the damping controller's gains (seed 001, 5.2.2)
-  artibus list                         the benches and their parameters
-  artibus info FMU|SSP                 an FMU's variables, or a bench's components and connections
+  artibus list [--parameters]          the benches and FMUs, one line each (--parameters: every bound value)
+  artibus info BENCH|FMU               a bench's components and connections, or an FMU's variables
   artibus simulate FMU [options]       run one FMU alone, write CSV
   artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp
   artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
   artibus replay LOG --bench BENCH     a recorded log (.csv, .blf, .asc) drives a bench; model against measured
   artibus sweep BENCH --grid C.V=A,B  many cases on Dask (grid, --variant axis, --design CSV/YAML), resumable
-  artibus demo [-o DIR]                the main job (for now): the Urbino 18 pusher on an S-curve
+  artibus demo [--report DIR]          the main job (for now): the Urbino 18 pusher on an S-curve
+
+Throughout: -o/--output FILE is the results file a command writes (.csv, or
+.mat for run), --report DIR a directory of plots and HTML. Files are written
+under a temporary name and renamed, so a file under its final name is always
+complete. Ctrl-C (SIGINT) or SIGTERM during a run saves the results up to then
+as OUT.partial.csv (OUT.partial.mat) and exits with 130 (143).
 """
 import argparse
 import math
+import signal
 import sys
 from pathlib import Path
 
-from artibus import ArtibusError, fmu_path
+from artibus import ArtibusError, __version__, fmu_dir, fmu_path
+
+
+def _seconds(text):
+    """--stop-time, --step: a finite number > 0 (a one-line usage error otherwise, never a traceback)."""
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(x) or x <= 0:
+        raise argparse.ArgumentTypeError(f"{text}: expected a finite time > 0 s")
+    return x
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is, as Ctrl-C raises KeyboardInterrupt:
+    the same clean-up (temporary directories, partial results) runs for both."""
+    signum = signal.SIGTERM
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _check_output(path):
+    from artibus.files import check_output
+    return check_output(path, "-o")
+
+
+def _make_dir(path, what="--report"):
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ArtibusError(f"{what} {path}: cannot make the directory ({e.strerror})") from None
+    if not Path(path).is_dir():
+        raise ArtibusError(f"{what} {path}: not a directory")
+    return Path(path)
+
+
+def _partial(e, out):
+    """After an interrupt: the results up to then (KeyboardInterrupt.result, set by the
+    runner) saved as OUT.partial.csv; the path is remembered on the exception for main."""
+    from artibus import runner
+    result = getattr(e, "result", None)
+    if result is None or not len(result.rows) or out is None:
+        return
+    partial = runner.partial_path(out)
+    try:
+        runner.save(result, partial)
+    except (ArtibusError, OSError) as err:
+        e.partial_error = str(err)
+        return
+    e.partial = partial
+    e.partial_time = result.time[-1]
 
 
 def _fmu_arg(text):
@@ -36,11 +96,33 @@ def _parse_set(items):
     return values
 
 
+def _fmu_names():
+    return sorted(p.stem for p in fmu_dir().glob("*.fmu"))
+
+
 def cmd_info(args):
     from fmpy import read_model_description
-    if str(args.fmu).endswith(".ssp"):
-        return _info_ssp(args.fmu)
-    md = read_model_description(str(_fmu_arg(args.fmu)))
+    from artibus import ssp
+    name = str(args.fmu)
+    if name.endswith(".ssp") or name in ssp.bench_names():
+        return _info_ssp(name)
+    p = Path(name)
+    if p.suffix == ".fmu":
+        if not p.is_file():
+            raise ArtibusError(f"{p}: no such file")
+        path = p
+    elif (fmu_dir() / f"{name}.fmu").is_file():
+        path = fmu_dir() / f"{name}.fmu"
+    else:
+        import difflib
+        known = ssp.bench_names() + _fmu_names()
+        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
+        hint = f"; did you mean {' or '.join(close)}?" if close else f" (see `artibus list`)"
+        raise ArtibusError(f"{name}: no such bench or FMU{hint}")
+    try:
+        md = read_model_description(str(path))
+    except Exception as e:  # a corrupt or foreign file: name it
+        raise ArtibusError(f"{path}: not a readable FMU ({e})") from None
     print(f"{md.modelName}: {md.description}")
     de = md.defaultExperiment
     if de:
@@ -71,23 +153,36 @@ def _info_ssp(path):
 
 
 def cmd_list(args):
+    """One line per bench and per FMU; --parameters: every bench's bound parameters too."""
     from artibus import ssp
     names = ssp.bench_names()
-    if not names:
-        print("no benches in ssp/benches/")
+    print(f"benches ({len(names)}; `artibus info BENCH` for one, `artibus run BENCH` to run it):"
+          if names else "no benches in ssp/benches/")
     for name in names:
         try:
             bench = ssp.read(ssp.ssp_path(name))
         except Exception as e:  # an unpacked or broken bench is still listed
-            print(f"{name}: ({e})")
+            print(f"  {name}: ({e})")
             continue
-        print(f"{name}: {', '.join(bench.components)}; stop time {bench.stop_time} s")
-        names = ssp.variants(ssp.ssp_path(name))
-        if names:
-            print(f"    variants (--variant): {', '.join(names)}")
-        for c in bench.components.values():
-            for k, v in sorted(c.parameters.items()):
-                print(f"    {c.path}.{k} = {v}")
+        variants = ssp.variants(ssp.ssp_path(name))
+        more = f"; variants: {', '.join(variants)}" if variants else ""
+        print(f"  {name}: {', '.join(bench.components)}; {bench.stop_time:g} s{more}")
+        if args.parameters:
+            for c in bench.components.values():
+                for k, v in sorted(c.parameters.items()):
+                    print(f"      {c.path}.{k} = {v}")
+    fmus = _fmu_names()
+    if fmus:
+        from fmpy import read_model_description
+        print(f"\nFMUs ({len(fmus)} in {fmu_dir()}; `artibus info FMU` for its variables):")
+        for f in fmus:
+            try:
+                d = read_model_description(str(fmu_dir() / f"{f}.fmu")).description or ""
+            except Exception as e:
+                d = f"(unreadable: {e})"
+            print(f"  {f}: {d[:100] + ('...' if len(d) > 100 else '')}")
+    if not args.parameters:
+        print("\n(`artibus list --parameters` adds every bench's parameter values)")
     return 0
 
 
@@ -113,24 +208,31 @@ def cmd_run(args):
     if args.stop_time is None and not args.all:
         args.stop_time = ssp.variant_stop_time(args.bench, args.variant)    # None: the bench's own
     summary = []
+    from artibus import comparison
+    kept = {}
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, args.variant), **user}
         with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
                                algorithm=args.algorithm, can=args.can, can_log=args.can_log,
                                can_faults=args.can_fault) as sim:
-            result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
-            can_summary = None
-            if sim.can is not None:
-                can_summary = sim.can.summary(result.time[-1] - result.time[0])
-                print(can_summary)
             name = sim.bench.name
+            # where the results go, checked before the run (not found unwritable after it)
             if args.report:
-                out_dir = Path(args.report) / name if args.all else Path(args.report)
+                out_dir = _make_dir(Path(args.report) / name if args.all else Path(args.report))
                 out = Path(args.output) if args.output and not args.all else out_dir / "results.csv"
             else:
                 out_dir = None
                 out = Path(args.output or f"{name}.csv")
-            out.parent.mkdir(parents=True, exist_ok=True)
+            args._out = _check_output(out)
+            try:
+                result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
+            except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
+                _partial(e, out)
+                raise
+            can_summary = None
+            if sim.can is not None:
+                can_summary = sim.can.summary(result.time[-1] - result.time[0])
+                print(can_summary)
             runner.save(result, out)
             span = result.time[-1] - result.time[0]
             print(f"{name}: {out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
@@ -139,16 +241,22 @@ def cmd_run(args):
                 from artibus.benches import write_report
                 kpis = write_report(name, result, out_dir, sim.wall)
                 if can_summary is not None:
-                    (out_dir / "can_bus.txt").write_text(can_summary + "\n")
+                    from artibus.files import write_text
+                    write_text(out_dir / "can_bus.txt", can_summary + "\n")
                 print(f"{name}: report {out_dir / 'index.html'}")
                 for k in kpis:
                     print(f"    {k.name}: {k.cell()} {k.unit}" + (f"   (paper: {k.paper})" if k.paper else ""))
                 summary.append((name, out_dir, kpis))
+                if args.all and comparison.wanted(name):    # seed 000's comparison page reuses it
+                    kept[name] = result
                 if args.can_fault:
                     _fault_free_kpis(bench, args, overrides, out_dir, kpis)
     if args.all and args.report:
         from artibus.report import write_index
-        print(write_index(Path(args.report), summary))
+        page = comparison.write(Path(args.report) / "comparison", kept)
+        pages = [("comparison/index.html", comparison.TITLE, "unsteered, guided, guided + force minimisation "
+                  "and pathMemory side by side")] if page else []
+        print(write_index(Path(args.report), summary, pages))
     return 0
 
 
@@ -169,23 +277,19 @@ def _fault_free_kpis(bench, args, overrides, out_dir, kpis):
         print(f"    {b.name}: {a.cell()} -> {b.cell()} {b.unit} (difference {diff:+.4g})")
         rows.append(f'"{b.name}",{b.unit},{a.value!r},{b.value!r},{diff!r}')
     out = out_dir / "kpi_faults.csv"
-    tmp = out.with_name(out.name + ".part")
-    tmp.write_text("\n".join(rows) + "\n")
-    tmp.replace(out)
+    from artibus.files import write_text
+    write_text(out, "\n".join(rows) + "\n")
     print(f"{sim.bench.name}: {out}")
 
 
 def cmd_replay(args):
     from artibus import replay, runner
+    out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"))
     rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
                         overrides=_parse_set(args.set), steering_map_name=args.steering_map,
                         variants=args.variant)
     r = rep.result
-    out = Path(args.output or f"{Path(args.log).stem}_replay.csv")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    part = out.with_name(out.name + ".part" + out.suffix)
-    runner.save(r, part)
-    part.replace(out)
+    runner.save(r, out)
     print(f"replay of {args.log} into {args.bench}: {out}: {len(r.rows)} rows, {r.time[-1] - r.time[0]:g} s")
     for inp, (sig, unit) in rep.drive.items():
         print(f"    {inp} <- {sig}" + (" (seed 003 App. A steering map)" if rep.profile.steering
@@ -208,8 +312,8 @@ def cmd_can_decode(args):
     header = "time_s,message,signal,value,unit,e2e"
     lines = [f"{t:.6f},{m},{s},{v!r},{u},{e}" for t, m, s, v, u, e in rows]
     if args.csv:
-        out = Path(args.csv)
-        out.write_text(header + "\n" + "\n".join(lines) + "\n")
+        from artibus.files import write_text
+        out = write_text(Path(args.csv), header + "\n" + "\n".join(lines) + "\n")
         print(f"{out}: {len(rows)} signal values")
     else:
         print(header)
@@ -224,21 +328,27 @@ def cmd_bode(args):
     import numpy as np
     from artibus import bode
     from artibus import ssp
+    from artibus.files import write_text
+    if not args.measure:
+        hint = (f" (-o/--output is the results file now, as in every command: "
+                f"--measure {args.output} names the output to measure)"
+                if args.output and not args.output.endswith(".csv") else "")
+        raise ArtibusError("bode: give the output to measure, --measure COMP.VAR" + hint)
+    out = _check_output(Path(args.output or "bode.csv"))
     overrides = {**ssp.variant_overrides(args.bench, args.variant), **_parse_set(args.set)}
     freqs = np.geomspace(args.fmin, args.fmax, args.n) if args.n > 1 else [args.fmin]
-    resp = bode.frequency_response(args.bench, args.input, args.output, freqs, args.amplitude,
+    resp = bode.frequency_response(args.bench, args.input, args.measure, freqs, args.amplitude,
                                    periods=args.periods, settle=args.settle, overrides=overrides,
                                    step=args.step)
-    out = Path(args.output_file or "bode.csv")
-    rows = ["frequency_Hz," + ",".join(f"{o}.gain,{o}.phase_rad" for o in args.output)]
+    rows = ["frequency_Hz," + ",".join(f"{o}.gain,{o}.phase_rad" for o in args.measure)]
     for k, f in enumerate(freqs):
-        rows.append(f"{f:.6g}," + ",".join(f"{resp[o][k].gain:.8g},{resp[o][k].phase:.8g}" for o in args.output))
-    out.write_text("\n".join(rows) + "\n")
+        rows.append(f"{f:.6g}," + ",".join(f"{resp[o][k].gain:.8g},{resp[o][k].phase:.8g}" for o in args.measure))
+    write_text(out, "\n".join(rows) + "\n")
     print(f"{out}: {len(freqs)} frequencies")
     for line in rows:
         print("  " + line)
     if args.plot:
-        bode.plot(args.plot, resp, f"{args.bench}: {', '.join(args.output)} / {args.input}")
+        bode.plot(args.plot, resp, f"{args.bench}: {', '.join(args.measure)} / {args.input}")
         print(args.plot)
     return 0
 
@@ -264,13 +374,19 @@ def cmd_simulate(args):
     from artibus.parameters import read_parameters, check_against
     from artibus.simulation import simulate
     fmu = _fmu_arg(args.fmu)
+    out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"))
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
     extra = _parse_set(args.set)
+    if any("[" in k for k in extra):          # mu[*], mu[1:6]: each element
+        from fmpy import read_model_description
+        from artibus.names import expand_all
+        names = [v.name for v in read_model_description(str(fmu)).modelVariables]
+        extra = expand_all(extra, lambda full: ("", names))
     check_against(extra, fmu, "--set")
     params.update(extra)
     result = simulate(fmu, parameters=params, stop_time=args.stop_time, step=args.step)
-    out = Path(args.output or f"{fmu.stem}.csv")
-    result.to_csv(out)
+    from artibus.runner import save
+    save(result, out)
     print(f"{out}: {len(result.rows)} rows")
     return 0
 
@@ -282,8 +398,14 @@ def cmd_demo(args):
     import numpy as np
     from artibus.report import birds_eye, signals
     from artibus.simulation import simulate
-    out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
+    out = _make_dir(args.report)
+    csv = out / "BusKinematics_Urbino18_SCurve.csv"
+    if args.output:
+        if Path(args.output).is_dir() or not Path(args.output).suffix:
+            raise ArtibusError(f"-o {args.output}: -o is the results file (.csv); the directory of "
+                               f"results and plots is --report DIR")
+        csv = Path(args.output)
+    _check_output(csv)
     fmu = fmu_path("BusKinematics")
     params = read_parameters("Urbino18", fmu)
     params["testSteerAmp"] = 0.0
@@ -294,9 +416,9 @@ def cmd_demo(args):
 
     result = simulate(fmu, parameters=params, inputs={"gammaF": gammaF, "v": lambda t: 3.0},
                       stop_time=40.0, step=0.05)
-    csv = out / "BusKinematics_Urbino18_SCurve.csv"
     png = out / "BusKinematics_Urbino18_SCurve.png"
-    result.to_csv(csv)
+    from artibus.runner import save
+    save(result, csv)
     theta0 = result["theta[0]"]
     front = (result["x[0]"] + params["L0"] * np.cos(theta0), result["y[0]"] + params["L0"] * np.sin(theta0))
     birds_eye(png, {"front axle": front, "tractor rear axle P0": (result["x[0]"], result["y[0]"]),
@@ -314,13 +436,14 @@ def cmd_demo(args):
 def build_parser():
     p = argparse.ArgumentParser(prog="artibus", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action="version", version=f"artibus {__version__}")
     sub = p.add_subparsers(dest="verb", required=True)
     s = sub.add_parser("run", help="run an SSP bench")
     s.add_argument("bench", nargs="?", help="a bench name (see `artibus list`) or the path of an .ssp")
     s.add_argument("--all", action="store_true", help="run every bench")
     s.add_argument("--report", metavar="DIR", help="write plots and an HTML page with the KPIs to DIR")
-    s.add_argument("--stop-time", type=float, help="default: the bench's DefaultExperiment")
-    s.add_argument("--step", type=float, help="base communication step, s")
+    s.add_argument("--stop-time", type=_seconds, help="default: the bench's DefaultExperiment")
+    s.add_argument("--step", type=_seconds, help="base communication step, s")
     s.add_argument("--ssv", action="append", help="parameter file with names COMPONENT.VARIABLE")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE", help="set a parameter")
     s.add_argument("--variant", action="append", metavar="NAME",
@@ -329,7 +452,9 @@ def build_parser():
     s.add_argument("--record", action="append", metavar="COMP.VAR",
                    help="record this variable (default: every connected output)")
     s.add_argument("--algorithm", default="gauss-seidel", choices=["gauss-seidel", "jacobi"])
-    s.add_argument("-o", "--output", help="results: .csv or .mat (default: <bench>.csv)")
+    s.add_argument("-o", "--output", metavar="FILE",
+                   help="results: .csv or .mat (default: <bench>.csv, with --report DIR/results.csv); "
+                        "checked before the run; a run stopped by Ctrl-C/SIGTERM leaves FILE.partial.csv")
     s.add_argument("--can", metavar="virtual|INTERFACE:CHANNEL",
                    help="for a bench that routes connections over CAN: python-can's virtual bus "
                         "(the default) or a real interface, e.g. socketcan:vcan0")
@@ -359,24 +484,25 @@ def build_parser():
     s.add_argument("--dbc", help="for a CAN log: default the bench's DBC, else ssp/can/Bus36m.dbc")
     s.add_argument("--steering-map", help="a parameter set c[0..3] (seed 003 App. A), default the bench's")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
-    s.add_argument("--stop-time", type=float, help="default: the end of the driving signals")
-    s.add_argument("-o", "--output", help="results CSV (default <log>_replay.csv)")
+    s.add_argument("--stop-time", type=_seconds, help="default: the end of the driving signals")
+    s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default <log>_replay.csv)")
     s.add_argument("--report", metavar="DIR", help="plots of model against measured and errors.csv")
     s.set_defaults(func=cmd_replay)
     s = sub.add_parser("bode", help="frequency response through the co-simulation (sine tests)")
     s.add_argument("bench", help="a bench name or the path of an .ssp")
     s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")
-    s.add_argument("--output", required=True, action="append", metavar="COMP.VAR", help="an output to measure")
+    s.add_argument("--measure", action="append", metavar="COMP.VAR",
+                   help="an output to measure (repeatable)")
     s.add_argument("--fmin", type=float, default=0.05, help="lowest frequency, Hz")
     s.add_argument("--fmax", type=float, default=5.0, help="highest frequency, Hz")
     s.add_argument("--n", type=int, default=12, help="frequencies, log-spaced")
     s.add_argument("--amplitude", type=float, default=0.01, help="sine amplitude, in the input's unit")
     s.add_argument("--periods", type=int, default=4, help="periods fitted after the transient")
     s.add_argument("--settle", type=float, help="time given to the transient, s")
-    s.add_argument("--step", type=float)
+    s.add_argument("--step", type=_seconds)
     s.add_argument("--variant", action="append", metavar="NAME", help="a variant of the bench (repeatable)")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
-    s.add_argument("-o", "--output-file", help="CSV (default bode.csv)")
+    s.add_argument("-o", "--output", "--output-file", metavar="FILE", help="results CSV (default bode.csv)")
     s.add_argument("--plot", help="PNG with gain and phase")
     s.set_defaults(func=cmd_bode)
     s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), "
@@ -384,24 +510,30 @@ def build_parser():
     s.add_argument("--target", type=float, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
     s.add_argument("--dry-run", action="store_true", help="print the gains, write nothing")
     s.set_defaults(func=cmd_calibrate)
-    s = sub.add_parser("list", help="the benches and their parameters")
+    s = sub.add_parser("list", help="the benches and FMUs, one line each")
+    s.add_argument("--parameters", action="store_true", help="every bench's bound parameter values too")
     s.set_defaults(func=cmd_list)
     s = sub.add_parser("pack", help="pack benches into self-contained .ssp files")
     s.add_argument("bench", nargs="*", help="default: every bench in ssp/benches")
     s.set_defaults(func=cmd_pack)
     s = sub.add_parser("info", help="show an FMU's variables or a bench's structure")
-    s.add_argument("fmu", help="path of an .fmu or .ssp, or the name of a built FMU")
+    s.add_argument("fmu", metavar="BENCH|FMU", help="a bench name, the name of a built FMU, or the path of an .ssp or .fmu")
     s.set_defaults(func=cmd_info)
     s = sub.add_parser("simulate", help="run one FMU alone")
     s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU")
     s.add_argument("--ssv", help="parameter set: name in ssp/parameters or path of an .ssv")
     s.add_argument("--set", action="append", metavar="NAME=VALUE", help="set a parameter")
-    s.add_argument("--stop-time", type=float)
-    s.add_argument("--step", type=float)
-    s.add_argument("-o", "--output", help="CSV file (default: <FMU>.csv)")
+    s.add_argument("--stop-time", type=_seconds)
+    s.add_argument("--step", type=_seconds)
+    s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: <FMU>.csv)")
     s.set_defaults(func=cmd_simulate)
+    s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia)")
+    s.add_argument("ssv", nargs="+", help="a parameter set: path of an .ssv or a name in ssp/parameters")
+    s.add_argument("--model", choices=["BusDynamics", "BusKinematics"], help="default: from the names in the set")
+    s.set_defaults(func=lambda a: __import__("artibus.check").check.main(a.ssv, a.model))
     s = sub.add_parser("demo", help="the main job: a demo run with results and a plot")
-    s.add_argument("-o", "--output", default="out", help="output directory (default: out)")
+    s.add_argument("--report", metavar="DIR", default="out", help="directory of results and plots (default: out)")
+    s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: DIR/BusKinematics_Urbino18_SCurve.csv)")
     s.set_defaults(func=cmd_demo)
     from artibus import sweep as sweep_mod      # artibus sweep: its options and command in artibus/sweep.py
     sweep_mod.add_parser(sub)
@@ -410,16 +542,39 @@ def build_parser():
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    import threading
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)   # SIGTERM unwinds as Ctrl-C does
     try:
         return args.func(args)
+    except KeyboardInterrupt as e:     # Ctrl-C (SIGINT) or SIGTERM: one line, 130 or 143
+        sig = signal.Signals(getattr(e, "signum", signal.SIGINT))
+        partial = getattr(e, "partial", None)
+        if partial is not None:
+            what = f"partial results up to t = {e.partial_time:g} s in {partial}"
+        elif getattr(e, "partial_error", None):
+            what = f"partial results not saved: {e.partial_error}"
+        else:
+            what = "nothing written"
+        print(f"artibus: stopped by {sig.name}; {what}", file=sys.stderr)
+        return 128 + sig.value
     except ArtibusError as e:
         print(f"artibus: error: {e}", file=sys.stderr)
         log = getattr(e, "log", None)
         if log:
             print("FMU log:\n  " + "\n  ".join(log[-10:]), file=sys.stderr)
         result = getattr(e, "result", None)
-        if result is not None and result.rows and getattr(args, "output", None):
-            partial = Path(str(args.output) + ".partial.csv")
-            result.to_csv(partial)
-            print(f"artibus: partial results up to the failure: {partial}", file=sys.stderr)
+        out = getattr(args, "_out", None)
+        if result is not None and result.rows and out is not None:
+            from artibus import runner
+            partial = runner.partial_path(out)
+            try:
+                runner.save(result, partial)
+                print(f"artibus: partial results up to the failure: {partial}", file=sys.stderr)
+            except (ArtibusError, OSError) as err:
+                print(f"artibus: partial results not saved: {err}", file=sys.stderr)
         return 1
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)

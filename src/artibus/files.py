@@ -107,13 +107,16 @@ def check_output(path, what="-o"):
         raise ArtibusError(f"{what} {path}: directory {parent} does not exist")
     if not parent.is_dir():
         raise ArtibusError(f"{what} {path}: {parent} is not a directory")
-    probe = temp_name(path)
+    probe = parent / f".{path.name}.probe-{os.getpid()}-{secrets.token_hex(3)}"
+    fd = None
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except OSError as e:
         raise ArtibusError(f"{what} {path}: cannot write in {parent} ({e.strerror})") from None
-    os.close(fd)
-    os.unlink(probe)
+    finally:
+        if fd is not None:
+            os.close(fd)
+            os.unlink(probe)
     if path.exists() and not os.access(path, os.W_OK) and os.geteuid() != 0:
         raise ArtibusError(f"{what} {path}: the file exists and is read-only")
     return path

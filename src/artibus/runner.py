@@ -194,6 +194,38 @@ def _order(units, links, where):
     return ordered
 
 
+PLAN_TABLE = 4096       # base steps of the plan's period tabulated at most (see _Plan)
+
+
+class _Plan:
+    """Which components start and which end their communication step at base
+    step k. A component with step H = ratio * h takes its inputs at the start of
+    its interval (k % ratio == 0) and publishes its outputs at the end, when the
+    others get there ((k + 1) % ratio == 0). The pattern repeats with the period
+    lcm(ratios): up to PLAN_TABLE base steps (and never more than the run's n)
+    it is tabulated once; beyond (a slow component on a tiny base step: with
+    --step 1e-8 a 0.01 s component's period is 10^6 base steps) each step's
+    entry is computed when it is asked for, so memory does not grow with the
+    period. plan[k] = (starting, ending, gs): gs for Gauss-Seidel, per base
+    step in the order, (unit, starts, ends) of those that do either."""
+
+    def __init__(self, order, n):
+        self.order = order
+        self.period = math.lcm(*(u.ratio for u in order))
+        self.table = ([self.entry(k) for k in range(self.period)]
+                      if self.period <= min(PLAN_TABLE, max(n, 1)) else None)
+
+    def entry(self, k):
+        starting = [u for u in self.order if k % u.ratio == 0]
+        ending = [u for u in self.order if (k + 1) % u.ratio == 0]
+        gs = [(u, k % u.ratio == 0, (k + 1) % u.ratio == 0) for u in self.order
+              if k % u.ratio == 0 or (k + 1) % u.ratio == 0]
+        return starting, ending, gs
+
+    def __getitem__(self, k):
+        return self.table[k % self.period] if self.table is not None else self.entry(k)
+
+
 class Simulation:
     """A bench, set up and ready to run."""
 
@@ -255,6 +287,12 @@ class Simulation:
 
         # parameters: bindings, then the user's overrides ("comp.var" -> value)
         self.parameters = {p: dict(c.parameters) for p, c in self.bench.components.items()}
+        from artibus.names import expand_all      # Bus.mu[*], Bus.mu[1:6]: each element
+
+        def variables_of(full):
+            comp = full.split("[", 1)[0].rpartition(".")[0]
+            return (comp + ".", list(units[comp].fmu.vars)) if comp in units else None
+        overrides = expand_all(overrides, variables_of)
         for full, value in overrides.items():
             comp, _, var = full.rpartition(".")
             if comp not in self.parameters:
@@ -466,11 +504,12 @@ class Simulation:
                 copies.append(bytes(out))
 
         def result(self):
-            n = len(self.times)
+            # rows taken whole (an interrupt may have stopped take() midway)
+            n = min([len(self.times)] + [len(copies) for _, copies in self.buffers])
             table = np.empty((n, len(self.names)))
-            table[:, 0] = self.times
+            table[:, 0] = self.times[:n]
             for (u, idx, cols), (_, copies) in zip(self.rec, self.buffers):
-                values = np.frombuffer(b"".join(copies), dtype=np.float64).reshape(n, u.raw.n_out)
+                values = np.frombuffer(b"".join(copies[:n]), dtype=np.float64).reshape(n, u.raw.n_out)
                 table[:, cols] = values[:, idx]
             return Result.from_array(self.names, table)
 
@@ -489,16 +528,8 @@ class Simulation:
         n = int(round((stop - start) / h))
         t = start
         current = None
-        # a component with step H = ratio * h takes its inputs at the start of
-        # its interval and publishes its outputs at the end, when the others get
-        # there: which start and which end at base step k repeats with this period
-        period = math.lcm(*(u.ratio for u in self.units))
-        plan = [([u for u in self.order if k % u.ratio == 0],
-                 [u for u in self.order if (k + 1) % u.ratio == 0]) for k in range(period)]
-        # Gauss-Seidel: per base step, in the order, (unit, starts, ends) of those that do either
-        plan_gs = [[(u, u in starting, u in ending) for u in self.order if u in starting or u in ending]
-                   for starting, ending in plan]
-        stepper = _core_stepper(self, plan, plan_gs, core)
+        plan = _Plan(self.order, n)
+        stepper = _core_stepper(self, plan, None, core)
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
@@ -513,7 +544,7 @@ class Simulation:
                 t = start + k * h
                 if self.can is not None and k % self.can_ratio == 0:
                     self.can.tick(k // self.can_ratio, t)
-                starting, ending = plan[k % period]
+                starting, ending, gs = plan[k]
                 if self.algorithm == "jacobi":
                     for u in starting:
                         self._propagate(u, t)
@@ -524,7 +555,7 @@ class Simulation:
                         current = u
                         self._step(u, t + h - u.step)
                 else:
-                    for u, starts, ends in plan_gs[k % period]:
+                    for u, starts, ends in gs:
                         if starts:
                             self._propagate(u, t)
                             current = u
@@ -539,6 +570,12 @@ class Simulation:
                     sys.stderr.write(f"\r{self.bench.name}: t = {t:8.2f} s  [{'#' * (50 * (k + 1) // n):50s}]")
             if progress:
                 sys.stderr.write("\n")
+        except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the results so far go with it
+            if progress:
+                sys.stderr.write("\n")
+            if stepper is None:          # (the core attached its own)
+                e.result = rec.result()
+            raise
         except FMICallException:
             who = current.path if current else "?"
             log = current.fmu.log if current else [m for u in self.units for m in u.fmu.log]
@@ -655,7 +692,7 @@ def _core_library():
     return got
 
 
-def _core_stepper(sim, plan, plan_gs, core=None):
+def _core_stepper(sim, plan, plan_gs=None, core=None):
     """The C core set up for this run of ``sim``, or None where it does not
     apply: then today's Python loop runs. ``sim.stepping`` says which, and
     why. core: None (use it where it applies, unless ARTIBUS_CORE=0), True
@@ -681,14 +718,14 @@ def _core_stepper(sim, plan, plan_gs, core=None):
             raise ArtibusError(f"{sim.bench.file}: the C stepping core does not apply: {why}")
         return None
     sim.stepping = "C core"
-    return _CoreStepper(sim, lib, plan, plan_gs)
+    return _CoreStepper(sim, lib, plan)
 
 
 class _CoreStepper:
     """The plan and the units as core.h's plain structs, over _RawCalls' buffers."""
 
-    def __init__(self, sim, lib, plan, plan_gs):
-        self.sim, self.lib = sim, lib
+    def __init__(self, sim, lib, plan):
+        self.sim, self.lib, self.plan = sim, lib, plan
         units = sim.units
         index = {id(u): i for i, u in enumerate(units)}
         double = sizeof(c_double)
@@ -711,9 +748,23 @@ class _CoreStepper:
             s.out_vrs, s.out = addressof(raw.out_vrs), addressof(raw.out)
             s.in_vrs, s.inp = addressof(raw.in_vrs), addressof(raw.inp)
             s.written, s.n_sources, s.sources = addressof(written), len(u.sources), addressof(sources)
-        # the plan as Simulation.run's loop walks it: per base step of the period, (op, unit)
+        self._index = index
+        # the plan as Simulation.run's loop walks it: per base step of the period, (op, unit);
+        # a plan too long to tabulate (_Plan.table None) is given to the core a window
+        # of CORE_PIECE base steps at a time (see _window)
+        if plan.table is not None:
+            self._ops(range(plan.period), plan.period)
+        # recording: the Recorder's columns, each a place in an output buffer
+        self.rec = (c_void_p * max(1, len(sim.record)))(
+            *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record))
+
+    def _ops(self, steps, period):
+        """op_start/op_kind/op_unit for the core: entry p (0 <= p < period) does base
+        step steps[p]'s operations (the core does those of entry k % period at step k)."""
+        sim, index = self.sim, self._index
         kinds, who, start = [], [], [0]
-        for (starting, ending), gs in zip(plan, plan_gs):
+        for k in steps:
+            starting, ending, gs = self.plan[k] if k is not None else ((), (), ())
             if sim.algorithm == "jacobi":
                 ops = ([(_AC_PROPAGATE, u) for u in starting] + [(_AC_WRITE, u) for u in starting]
                        + [(_AC_STEP, u) for u in ending])
@@ -730,20 +781,31 @@ class _CoreStepper:
         self.op_start = (c_int * len(start))(*start)
         self.op_kind = (c_int * max(1, len(kinds)))(*kinds)
         self.op_unit = (c_int * max(1, len(who)))(*who)
-        # recording: the Recorder's columns, each a place in an output buffer
-        self.rec = (c_void_p * max(1, len(sim.record)))(
-            *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record))
-        self.period = len(plan)
+        self.period = period
+
+    def _window(self, s, k0, k1):
+        """The plan of base steps k0 .. k1 - 1 (k1 - k0 <= CORE_PIECE) as a period of
+        CORE_PIECE entries: step k is entry k % CORE_PIECE, distinct for the steps of
+        one window. Memory bounded whatever the plan's period."""
+        w = CORE_PIECE
+        steps = [None] * w
+        for k in range(k0, k1):
+            steps[k % w] = k
+        self._ops(steps, w)
+        s.period, s.op_start = self.period, addressof(self.op_start)
+        s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
 
     def run(self, start, h, n, progress):
         """Base steps 0 .. n - 1 from the initialised state: the Result, or
         SimulationError with the results up to the failure, as the Python loop."""
         sim = self.sim
         table = np.empty((n + 1, len(sim.names)))
-        s = _AcSim(n_units=len(sim.units), units=addressof(self.units), period=self.period,
-                   op_start=addressof(self.op_start), op_kind=addressof(self.op_kind),
-                   op_unit=addressof(self.op_unit), start=start, h=h, n_cols=len(sim.names),
-                   rec=addressof(self.rec), table=table.ctypes.data)
+        windowed = self.plan.table is None
+        s = _AcSim(n_units=len(sim.units), units=addressof(self.units), start=start, h=h,
+                   n_cols=len(sim.names), rec=addressof(self.rec), table=table.ctypes.data)
+        if not windowed:
+            s.period, s.op_start = self.period, addressof(self.op_start)
+            s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
         for a, u, written in zip(self.units, sim.units, self.written):
             a.wall = 0.0
             a.has_written = u.raw.written is not None
@@ -755,11 +817,15 @@ class _CoreStepper:
         # the Python loop); with the progress bar ending where the Python loop draws it
         ends = [k + 1 for k in range(0, n, every)] if progress else list(range(CORE_PIECE, n, CORE_PIECE))
         ends.append(n)
+        if windowed:                 # no piece longer than a window of the plan
+            ends = sorted(set(ends) | set(range(CORE_PIECE, n, CORE_PIECE)))
         k0, failed = 0, 0
         try:
             for k1 in ends:
                 if k1 <= k0:
                     continue
+                if windowed:
+                    self._window(s, k0, k1)
                 failed = self.lib.artibus_core_run(byref(s), k0, k1)
                 if failed:
                     break
@@ -767,6 +833,9 @@ class _CoreStepper:
                 if progress and (k1 - 1) % every == 0:
                     t = start + k1 * h
                     sys.stderr.write(f"\r{sim.bench.name}: t = {t:8.2f} s  [{'#' * (50 * k1 // n):50s}]")
+        except KeyboardInterrupt as e:     # Ctrl-C or SIGTERM (artibus.cli): the rows done go with it
+            e.result = Result.from_array(sim.names, table[:k0 + 1].copy())
+            raise
         finally:
             for a, u, written in zip(self.units, sim.units, self.written):
                 u.wall += a.wall
@@ -794,16 +863,28 @@ def run(ssp, stop_time=None, step=None, overrides=None, record=None,
 
 
 def save(result, path):
-    """CSV, or MATLAB .mat (one variable per signal, names made MATLAB-safe)."""
+    """CSV, or MATLAB .mat (one variable per signal, names made MATLAB-safe),
+    written to a temporary name beside ``path`` and renamed (artibus.files):
+    ``path`` is the complete file or is left as it was, never torn by a
+    Ctrl-C, a SIGTERM or a full disk."""
+    from artibus.files import atomic_path
     path = Path(path)
-    if path.suffix == ".mat":
-        from scipy.io import savemat
-        data = result.array()
-        safe = {}
-        for i, n in enumerate(result.names):
-            key = "".join(ch if ch.isalnum() else "_" for ch in n).strip("_")[:63] or f"v{i}"
-            safe[key] = data[:, i]
-        savemat(str(path), safe)
-    else:
-        result.to_csv(path)
+    with atomic_path(path) as tmp:
+        if path.suffix == ".mat":
+            from scipy.io import savemat
+            data = result.array()
+            safe = {}
+            for i, n in enumerate(result.names):
+                key = "".join(ch if ch.isalnum() else "_" for ch in n).strip("_")[:63] or f"v{i}"
+                safe[key] = data[:, i]
+            savemat(str(tmp), safe)
+        else:
+            result.to_csv(tmp)
     return path
+
+
+def partial_path(path):
+    """Where the results of a run that stopped midway go: ``out.csv`` ->
+    ``out.partial.csv`` (``.mat`` likewise), never the final name."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}.partial{path.suffix or '.csv'}")

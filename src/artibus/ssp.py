@@ -191,13 +191,15 @@ def pack(bench, out_dir=None):
 
 
 def _write_pack(out, ssd_file, files):
+    from artibus.files import atomic_path
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(out.name + ".part")      # a run that reads it never sees half a file
-    with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
-        z.write(ssd_file, "SystemStructure.ssd")
-        for ref, path in sorted(files.items()):
-            z.write(path, ref)
-    tmp.replace(out)
+    # packed under a name of this process's own, then renamed: a run that reads it never
+    # sees half a file, and runs packing the same stale bench at once do not collide
+    with atomic_path(out, fsync=False) as tmp:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
+            z.write(ssd_file, "SystemStructure.ssd")
+            for ref, path in sorted(files.items()):
+                z.write(path, ref)
     return out
 
 
