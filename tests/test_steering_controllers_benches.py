@@ -101,7 +101,7 @@ def dynamic_circle(strategy, speed=BENCH_SPEED, R2=BENCH_R2, ramp=4.0, laps=1.5)
     gamma1 = math.atan(L1 / R2)
     bus = opened("BusDynamics", p)
     tg = opened("TrainGuidance", {"testSteerAmp": 0.0, "v": speed, "gamma1": 0.0})
-    fm = opened("ForceMinimization", {"testSteerAmp": 0.0})
+    fm = opened("ForceMinimization", {"testSteerAmp": 0.0, "gamma1": 0.0})
     names = ["FjointY[1]", "FjointY[2]", "Fy[3]", "Fy[5]", "xAxle[2]", "yAxle[2]",
              "xAxle[4]", "yAxle[4]", "xAxle[6]", "yAxle[6]", "vx[1]"]
     try:
