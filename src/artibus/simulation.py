@@ -69,8 +69,9 @@ def _callbacks(log):
 
     cb = fmi2CallbackFunctions()
     cb.logger = fmi2CallbackLoggerTYPE(logger)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    from artibus import memory     # the process's calloc/free (a preloaded ASan sees the FMUs' heap)
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(memory.calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(memory.free)
     addLoggerProxy(byref(cb))
     cb._keep = logger  # keep the Python function alive
     # FMPy's proxy keeps the last logger given to addLoggerProxy in one static

@@ -7,8 +7,10 @@
  * fmi2SetFMUstate, fmi2Reset and fmi2FreeInstance are allowed).
  * Variables are read and written through the generated table (vartable.h).
  */
+#include <ctype.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -143,7 +145,15 @@ static char *resource_path(ModelInstance *comp, const char *uri) {
     char *o = out;
     for (; *p; p++) {
         unsigned hex;
-        if (*p == '%' && sscanf(p + 1, "%2x", &hex) == 1) { *o++ = (char)hex; p += 2; }
+        if (*p == '%') {    /* exactly two hex digits, else the location is malformed */
+            if (!isxdigit((unsigned char)p[1]) || !isxdigit((unsigned char)p[2]) ||
+                sscanf(p + 1, "%2x", &hex) != 1 || hex == 0) {
+                comp->cb.freeMemory(out);
+                return NULL;
+            }
+            *o++ = (char)hex;
+            p += 2;
+        }
         else *o++ = *p;
     }
     return out;
@@ -204,6 +214,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
         return NULL;
     }
     comp->resourceDir = resource_path(comp, resourceLocation);
+    if (resourceLocation && strncmp(resourceLocation, "file:", 5) == 0 && !comp->resourceDir) {
+        log_error(comp, "fmi2Instantiate: fmuResourceLocation '%s' has a malformed percent escape "
+                        "(%% must be followed by two hex digits, not %%00)", resourceLocation);
+        functions->freeMemory(comp->instanceName);
+        functions->freeMemory(comp);
+        return NULL;
+    }
     for (int i = 0; i < LOG_NCATEGORIES; i++) comp->logOn[i] = loggingOn;
     comp->v.state = S_INSTANTIATED;
     comp->stopTime = INFINITY;
@@ -245,11 +262,14 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     return fmi2OK;
 }
 
+static fmi2Status check_outputs(ModelInstance *comp, const char *fn);
+
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     ENTER("fmi2ExitInitializationMode", M_ExitInit);
     fmi2Status status = model_init(comp);
     if (status > fmi2Warning) return leave(comp, status);
     model_outputs(comp);
+    if (check_outputs(comp, "fmi2ExitInitializationMode")) return leave(comp, fmi2Error);
     comp->dirty = false;
     comp->restart = comp->forget = true;
     comp->v.state = comp->type == fmi2ModelExchange ? S_EVENT_MODE : S_STEP_COMPLETE;
@@ -399,16 +419,81 @@ SETTER(fmi2SetString, fmi2String, T_STRING,
        strcmp((char *)field(comp, v), value[i]) != 0,
        strcpy((char *)field(comp, v), value[i]))
 
-/* ---- FMU state: the plain-data block comp->v, nothing else ------------------ */
+/* ---- FMU state: the plain-data block comp->v, nothing else ------------------
+ * A state is validated as a whole before any of it is used (fmi2SetFMUstate,
+ * fmi2DeSerializeFMUstate): header, the checksum of a serialized body, the
+ * instance state, the time, every variable (finite; parameters and inputs in
+ * their declared range) and the model's own ModelState (model_state_valid).
+ * Otherwise fmi2Error with a message, and the instance's values unchanged. */
 
 typedef struct {
     uint32_t magic;         /* 'ABFS' */
     uint32_t size;          /* sizeof(FmuState) of the build that wrote it */
     char guid[64];
+    uint64_t sum;           /* FNV-1a of guid and v, written by fmi2SerializeFMUstate */
     __typeof__(((ModelInstance *)0)->v) v;
 } FmuState;
 
 #define FMUSTATE_MAGIC 0x41424653u
+
+static uint64_t fnv1a(uint64_t h, const void *p, size_t n) {
+    const unsigned char *b = p;
+    for (size_t i = 0; i < n; i++) { h ^= b[i]; h *= 1099511628211ull; }
+    return h;
+}
+
+/* the checksum of a serialized state: FNV-1a over its GUID field and body */
+static uint64_t state_sum(const FmuState *s) {
+    return fnv1a(fnv1a(1469598103934665603ull, s->guid, sizeof s->guid), &s->v, sizeof s->v);
+}
+
+static fmi2Status check_state(ModelInstance *comp, const char *fn, const FmuState *s) {
+    if (!s || s->magic != FMUSTATE_MAGIC || s->size != sizeof(FmuState) ||
+        memchr(s->guid, '\0', sizeof s->guid) == NULL || strcmp(s->guid, MODEL_GUID) != 0)
+        return log_error(comp, "%s: the state was not made by this FMU (GUID %s)", fn, MODEL_GUID);
+    const unsigned st = (unsigned)s->v.state;
+    if (!(st & (unsigned)ANY_BUT_FATAL) || (st & (st - 1)) || (st & ~(unsigned)ANY_BUT_FATAL))
+        return log_error(comp, "%s: the state's instance state %u is not a legal one", fn, st);
+    if (!isfinite(s->v.time))
+        return log_error(comp, "%s: the state's time %g is not finite", fn, s->v.time);
+    for (size_t i = 0; i < MODEL_NVARS; i++) {
+        const VarInfo *v = &VARS[i];
+        const char *p = (const char *)&s->v.d + v->offset;
+        const bool ranged = v->causality == C_PARAMETER || v->causality == C_INPUT;
+        double x;
+        switch (v->type) {
+        case T_REAL:
+            memcpy(&x, p, sizeof x);
+            if (!isfinite(x))
+                return log_error(comp, "%s: the state's %s = %g is not finite", fn, v->name, x);
+            break;
+        case T_INTEGER: {
+            int k;
+            memcpy(&k, p, sizeof k);
+            x = k;
+            break;
+        }
+        case T_BOOLEAN: {
+            int k;
+            memcpy(&k, p, sizeof k);
+            if (k != 0 && k != 1)
+                return log_error(comp, "%s: the state's Boolean %s = %d is neither 0 nor 1", fn, v->name, k);
+            continue;
+        }
+        default:
+            if (!memchr(p, '\0', ARTIBUS_STRLEN))
+                return log_error(comp, "%s: the state's String %s is not terminated", fn, v->name);
+            continue;
+        }
+        if (ranged && !(x >= v->min && x <= v->max))
+            return log_error(comp, "%s: the state's %s = %.15g is outside its range [%g, %g]",
+                             fn, v->name, x, v->min, v->max);
+    }
+    char why[512] = "";
+    if (!model_state_valid(&s->v.d, &s->v.s, s->v.time, why, sizeof why))
+        return log_error(comp, "%s: the state is not valid: %s", fn, why[0] ? why : "(no reason given)");
+    return fmi2OK;
+}
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     ENTER("fmi2GetFMUstate", M_FMUstate);
@@ -420,7 +505,9 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
         return leave(comp, log_error(comp, "fmi2GetFMUstate: the state to overwrite was not made by this FMU"));
     s->magic = FMUSTATE_MAGIC;
     s->size = sizeof(FmuState);
+    memset(s->guid, 0, sizeof s->guid);
     snprintf(s->guid, sizeof s->guid, "%s", MODEL_GUID);
+    s->sum = 0;
     s->v = comp->v;
     *state = s;
     /* the integrator restarts here, exactly as it will after a restore: so a
@@ -430,10 +517,20 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
 }
 
 static fmi2Status restore(ModelInstance *comp, const char *fn, const FmuState *s) {
-    if (!s || s->magic != FMUSTATE_MAGIC || s->size != sizeof(FmuState) ||
-        strcmp(s->guid, MODEL_GUID) != 0)
-        return log_error(comp, "%s: the state was not made by this FMU (GUID %s)", fn, MODEL_GUID);
+    if (check_state(comp, fn, s)) return fmi2Error;
+    /* the model rebuilds what it derives at initialisation (a fresh instance
+       has none of it); if it cannot, the previous values come back */
+    __typeof__(comp->v) *old = fmu_calloc(comp, 1, sizeof comp->v);
+    if (!old) return log_error(comp, "%s: out of memory", fn);
+    *old = comp->v;
     comp->v = s->v;
+    if (model_restored(comp) > fmi2Warning) {
+        comp->v = *old;
+        comp->cb.freeMemory(old);
+        comp->dirty = comp->restart = comp->forget = true;
+        return log_error(comp, "%s: the state could not be restored", fn);
+    }
+    comp->cb.freeMemory(old);
     comp->restart = comp->forget = true;
     comp->dirty = true;
     log_event(comp, "%s: state restored at t = %g", fn, comp->v.time);
@@ -467,7 +564,12 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte b
     if (!state || !bytes || size < sizeof(FmuState))
         return leave(comp, log_error(comp, "fmi2SerializeFMUstate: need %zu bytes, got %zu",
                                      sizeof(FmuState), bytes ? size : 0));
-    memcpy(bytes, state, sizeof(FmuState));
+    const FmuState *s = (const FmuState *)state;
+    if (s->magic != FMUSTATE_MAGIC || s->size != sizeof(FmuState))
+        return leave(comp, log_error(comp, "fmi2SerializeFMUstate: the state was not made by this FMU"));
+    memcpy(bytes, s, sizeof(FmuState));
+    const uint64_t sum = state_sum(s);
+    memcpy(bytes + offsetof(FmuState, sum), &sum, sizeof sum);
     return fmi2OK;
 }
 
@@ -476,14 +578,35 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size
     if (!bytes || !state || size != sizeof(FmuState))
         return leave(comp, log_error(comp, "fmi2DeSerializeFMUstate: expected %zu bytes, got %zu",
                                      sizeof(FmuState), size));
-    FmuState tmp;
-    memcpy(&tmp, bytes, sizeof tmp);
-    if (tmp.magic != FMUSTATE_MAGIC || strcmp(tmp.guid, MODEL_GUID) != 0)
-        return leave(comp, log_error(comp, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU"));
-    FmuState *s = *state ? (FmuState *)*state : fmu_calloc(comp, 1, sizeof(FmuState));
-    if (!s) return leave(comp, log_error(comp, "fmi2DeSerializeFMUstate: out of memory"));
-    *s = tmp;
-    *state = s;
+    FmuState *tmp = fmu_calloc(comp, 1, sizeof(FmuState));
+    if (!tmp) return leave(comp, log_error(comp, "fmi2DeSerializeFMUstate: out of memory"));
+    memcpy(tmp, bytes, sizeof(FmuState));
+    fmi2Status status = fmi2OK;
+    if (tmp->magic != FMUSTATE_MAGIC || memchr(tmp->guid, '\0', sizeof tmp->guid) == NULL ||
+        strcmp(tmp->guid, MODEL_GUID) != 0)
+        status = log_error(comp, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU");
+    else if (tmp->sum != state_sum(tmp))
+        status = log_error(comp, "fmi2DeSerializeFMUstate: the state's checksum does not match its "
+                                 "body (the bytes were changed after fmi2SerializeFMUstate)");
+    else
+        status = check_state(comp, "fmi2DeSerializeFMUstate", tmp);
+    if (status != fmi2OK) {
+        comp->cb.freeMemory(tmp);
+        return leave(comp, fmi2Error);
+    }
+    tmp->sum = 0;
+    if (*state) {
+        FmuState *s = (FmuState *)*state;
+        if (s->magic != FMUSTATE_MAGIC) {
+            comp->cb.freeMemory(tmp);
+            return leave(comp, log_error(comp, "fmi2DeSerializeFMUstate: the state to overwrite was "
+                                               "not made by this FMU"));
+        }
+        *s = *tmp;
+        comp->cb.freeMemory(tmp);
+    } else {
+        *state = tmp;
+    }
     return fmi2OK;
 }
 
@@ -516,6 +639,19 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 
 /* ---- stepping ---------------------------------------------------------------- */
 
+/* every Real output finite, after model_outputs; else fmi2Error naming it */
+static fmi2Status check_outputs(ModelInstance *comp, const char *fn) {
+    for (size_t i = 0; i < MODEL_NVARS; i++) {
+        const VarInfo *v = &VARS[i];
+        if (v->type != T_REAL || v->causality != C_OUTPUT) continue;
+        const double x = *(const double *)field(comp, v);
+        if (!isfinite(x))
+            return log_error(comp, "%s: output %s = %g at t = %.17g is not finite (a parameter or "
+                                   "input out of its physical range?)", fn, v->name, x, comp->v.time);
+    }
+    return fmi2OK;
+}
+
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     (void)noSetFMUStatePriorToCurrentPoint;
     ENTER("fmi2DoStep", M_DoStep);
@@ -531,7 +667,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
     fmi2Status status = model_do_step(comp, now, h);
     comp->restart = comp->forget = false;
     if (status <= fmi2Warning) {
-        comp->dirty = true;         /* outputs are computed when they are read */
+        model_outputs(comp);        /* never a non-finite output with fmi2OK */
+        comp->dirty = false;
+        if (check_outputs(comp, "fmi2DoStep")) status = fmi2Error;
     } else {
         model_outputs(comp);        /* the state it stopped in, readable in the error state */
         comp->dirty = false;

@@ -14,6 +14,7 @@
 
 #include <math.h>
 #include <stdbool.h>
+#include <stdio.h>
 #include "fmi2Functions.h"
 #include "vartable.h"
 #include "config.h"
@@ -90,6 +91,41 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h);
 /* Release comp->solver (fmi2Reset, fmi2FreeInstance). */
 void model_free(ModelInstance *comp);
 
+/* A state about to be restored (fmi2SetFMUstate, fmi2DeSerializeFMUstate).
+ * The layer has checked the time, the instance state and every variable in d
+ * (finite; parameters and inputs within their declared min/max); the model
+ * checks its ModelState as a whole against d: every count and index in range,
+ * every double finite, sample counters consistent with time. On failure it
+ * writes why into why[n] and returns false. Must not touch anything else. */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n);
+
+/* After a state was restored (v is the restored one, validated): rebuild what
+ * the model derives at initialisation in comp->solver (a road, the integrator
+ * of another size), so that a state restores into a fresh instance too. On
+ * fmi2Error (logged) the layer puts the previous v back. */
+fmi2Status model_restored(ModelInstance *comp);
+
+/* in model_state_valid: return STATE_INVALID("nAxles = %d", ...) */
+#define STATE_INVALID(...) (snprintf(why, n, __VA_ARGS__), false)
+
+/* all n doubles finite */
+static inline bool finite_all(const double *x, size_t n) {
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(x[i])) return false;
+    return true;
+}
+
+/* a discrete controller's next sample k (at t0 + k Ts) in a restored state
+ * lies within a sample period or so of the time the state was taken at: so a
+ * step takes at most h / Ts + 2 samples (a corrupted counter would loop) */
+static inline bool sample_index_ok(double t0, long long k, double Ts, double time) {
+    if (!isfinite(t0) || !(Ts > 0) || k < 0 || k > (1LL << 52) || t0 > time + 1e-9 * Ts ||
+        !(fabs(t0) + fabs(time) < 1e11 * Ts))     /* else t + Ts would round to t */
+        return false;
+    const double tk = t0 + (double)k * Ts;
+    return tk >= time - 1.5 * Ts && tk <= time + 2.5 * Ts;
+}
+
 /* ---- Model Exchange: supplied by the models whose model description has
  * <ModelExchange> (the plants); MODEL_NX states and MODEL_NZ event
  * indicators, in the order of <Derivatives> (model_vars.h lists it). The
@@ -111,7 +147,7 @@ fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNex
 
 /* The built-in test stimulus of a model run alone (`fmpy simulate`): one
  * sine period amp sin(2 pi t / period), an S-curve on a steering input, then
- * nothing. Parameters testSteerAmp / testSteerPeriod; benches set amp = 0. */
+ * nothing. Parameters testSteerAmp / testSteerPeriod; off (amp = 0) by default. */
 static inline double test_sine(double amp, double period, double t) {
     return (amp != 0.0 && t < period) ? amp * sin(2 * M_PI * t / period) : 0.0;
 }

@@ -79,3 +79,16 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
+
+/* FMU state: parameters (from model_init), valve pressure, dissipated energy */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    (void)d; (void)time;
+    const DamperParams *p = &s->par;
+    if (!finite_all(&p->R, (size_t)(&p->cStop - &p->R) + 1) || !isfinite(s->pValve) || !isfinite(s->Ediss))
+        return STATE_INVALID("a parameter, the valve pressure or the energy is not finite");
+    if ((p->bothWays != 0 && p->bothWays != 1) || (s->warned != 0 && s->warned != 1))
+        return STATE_INVALID("bothWays = %d, warned = %d", p->bothWays, s->warned);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

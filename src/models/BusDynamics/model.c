@@ -283,3 +283,16 @@ fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNex
     *tNext = INFINITY;
     return fmi2OK;
 }
+
+/* FMU state: the coordinates and their rates; the integrator (its size from
+ * nModules) is made again at the next step */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    (void)d; (void)time;
+    if (!finite_all(s->z, 6) || !finite_all(s->zd, 6)) return STATE_INVALID("a coordinate z or rate zd is not finite");
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) {
+    model_free(comp);
+    return fmi2OK;
+}

@@ -267,3 +267,14 @@ fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNex
     }
     return fmi2OK;
 }
+
+/* FMU state: ModelState holds nothing; the integrator (of size 3 + N) is made again */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    (void)d; (void)s; (void)time; (void)why; (void)n;
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) {
+    model_free(comp);
+    return fmi2OK;
+}

@@ -102,3 +102,23 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
+
+/* FMU state: parameters (from model_init), reference model, outputs, sample counter */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    const DcController *c = &s->c;
+    if (c->p.nKc < 1 || c->p.nKc > DC_MAX_KC || c->p.option < 0 || c->p.option > 5 ||
+        (c->p.exactRef != 0 && c->p.exactRef != 1))
+        return STATE_INVALID("Kc table of %d points, option %d, exactRef %d", c->p.nKc, c->p.option, c->p.exactRef);
+    if (!finite_all(c->p.KcSpeed, DC_MAX_KC) || !finite_all(c->p.KcGain, DC_MAX_KC) ||
+        !finite_all(&c->l1, (size_t)(&c->active - &c->l1) + 1) || !isfinite(c->p.Ts) || !(c->p.Ts == d->Ts) ||
+        !isfinite(c->p.f1) || !isfinite(c->p.b1) || !isfinite(c->p.b11) || !isfinite(c->p.f2) ||
+        !isfinite(c->p.b2) || !isfinite(c->p.m2) || !isfinite(c->p.Crear) || !isfinite(c->p.K1) ||
+        !isfinite(c->p.K2) || !isfinite(c->p.K3) || !isfinite(c->p.Krev) || !isfinite(c->p.vMin) ||
+        !isfinite(c->p.pctMax) || !isfinite(c->p.pctFloor) || !isfinite(c->p.pctAtMmax))
+        return STATE_INVALID("a parameter, reference model state or output is not finite");
+    if (!sample_index_ok(s->t0, s->k, d->Ts, time))
+        return STATE_INVALID("sample k = %lld from t0 = %g (Ts = %g s) is not near t = %g s", s->k, s->t0, d->Ts, time);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

@@ -78,3 +78,14 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
+
+/* FMU state: parameters (from model_init) and the last outputs; the sample counter */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    if (!finite_all((const double *)&s->f, sizeof s->f / sizeof(double)))
+        return STATE_INVALID("a parameter or output of the force minimisation is not finite");
+    if (!sample_index_ok(s->t0, s->k, d->Ts, time))
+        return STATE_INVALID("sample k = %lld from t0 = %g (Ts = %g s) is not near t = %g s", s->k, s->t0, d->Ts, time);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

@@ -208,3 +208,15 @@ fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNex
     *tNext = D->testSteerAmp != 0.0 && comp->v.time < ts - step_tol(comp) ? ts : INFINITY;
     return fmi2OK;
 }
+
+/* FMU state: a warning flag; the integrator is made again at the next step */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    (void)d; (void)time;
+    if (s->warnedSpeed != 0 && s->warnedSpeed != 1) return STATE_INVALID("warnedSpeed = %d", s->warnedSpeed);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) {
+    model_free(comp);
+    return fmi2OK;
+}

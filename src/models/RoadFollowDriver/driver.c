@@ -48,8 +48,8 @@ void driver_sample(const Road *r, const DriverParams *p, const DriverInput *in,
     reference_point(p, in, &px, &py);
 
     /* the reference point on the road: incremental search around the last foot */
-    const int ahead = (int)ceil((fabs(in->v) * p->Ts + AHEAD_MARGIN) / ds);
-    const RoadFoot f0 = road_project(r, px, py, m->iRef - (int)ceil(BACK_WINDOW / ds), m->iRef + ahead);
+    const int ahead = road_int(ceil((fabs(in->v) * p->Ts + AHEAD_MARGIN) / ds));
+    const RoadFoot f0 = road_project(r, px, py, m->iRef - road_int(ceil(BACK_WINDOW / ds)), m->iRef + ahead);
     m->iRef = f0.i;
     out->s = f0.s;
     out->eLat = f0.eLat;
@@ -62,8 +62,8 @@ void driver_sample(const Road *r, const DriverParams *p, const DriverInput *in,
     const double lNear = p->lookNear0 + p->tNear * fabs(in->v);
     const double lFar = p->lookFar0 + p->tFar * fabs(in->v);
     const double c = cos(in->psi), s = sin(in->psi);
-    const int hiNear = f0.i + (int)ceil((1.5 * lNear + AHEAD_MARGIN) / ds);
-    const int hiFar = f0.i + (int)ceil((1.5 * lFar + AHEAD_MARGIN) / ds);
+    const int hiNear = f0.i + road_int(ceil((1.5 * lNear + AHEAD_MARGIN) / ds));
+    const int hiFar = f0.i + road_int(ceil((1.5 * lFar + AHEAD_MARGIN) / ds));
     const RoadFoot f3 = road_project(r, px + lNear * c, py + lNear * s, f0.i, hiNear);
     const RoadFoot f4 = road_project(r, px + lFar * c, py + lFar * s, f0.i, hiFar);
 

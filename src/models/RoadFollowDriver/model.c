@@ -209,3 +209,49 @@ void model_free(ModelInstance *comp) {
     free(comp->solver);
     comp->solver = NULL;
 }
+
+/* FMU state: the sample counter, the driver's memory (its road index checked
+ * against the road again in model_restored), held outputs, the test vehicle */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    if (!sample_index_ok(s->t0, s->kNext, d->Ts, time))
+        return STATE_INVALID("sample kNext = %ld from t0 = %g (Ts = %g s) is not near t = %g s",
+                             s->kNext, s->t0, d->Ts, time);
+    if (s->mem.iRef < 0 || s->mem.iRef >= ROAD_MAX_POINTS)
+        return STATE_INVALID("road index iRef = %d is outside the table (0 .. %d)", s->mem.iRef, ROAD_MAX_POINTS - 1);
+    const DriverOutput *o = &s->out;
+    if (!isfinite(s->mem.delta) || !isfinite(s->mem.integral) || !isfinite(o->delta) || !isfinite(o->Fx) ||
+        !isfinite(o->vRef) || !isfinite(o->s) || !isfinite(o->eLat) || !isfinite(o->ePsi) ||
+        !isfinite(s->xv) || !isfinite(s->yv) || !isfinite(s->psiv) || !isfinite(s->vv))
+        return STATE_INVALID("a memory, output or test vehicle value is not finite");
+    if ((o->finished != 0 && o->finished != 1) || (o->method != 1 && o->method != 2 && o->method != 0))
+        return STATE_INVALID("finished = %d, method = %d", o->finished, o->method);
+    return true;
+}
+
+/* the road of the restored parameters (built again unless it is the one built) */
+fmi2Status model_restored(ModelInstance *comp) {
+    Work *w = comp->solver;
+    const RoadKey key = road_key(comp);
+    if (w && w->built && D->road != ROAD_CSV && memcmp(&key, &w->key, sizeof key) == 0) {
+        if (comp->v.s.mem.iRef >= w->road.n)
+            return log_error(comp, "road index iRef = %d is beyond the road's %d points",
+                             comp->v.s.mem.iRef, w->road.n);
+        return fmi2OK;
+    }
+    Work *nw = malloc(sizeof(Work));
+    if (!nw) return log_error(comp, "out of memory");
+    if (build_road(comp, &nw->road)) {
+        free(nw);
+        return fmi2Error;
+    }
+    if (comp->v.s.mem.iRef >= nw->road.n) {
+        const int np = nw->road.n;
+        free(nw);
+        return log_error(comp, "road index iRef = %d is beyond the road's %d points", comp->v.s.mem.iRef, np);
+    }
+    nw->built = 1;
+    nw->key = key;
+    free(w);
+    comp->solver = nw;
+    return fmi2OK;
+}

@@ -41,7 +41,7 @@ static double piece_y(const Piece *p, int np, double x) {
 static int profile(const Piece *p, int np, double step, double *x, double *y, int cap,
                    char *err, size_t errlen) {
     const double end = p[np - 1].x0 + p[np - 1].len;
-    const int m = (int)ceil(end / step - 1e-9);
+    const int m = road_int(ceil(end / step - 1e-9));
     if (m + 1 > cap)
         return fail(err, errlen, "road of %.6g m needs %d points at step %.6g m, more than %d",
                     end, m + 1, step, cap);
@@ -94,12 +94,12 @@ static int iso3888(const RoadParams *q, double *x, double *y, int cap, char *err
  * +x and left to the same straight after 360 deg */
 static int circle(const RoadParams *q, double *x, double *y, int cap, char *err, size_t errlen) {
     const double R = q->R, h = q->step;
-    const int nb = (int)ceil(q->before / h - 1e-9);
-    const int nc = (int)ceil(2 * M_PI * fabs(R) / h - 1e-9);
-    const int na = (int)ceil(q->after / h - 1e-9);
-    const int n = nb + nc + na + 1;
+    const int nb = road_int(ceil(q->before / h - 1e-9));
+    const int nc = road_int(ceil(2 * M_PI * fabs(R) / h - 1e-9));
+    const int na = road_int(ceil(q->after / h - 1e-9));
+    const long long n = (long long)nb + nc + na + 1;
     if (n > cap)
-        return fail(err, errlen, "circle road needs %d points at step %.6g m, more than %d", n, h, cap);
+        return fail(err, errlen, "circle road needs %lld points at step %.6g m, more than %d", n, h, cap);
     int k = 0;
     for (int i = 0; i < nb; i++, k++) { x[k] = q->before * i / nb; y[k] = 0.0; }
     for (int i = 0; i < nc; i++, k++) {
@@ -219,7 +219,7 @@ int road_resample(const double *x, const double *y, int n, double ds, Road *r,
                         j, j + 1, x[j], y[j]);
         length += l;
     }
-    const int m = (int)ceil(length / ds - 1e-9);
+    const int m = road_int(ceil(length / ds - 1e-9));
     if (m + 1 > ROAD_MAX_POINTS)
         return fail(err, errlen, "road of %.6g m at ds = %g m needs %d points, more than the "
                                  "table's %d", length, ds, m + 1, ROAD_MAX_POINTS);
@@ -252,7 +252,7 @@ int road_resample(const double *x, const double *y, int n, double ds, Road *r,
 
 int road_index(const Road *r, double s) {
     if (!(s > 0)) return 0;
-    const int i = (int)(s / r->ds + 0.5);
+    const int i = road_int(s / r->ds + 0.5);
     return i < r->n ? i : r->n - 1;
 }
 

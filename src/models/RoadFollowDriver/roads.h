@@ -14,6 +14,13 @@
 
 #define ROAD_MAX_POINTS 20000    /* resampled table: 2 km at ds = 0.1 m */
 #define ROAD_RAW_MAX    200000   /* points of a generated or CSV polyline */
+
+/* a count or an index from a double, range-checked: NaN -> 0, clamped to
+ * +-1e9 (beyond every table, within int), so huge distances give "too many
+ * points" or the table's end instead of an undefined conversion */
+static inline int road_int(double x) {
+    return x != x ? 0 : x > 1e9 ? 1000000000 : x < -1e9 ? -1000000000 : (int)x;
+}
 #define ROAD_ERRLEN     512
 
 enum { ROAD_CSV = 0, ROAD_LANE_CHANGE = 1, ROAD_CIRCLE = 2, ROAD_ISO3888 = 3 };

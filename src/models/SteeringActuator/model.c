@@ -62,3 +62,18 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
+
+/* FMU state: parameters, the fallback, axle angles, the sample counter */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    const SteeringAct *a = &s->a;
+    if (!cf_state_valid(&a->cf) || s->mode < CF_NORMAL || s->mode > CF_SAFE)
+        return STATE_INVALID("fallback counts or mode %d out of range", s->mode);
+    if (!isfinite(a->p.Tact) || !isfinite(a->p.rateMax) || !isfinite(a->p.tHold) || !isfinite(a->p.rampRate) ||
+        !(a->p.Ts == d->Ts) || !isfinite(a->a) || !finite_all(a->delta, 2) || !finite_all(a->cmdRx, 2))
+        return STATE_INVALID("a parameter or angle is not finite");
+    if (!sample_index_ok(s->t0, s->k, d->Ts, time))
+        return STATE_INVALID("sample k = %lld from t0 = %g (Ts = %g s) is not near t = %g s", s->k, s->t0, d->Ts, time);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

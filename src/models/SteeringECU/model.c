@@ -102,3 +102,18 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
+
+/* FMU state: parameters, lag states, the fallback, the sample counter */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    const SteeringEcu *e = &s->e;
+    if ((e->module != 2 && e->module != 3) || !cf_state_valid(&e->cf) || s->mode < CF_NORMAL || s->mode > CF_SAFE)
+        return STATE_INVALID("module %d, fallback counts or mode %d out of range", e->module, s->mode);
+    if (!finite_all((const double *)&e->g, sizeof e->g / sizeof(double)) ||
+        !finite_all((const double *)&e->f, sizeof e->f / sizeof(double)) || !finite_all(e->calc, 2))
+        return STATE_INVALID("a parameter, lag state or angle is not finite");
+    if (!sample_index_ok(s->t0, s->k, d->Ts, time))
+        return STATE_INVALID("sample k = %lld from t0 = %g (Ts = %g s) is not near t = %g s", s->k, s->t0, d->Ts, time);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

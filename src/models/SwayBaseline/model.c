@@ -71,3 +71,21 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
+
+/* FMU state: parameters (from model_init), SSC timer, outputs, sample counter */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    const SbBaseline *b = &s->b;
+    if (b->p.nGround < 1 || b->p.nGround > SB_MAX_GROUND || b->nHold < 0 || b->nHold > (1LL << 52) ||
+        b->k < 0 || b->k > (1LL << 52) || b->kLast > b->k || (b->everHeld != 0 && b->everHeld != 1))
+        return STATE_INVALID("ground table of %d points, nHold %lld, k %lld, kLast %lld", b->p.nGround,
+                             b->nHold, b->k, b->kLast);
+    if (!finite_all(b->p.groundSpeed, SB_MAX_GROUND) || !finite_all(b->p.groundPct, SB_MAX_GROUND) ||
+        !finite_all(&b->p.vSSC, (size_t)(&b->p.Ts - &b->p.vSSC) + 1) || !(b->p.Ts == d->Ts) ||
+        !isfinite(b->tSince) || !isfinite(b->pct) || !isfinite(b->pctGround) || !isfinite(b->ssc) || !isfinite(b->ep))
+        return STATE_INVALID("a parameter, timer or output is not finite");
+    if (!sample_index_ok(s->t0, s->k, d->Ts, time))
+        return STATE_INVALID("sample k = %lld from t0 = %g (Ts = %g s) is not near t = %g s", s->k, s->t0, d->Ts, time);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

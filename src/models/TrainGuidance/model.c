@@ -121,3 +121,29 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
+
+/* FMU state: parameters and lag states, the path memory (ring buffer indices)
+ * and the sample counter */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    const TgPath *m = &s->pm;
+    if (!finite_all((const double *)&s->g, sizeof s->g / sizeof(double)))
+        return STATE_INVALID("a parameter or lag state of the guidance is not finite");
+    if (!(s->g.p.Ts == d->Ts)) return STATE_INVALID("the guidance's Ts = %g s is not Ts = %g s", s->g.p.Ts, d->Ts);
+    if (!finite_all(m->px, TG_PM_N) || !finite_all(m->py, TG_PM_N) || !finite_all(m->pth, TG_PM_N) ||
+        !isfinite(m->x) || !isfinite(m->y) || !isfinite(m->psi) || !isfinite(m->s) || !isfinite(m->kPath) ||
+        !isfinite(m->s4) || !isfinite(m->s6) || !isfinite(m->e4) || !isfinite(m->e6) ||
+        !isfinite(m->gamma4) || !isfinite(m->gamma6))
+        return STATE_INVALID("a value of the path memory is not finite");
+    if (!(m->dsGrid > 0 && m->window >= 0 && m->window / m->dsGrid < 1e6))
+        return STATE_INVALID("path memory grid %g m, window %g m", m->dsGrid, m->window);
+    if (m->next < 0 || m->next > (1LL << 40) || m->seg4 < -1 || m->seg4 > m->next || m->seg6 < -1 || m->seg6 > m->next)
+        return STATE_INVALID("path memory indices next = %lld, seg4 = %lld, seg6 = %lld", m->next, m->seg4, m->seg6);
+    if (!(m->s >= 0 && m->s < ((double)m->next + 2.0) * m->dsGrid + 1.0))
+        return STATE_INVALID("path memory odometer s = %g m with %lld points stored", m->s, m->next);
+    if (s->backwards != 0 && s->backwards != 1) return STATE_INVALID("backwards = %d", s->backwards);
+    if (!sample_index_ok(s->t0, s->k, d->Ts, time))
+        return STATE_INVALID("sample k = %lld from t0 = %g (Ts = %g s) is not near t = %g s", s->k, s->t0, d->Ts, time);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

@@ -109,3 +109,21 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 void model_free(ModelInstance *comp) {
     (void)comp;                         /* nothing on the heap */
 }
+
+/* FMU state: gains (from model_init), memory, held outputs, the sample counter */
+bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
+    const ZsGains *g = &s->gains;
+    if (g->n < 2 || g->n > ZS_MAX_AXLES || g->n != d->n || g->rear < 1 || g->rear > g->n)
+        return STATE_INVALID("gains for n = %d axles, rear = %d (n = %d)", g->n, g->rear, d->n);
+    if (!finite_all(g->a, ZS_MAX_AXLES + 1) || !finite_all(g->b, ZS_MAX_AXLES + 1) ||
+        !finite_all(g->deltaMax, ZS_MAX_AXLES + 1) || !isfinite(g->N2) || !isfinite(g->N0) ||
+        !isfinite(g->D2) || !isfinite(g->D0) || !isfinite(g->uPole) ||
+        !finite_all(s->mem.delta, ZS_MAX_AXLES + 1) || !isfinite(s->mem.u) ||
+        !finite_all(s->delta, ZS_MAX_AXLES + 1) || !finite_all(s->K, ZS_MAX_AXLES + 1))
+        return STATE_INVALID("a gain, memory or held output is not finite");
+    if (!sample_index_ok(s->t0, s->kNext, d->Ts, time))
+        return STATE_INVALID("sample kNext = %ld from t0 = %g (Ts = %g s) is not near t = %g s", s->kNext, s->t0, d->Ts, time);
+    return true;
+}
+
+fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }

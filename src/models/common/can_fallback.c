@@ -21,6 +21,7 @@ int cf_setup(CfFallback *f, const CfParams *p, const double *counters, const dou
     if (!(isfinite(p->tHold) && p->tHold >= 0 && p->tHold <= 1e4)) return -5;
     if (!(isfinite(p->rampRate) && p->rampRate > 0)) return -6;
     if (!(isfinite(p->Ts) && p->Ts > 0)) return -7;
+    if (!(p->tHold / p->Ts <= 1e9)) return -5;      /* nHold below is an int */
     f->p = *p;
     f->nHold = (int)ceil(p->tHold / p->Ts - 1e-9);
     if (f->nHold < 1) f->nHold = 1;                 /* the detection cycle holds at least */
@@ -104,4 +105,20 @@ unsigned cf_sample(CfFallback *f, const double *counters, unsigned used, int bad
         break;
     }
     return stale;
+}
+
+int cf_state_valid(const CfFallback *f) {
+    const CfParams *p = &f->p;
+    if (!(p->nMsg >= 1 && p->nMsg <= CF_MAX_MSG && p->nOut >= 1 && p->nOut <= CF_MAX_OUT &&
+          p->nStale >= 0 && p->nStale <= 1000 && p->nRecover >= 1 && p->nRecover <= 100000 &&
+          isfinite(p->tHold) && isfinite(p->rampRate) && p->rampRate > 0 && isfinite(p->Ts) && p->Ts > 0))
+        return 0;
+    if (f->nHold < 1 || f->mode < CF_NORMAL || f->mode > CF_SAFE || f->cycles < 0 || f->fresh < 0 ||
+        (f->rejoin != 0 && f->rejoin != 1))
+        return 0;
+    for (int i = 0; i < CF_MAX_MSG; i++)
+        if (!isfinite(f->last[i]) || f->age[i] < 0 || f->age[i] > CF_AGE_CAP) return 0;
+    for (int j = 0; j < CF_MAX_OUT; j++)
+        if (!isfinite(f->out[j])) return 0;
+    return 1;
 }

@@ -67,4 +67,7 @@ const char *cf_param_name(int code);
  * not); outputs in f->out, always finite. */
 unsigned cf_sample(CfFallback *f, const double *counters, unsigned used, int bad, const double *want);
 
+/* 1 if a restored fallback state is usable: counts, modes and ages in range, values finite */
+int cf_state_valid(const CfFallback *f);
+
 #endif
