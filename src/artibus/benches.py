@@ -80,6 +80,7 @@ def write_report(bench, result, out_dir, wall=None):
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     kpis, images, notes = _report(bench, result, out)
+    images = list(images) + report.bench_animation(result, out, title=f"{bench}, bird's-eye view")
     span = result.time[-1] - result.time[0]
     intro = f"Bench {bench}: {span:g} s simulated" + (f" in {wall:.2f} s." if wall else ".")
     report.write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes)

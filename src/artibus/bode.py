@@ -4,6 +4,7 @@ until the transient has died away, then gain and phase of each output from a
 least-squares fit of  y = c + a sin(wt) + b cos(wt)  over whole periods."""
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -48,22 +49,81 @@ def frequency_response(bench, input, outputs, frequencies, amplitude, periods=4,
     return result
 
 
-def plot(path, responses, title):
+def unwrapped_phase_deg(points):
+    """The phase of measured points in degrees, unwrapped over frequency (the
+    lowest frequency's phase in (-180, 180])."""
+    ph = np.unwrap([p.phase for p in points])
+    if len(ph):
+        ph = ph - 2 * math.pi * round(ph[0] / (2 * math.pi))
+    return np.degrees(ph)
+
+
+def plot(path, responses, title, units=None, reference=None, input_unit=""):
+    """Bode plot: a column per output (gain on a log axis in the output's unit
+    per the input's, a dB axis beside it; unwrapped phase below).
+    responses: {output: [Point]} or {output: {series label: [Point]}} (several
+    runs of one output, e.g. two steering laws); units: {output: unit};
+    reference: {output: (label, frequencies Hz, complex G)} drawn as a line
+    (e.g. a closed form the measured points are checked against)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for name, pts in responses.items():
-        f = [p.frequency for p in pts]
-        ax1.semilogx(f, [20 * math.log10(max(p.gain, 1e-300)) for p in pts], "o-", label=name)
-        ax2.semilogx(f, np.degrees(np.unwrap([p.phase for p in pts])), "o-", label=name)
-    ax1.set_ylabel("gain [dB]")
-    ax2.set_ylabel("phase [deg]")
-    ax2.set_xlabel("frequency [Hz]")
-    for ax in (ax1, ax2):
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
-    ax1.set_title(title)
+    from artibus.report import save_figure
+    groups = {o: (v if isinstance(v, dict) else {"measured": v}) for o, v in responses.items()}
+    units = units or {}
+    reference = reference or {}
+    n = len(groups)
+    fig, axes = plt.subplots(2, n, figsize=(max(8.0, 5.2 * n), 6.5), sharex="col", squeeze=False)
+    for j, (out, series) in enumerate(groups.items()):
+        ax1, ax2 = axes[0, j], axes[1, j]
+        if out in reference:
+            label, fr, G = reference[out]
+            fr, G = np.asarray(fr, float), np.asarray(G, complex)
+            ax1.loglog(fr, np.abs(G), "g-", label=label)
+            ph = np.unwrap(np.angle(G))
+            ph = ph - 2 * math.pi * round(ph[0] / (2 * math.pi))
+            ax2.semilogx(fr, np.degrees(ph), "g-", label=label)
+        for label, pts in series.items():
+            f = [p.frequency for p in pts]
+            ax1.loglog(f, [max(p.gain, 1e-300) for p in pts], "o-", ms=3, label=label)
+            ax2.semilogx(f, unwrapped_phase_deg(pts), "o-", ms=3, label=label)
+        u = units.get(out, "")
+        per = f" [{u} / {input_unit}]" if (u or input_unit) else ""
+        ax1.set_ylabel(f"gain |{out.split('.')[-1]}|{per}")
+        lo, hi = ax1.get_ylim()             # the same axis in dB on the right (log gain is linear in dB)
+        db = ax1.twinx()
+        db.set_ylim(20 * math.log10(lo), 20 * math.log10(hi))
+        db.set_ylabel("gain [dB]")
+        ax2.set_ylabel("phase [deg]")
+        ax2.set_xlabel("frequency [Hz]")
+        ax1.set_title(out, fontsize=9)
+        for ax in (ax1, ax2):
+            ax.grid(True, which="both", alpha=0.3)
+        ax1.legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    return save_figure(fig, path, dpi=110)
+
+
+def output_units(bench, names):
+    """{"comp.var": unit} of outputs of a bench, from its FMUs' model descriptions."""
+    import zipfile
+    from fmpy import read_model_description
+    from artibus import ssp
+    b = ssp.read(ssp.ssp_path(bench))
+    units = {}
+    with zipfile.ZipFile(ssp.ssp_path(bench)) as z:
+        import tempfile
+        with tempfile.TemporaryDirectory(prefix="artibus-units-") as tmp:
+            for name in names:
+                comp, _, var = name.rpartition(".")
+                c = b.components.get(comp)
+                if c is None:
+                    continue
+                z.extract(c.source, tmp)
+                md = read_model_description(str(Path(tmp) / c.source))
+                v = {x.name: x for x in md.modelVariables}.get(var)
+                if v is not None:
+                    u = v.unit or (getattr(v.declaredType, "unit", None) if v.declaredType is not None else None)
+                    units[name] = u or "-"
+    return units

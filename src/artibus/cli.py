@@ -340,7 +340,9 @@ def cmd_bode(args):
     resp = bode.frequency_response(args.bench, args.input, args.measure, freqs, args.amplitude,
                                    periods=args.periods, settle=args.settle, overrides=overrides,
                                    step=args.step)
-    rows = ["frequency_Hz," + ",".join(f"{o}.gain,{o}.phase_rad" for o in args.measure)]
+    units = bode.output_units(args.bench, list(args.measure) + [args.input])
+    per = lambda o: f"{units.get(o, '-')} per {units.get(args.input, '-')}"    # noqa: E731 (gain's unit)
+    rows = ["frequency [Hz]," + ",".join(f"{o} gain [{per(o)}],{o} phase [rad]" for o in args.measure)]
     for k, f in enumerate(freqs):
         rows.append(f"{f:.6g}," + ",".join(f"{resp[o][k].gain:.8g},{resp[o][k].phase:.8g}" for o in args.measure))
     write_text(out, "\n".join(rows) + "\n")
@@ -348,7 +350,8 @@ def cmd_bode(args):
     for line in rows:
         print("  " + line)
     if args.plot:
-        bode.plot(args.plot, resp, f"{args.bench}: {', '.join(args.measure)} / {args.input}")
+        bode.plot(args.plot, resp, f"{args.bench}: {', '.join(args.measure)} / {args.input}", units=units,
+                  input_unit=units.get(args.input, ""))
         print(args.plot)
     return 0
 

@@ -189,31 +189,16 @@ def plot_kc(path, rows, f_lo=F_LO, f_check=F_CHECK):
 
 
 def plot_bode(path, v, points, geo, kc=1.0, title=""):
-    """Gain [dB] and phase [deg] of delta -> Lambda: the reference model (closed
-    form, times kc) as a line, the plant as measured points."""
-    plt = _plt()
+    """delta -> Lambda: the reference model (closed form, times kc) as a line,
+    the plant as measured points (artibus.bode.plot, the reference through its
+    ``reference`` argument)."""
+    from artibus import bode
     f = np.array([p.frequency for p in points])
     fr = np.geomspace(f.min(), f.max(), 300)
-    G = g_ref(fr, v, geo, kc)
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
     ref_label = "reference model, eq. 2.9" + (f", times Kc = {kc:.3f}" if kc != 1.0 else "")
-    ax1.semilogx(fr, 20 * np.log10(np.abs(G)), "g-", label=ref_label)
-    ax1.semilogx(f, 20 * np.log10([p.gain for p in points]), "bo-", ms=4, label="extensive model (BusDynamics), measured")
-    ax2.semilogx(fr, np.degrees(np.unwrap(np.angle(G))), "g-", label=ref_label)
-    ax2.semilogx(f, np.degrees(np.unwrap([p.phase for p in points])), "bo-", ms=4,
-                 label="extensive model (BusDynamics), measured")
-    ax1.set_ylabel("gain |Lambda / delta| [dB]")
-    ax2.set_ylabel("phase [deg]")
-    ax2.set_xlabel("frequency [Hz]")
-    for ax in (ax1, ax2):
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
-    sec = ax1.secondary_xaxis("top", functions=(lambda x: 2 * np.pi * x, lambda x: x / (2 * np.pi)))
-    sec.set_xlabel("angular frequency [rad/s]")
-    ax1.set_title(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    return bode.plot(path, {OUTPUT: {"extensive model (BusDynamics), measured": points}}, title,
+                     units={OUTPUT: "rad"}, input_unit="rad",
+                     reference={OUTPUT: (ref_label, fr, g_ref(fr, v, geo, kc))})
 
 
 def sway_peak(v, points, geo, amplitude=AMPLITUDE, n=9):
@@ -233,7 +218,8 @@ def sway_peak(v, points, geo, amplitude=AMPLITUDE, n=9):
 
 def write_bode_csv(path, v, points, geo, kc_value):
     with open(path, "w") as f:
-        f.write("frequency_Hz,plant_gain,plant_phase_deg,ref_gain,ref_phase_deg,ref_kc_gain\n")
+        f.write("frequency [Hz],plant gain [rad/rad],plant phase [deg],reference gain [rad/rad],"
+                "reference phase [deg],reference gain times Kc [rad/rad]\n")
         ph = np.degrees(np.unwrap([p.phase for p in points]))
         for p, q in zip(points, ph):
             G = g_ref(p.frequency, v, geo)

@@ -4,7 +4,8 @@ Each function takes plain arrays, so it works on any bench's results:
 
 - trace_deviation: how far an axle's trace strays from a reference axle's trace
   (seed 000, Fig. 9: max lateral distance of A4/A6 from the A2 trace);
-- swept_path_width: the width of the ground swept by the body outlines;
+- swept_path, swept_path_width: the ground swept by the body outlines (its
+  envelope and its width along the path) and the largest width;
 - overshoot: how far a trace goes beyond its final lateral offset after a lane
   change (seed 001, "initial overshoot" of the rear section);
 - oscillation: frequency and damping ratio of a decaying oscillation
@@ -69,14 +70,26 @@ def trace_deviation(ref_x, ref_y, x, y):
     return float(np.max(np.abs(dist[inside])))
 
 
-def swept_path_width(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8):
-    """Width of the swept path: the body outlines (an array [time, corner, 2] of
-    polygon corners, any number of modules stacked along the corner axis in
-    groups of 4) are sampled along their edges, each sample is located along the
-    reference path (arc length) and across it (signed lateral offset); per
-    ``bin_length`` of arc length the width is the spread of the offsets; the
-    result is the largest width over the path."""
-    ref = _polyline(ref_x, ref_y)
+@dataclass
+class SweptPath:
+    """The ground swept by the body outlines, located along a reference path:
+    per bin of arc length ``s`` (m, bin centres) the outermost offsets to the
+    left and right of the reference (m, left positive), their difference
+    ``width`` (m), and the envelope's two edges in the plane (``left_xy``,
+    ``right_xy``: arrays [bin, 2]). Bins no outline point fell into are left out."""
+    s: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    width: np.ndarray
+    left_xy: np.ndarray
+    right_xy: np.ndarray
+
+    @property
+    def max_width(self):
+        return float(np.max(self.width)) if len(self.width) else float("nan")
+
+
+def _outline_points(outlines, samples_per_edge):
     out = np.asarray(outlines, float)
     pts = []
     for m in range(0, out.shape[1], 4):
@@ -85,16 +98,47 @@ def swept_path_width(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8
             p0, p1 = quad[:, c], quad[:, (c + 1) % 4]
             for f in np.linspace(0, 1, samples_per_edge, endpoint=False):
                 pts.append(p0 + f * (p1 - p0))
-    s_all, off_all, inside = _project(ref, np.concatenate(pts))
+    return np.concatenate(pts)
+
+
+def swept_path(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8):
+    """The swept path (SweptPath): the body outlines (an array [time, corner, 2]
+    of polygon corners, any number of modules stacked along the corner axis in
+    groups of 4) are sampled along their edges, each sample is located along the
+    reference path (arc length) and across it (signed lateral offset); only
+    samples beside the reference (not beyond its ends) count."""
+    ref = _polyline(ref_x, ref_y)
+    if len(ref) < 2:
+        raise ValueError("the reference path needs at least 2 distinct points")
+    s_all, off_all, inside = _project(ref, _outline_points(outlines, samples_per_edge))
     s_all, off_all = s_all[inside], off_all[inside]   # only beside the reference path
     bins = np.floor(s_all / bin_length).astype(int)
-    order = np.argsort(bins)
+    order = np.argsort(bins, kind="stable")
     bins, off_all = bins[order], off_all[order]
     edges = np.flatnonzero(np.diff(bins)) + 1
-    width = 0.0
-    for o in np.split(off_all, edges):
-        width = max(width, float(o.max() - o.min()))
-    return width
+    keys = bins[np.concatenate([[0], edges])] if len(bins) else np.array([], int)
+    groups = np.split(off_all, edges) if len(bins) else []
+    left = np.array([g.max() for g in groups])
+    right = np.array([g.min() for g in groups])
+    s = (keys + 0.5) * bin_length
+    # the edges in the plane: the reference point at s, moved along its left normal
+    seg = np.diff(ref, axis=0)
+    seg_len = np.hypot(seg[:, 0], seg[:, 1])
+    s0 = np.concatenate([[0.0], np.cumsum(seg_len)])
+    i = np.clip(np.searchsorted(s0, s, side="right") - 1, 0, len(seg) - 1)
+    u = (s - s0[i]) / seg_len[i]
+    base = ref[i] + u[:, None] * seg[i]
+    tangent = seg[i] / seg_len[i][:, None]
+    normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
+    return SweptPath(s, left, right, left - right, base + left[:, None] * normal, base + right[:, None] * normal)
+
+
+def swept_path_width(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8):
+    """Width of the swept path (see swept_path): per ``bin_length`` of arc
+    length along the reference the spread of the outlines' lateral offsets;
+    the result is the largest width over the path."""
+    sp = swept_path(ref_x, ref_y, outlines, bin_length, samples_per_edge)
+    return float(np.max(sp.width)) if len(sp.width) else 0.0
 
 
 def overshoot(y, y_final=None):

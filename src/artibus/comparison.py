@@ -1,0 +1,157 @@
+"""Seed 000's central result on one page: the 36 m bus on the 17.5 m circle
+unsteered, guided (Task 1), guided with force minimisation (Tasks 1 and 2)
+and with the guidance's pathMemory mode, side by side as the paper's Figs.
+8-10 show them: the traces of A2, A4 and A6 (Fig. 8), the deviations of A4
+and A6 from the trace of A2 (Fig. 9) and the lateral force in the first
+hinge (Fig. 10), over the same axis.
+
+The three benches' results come from the same `artibus run --all --report`
+(cli keeps them, nothing runs twice); pathMemory is not a bench of its own:
+it is Bus36m_Circle_GuidedForceMin with Guidance.mode = 1, run here once."""
+import html
+from pathlib import Path
+
+import numpy as np
+
+from artibus import files, kpi, report
+from artibus.report import FAIL, PASS
+
+#: the page's cases: label -> (bench, overrides); the first three are benches of the run
+CASES = {
+    "unsteered": ("Bus36m_Circle", None),
+    "guided (Task 1)": ("Bus36m_Circle_Guided", None),
+    "guided + force minimisation (Tasks 1, 2)": ("Bus36m_Circle_GuidedForceMin", None),
+    "pathMemory + force minimisation": ("Bus36m_Circle_GuidedForceMin", {"Guidance.mode": 1}),
+}
+BENCHES = {b for b, o in CASES.values() if o is None}
+TITLE = "Seed 000, Figs. 8-10: the 36 m bus on the 17.5 m circle, unsteered and steered"
+PAPER = {"dev": ("about 6 unsteered, < 1.0 steered", "seed 000, Fig. 9 and sec. III"),
+         "F1": ("< 4 with force minimisation; > 20 with wrong A3/A5 angles", "seed 000, Fig. 10")}
+
+
+def wanted(bench):
+    """Whether the comparison needs this bench's result (cli keeps it)."""
+    return bench in BENCHES
+
+
+def _figures(r):
+    """A2/A4/A6 traces, deviations of A4/A6 from A2's trace over the driver's
+    progress s, hinge-1 lateral force, peak values (every 5th sample, as the
+    benches' KPIs)."""
+    ax = {a: (r[f"Bus.xAxle[{a}]"][::5], r[f"Bus.yAxle[{a}]"][::5]) for a in (2, 4, 6)}
+    s5 = r["Driver.s"][::5]
+    dev = {}
+    for a in (4, 6):
+        d, inside = kpi.lateral_distance(*ax[2], *ax[a])
+        dev[a] = np.where(inside, np.abs(d), np.nan)
+    F1 = r["Bus.FjointY[1]"][::5] / 1e3
+    outl = report.result_outlines(r)
+    swept = report.swept(outl).max_width if outl is not None else float("nan")
+    return {"traces": ax, "s": s5, "dev": dev, "F1": F1,
+            "peak": {"A4": float(np.nanmax(dev[4])), "A6": float(np.nanmax(dev[6])),
+                     "F1": float(np.max(np.abs(F1))), "swept": swept}}
+
+
+def _run_extra(bench, overrides):
+    from artibus import runner
+    return runner.run(bench, overrides=overrides)
+
+
+def write(out_dir, results, run_extra=_run_extra):
+    """out_dir/index.html with the figures and a table; results: {bench: Result}
+    of the run (the cases with overrides are run here). Returns the page's path,
+    or None when a bench of the comparison is missing from results."""
+    out = Path(out_dir)
+    if not BENCHES <= set(results):
+        return None
+    out.mkdir(parents=True, exist_ok=True)
+    data = {}
+    for label, (bench, overrides) in CASES.items():
+        r = results[bench] if overrides is None else run_extra(bench, overrides)
+        data[label] = _figures(r)
+    import matplotlib.pyplot as plt
+    from artibus.benchkit import circle_road
+    road = circle_road()
+    colours = dict(zip(CASES, report._colours()))
+    # Fig. 8: the traces, one panel per case, the same axes
+    fig, axes = plt.subplots(2, 2, figsize=(10, 5.6), sharex=True, sharey=True)
+    for a, (label, d) in zip(axes.ravel(), data.items()):
+        a.plot(*road, color="0.8", lw=5, zorder=0, label="road")
+        for k, st in ((2, "-"), (4, "--"), (6, ":")):
+            a.plot(*d["traces"][k], ls=st, lw=1.3, label=f"A{k}")
+        a.set_aspect("equal", adjustable="box")
+        a.set_title(label, fontsize=9)
+        a.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=7, loc="upper left")
+    for a in axes[1]:
+        a.set_xlabel("x [m]")
+    for a in axes[:, 0]:
+        a.set_ylabel("y [m]")
+    fig.suptitle("Traces of A2, A4 and A6 (seed 000, Fig. 8)", fontsize=10)
+    fig.tight_layout()
+    report.save_figure(fig, out / "traces.png", dpi=100)
+    # Figs. 9 and 10 over the same axis
+    fig, axes = plt.subplots(3, 1, figsize=(10, 8.4), sharex=True)
+    for label, d in data.items():
+        c = colours[label]
+        axes[0].plot(d["s"], d["dev"][4], color=c, lw=1.2, label=label)
+        axes[1].plot(d["s"], d["dev"][6], color=c, lw=1.2, label=label)
+        axes[2].plot(d["s"], d["F1"], color=c, lw=1.2, label=label)
+    for a in axes[:2]:
+        a.axhline(1.0, color="k", lw=0.8, ls="--")
+    axes[2].axhline(4.0, color="k", lw=0.8, ls="--")
+    axes[2].axhline(-4.0, color="k", lw=0.8, ls="--")
+    axes[0].set_ylabel("A4 from A2's trace [m]")
+    axes[1].set_ylabel("A6 from A2's trace [m]")
+    axes[2].set_ylabel("hinge 1 lateral force [kN]")
+    axes[2].set_xlabel("road progress of the driver's reference point s [m] (the circle from 25 to 135 m)")
+    axes[0].set_title("Deviations of A4 and A6 from the trace of A2 (seed 000, Fig. 9; dashed: 1.0 m) and the "
+                      "lateral force in the first hinge (Fig. 10; dashed: 4 kN)", fontsize=9)
+    axes[0].legend(fontsize=8)
+    for a in axes:
+        a.grid(True, alpha=0.3)
+    fig.tight_layout()
+    report.save_figure(fig, out / "deviation_force.png", dpi=100)
+    # the table
+    rows = []
+    for label, d in data.items():
+        p = d["peak"]
+        steered = label != "unsteered"
+        dev_ok = [(v < 1.0) if steered else None for v in (p["A4"], p["A6"])]
+        f_ok = (p["F1"] < 4.0) if "force minimisation" in label else ((p["F1"] > 20.0) if steered else None)
+
+        def td(v, ok, unit):
+            cls = "" if ok is None else (' class="n pass"' if ok else ' class="n fail"')
+            mark = "" if ok is None else (f" {PASS}" if ok else f" {FAIL}")
+            return f"<td{cls or ' class=n'}>{v:.3f} {unit}{mark}</td>"
+        rows.append(f"<tr><td>{html.escape(label)}</td>{td(p['A4'], dev_ok[0], 'm')}{td(p['A6'], dev_ok[1], 'm')}"
+                    f"{td(p['F1'], f_ok, 'kN')}<td class=n>{p['swept']:.3g} m</td></tr>")
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{html.escape(TITLE)}</title>
+<style>{report.STYLE}</style></head><body>
+<p><a href="../index.html">all benches</a></p>
+<h1>{html.escape(TITLE)}</h1>
+<p>The paper's central result (seed 000, sec. III, Figs. 8-10): without steering A4 and A6 leave the trace of
+A2 by about 6 m; train-like guidance (Task 1) brings them within 1.0 m; force minimisation on A3 and A5
+(Task 2) keeps the first hinge's lateral force below 4 kN, where wrong A3/A5 angles give more than 20 kN.
+pathMemory (TrainGuidance mode 1, beyond the paper) follows the stored trace of A2 instead of the
+steady-state angles. Our bus is estimated from public data (ssp/parameters/Bus36m.ssv): the paper gives no
+geometry or masses, so the figures differ from its plots; the bounds are its.</p>
+<table><tr><th>case</th><th>max deviation A4 from A2's trace</th><th>max deviation A6</th>
+<th>max |lateral force| hinge 1</th><th>swept-path width</th></tr>
+<tr><td><i>paper</i></td><td colspan=2><i>{html.escape(PAPER['dev'][0])} ({html.escape(PAPER['dev'][1])})</i></td>
+<td><i>{html.escape(PAPER['F1'][0])} ({html.escape(PAPER['F1'][1])})</i></td><td></td></tr>
+{''.join(rows)}
+</table>
+<p class=meta>{PASS}/{FAIL}: against the paper's bound for that case (deviations &lt; 1.0 m when steered; the
+force &lt; 4 kN with force minimisation, &gt; 20 kN guided without it). The benches' own pages:
+<a href="../Bus36m_Circle/index.html">Bus36m_Circle</a>, <a href="../Bus36m_Circle_Guided/index.html">Bus36m_Circle_Guided</a>,
+<a href="../Bus36m_Circle_GuidedForceMin/index.html">Bus36m_Circle_GuidedForceMin</a>.</p>
+<figure><img src="traces.png" alt="traces of A2, A4, A6"><figcaption>Traces of A2, A4 and A6 for each case, on the
+same axes (Fig. 8).</figcaption></figure>
+<figure><img src="deviation_force.png" alt="deviations and hinge force"><figcaption>Deviations of A4 and A6 from
+the trace of A2 (Fig. 9) and the first hinge's lateral force in module 1's frame (Fig. 10), every case over the
+driver's progress along the road.</figcaption></figure>
+</body></html>
+"""
+    return files.write_text(out / "index.html", page)
