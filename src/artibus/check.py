@@ -252,9 +252,9 @@ def _kinematics(values, get):
     for i in range(1, N + 1):
         _positive(get, probs, f"L[{i}]", f"wagon {i}'s length from joint {i} to its axle")
         lh = get.get(f"Lh[{i}]")
-        if isinstance(lh, (int, float)) and lh < 0:
-            probs.append(Problem(f"Lh[{i}]", lh, f"joint {i} lies ahead of the axle of segment {i - 1} "
-                                                 f"(Lh is measured backwards from that axle; negative: ahead)"))
+        if isinstance(lh, (int, float)) and not math.isfinite(lh):
+            probs.append(Problem(f"Lh[{i}]", lh, "not a finite length"))
+        # Lh < 0 (joint ahead of the axle) is a tractor-trailer's hitch, allowed by the model (seed 003, sec. II)
     for key in ("k", "j"):
         v = get.get(key)
         if isinstance(v, int) and not 0 <= v <= N:
