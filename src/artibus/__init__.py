@@ -26,6 +26,11 @@ def fmu_path(name):
     """Path of a built FMU, ``<fmu_dir>/<name>.fmu``."""
     path = fmu_dir() / f"{name}.fmu"
     if not path.is_file():
+        import difflib
+        known = sorted(p.stem for p in fmu_dir().glob("*.fmu"))
+        close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
+        if close:
+            raise ArtibusError(f"{name}: no such FMU; did you mean {' or '.join(close)}?")
         raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
     return path
 

@@ -4,6 +4,8 @@ FMPy reads and validates them against the SSP XSD it ships; here they are
 checked against an FMU's model description, so a misspelt name or a value out
 of range is reported with the file, the element and the value.
 """
+import math
+
 from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssv
 
@@ -48,8 +50,10 @@ def read_parameters(ssv, fmu=None):
 def typed(type_, text):
     if type_ == "Real":
         return float(text)
-    if type_ in ("Integer", "Enumeration"):
+    if type_ == "Integer":
         return int(text)
+    if type_ == "Enumeration":      # an item's name (SSP 1.0), or its value: see coerce
+        return text
     if type_ == "Boolean":
         if text not in ("true", "false", "1", "0"):
             raise ValueError(text)
@@ -57,20 +61,137 @@ def typed(type_, text):
     return text
 
 
-def check_against(values, fmu, source, prefix=""):
+def coerce(v, value, finite=True):
+    """``value`` (text from --set or an .ssv, or a Python number or bool) as a
+    value of the FMU variable ``v``'s declared type, strictly: no rounding
+    (3.7 is not an Integer), a Boolean is true, false, 1 or 0 (not "yes"), an
+    Enumeration is one of its items, by name or by value; a Real finite
+    unless ``finite`` is false (then the FMU refuses NaN and Inf itself).
+    ValueError saying why otherwise."""
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):   # a NumPy scalar
+        value = value.item()
+    t = v.type
+    text = value.strip() if isinstance(value, str) else None
+    if t == "Real":
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            raise ValueError(f"a Real is a number, not {type(value).__name__} {value!r}")
+        try:
+            x = float(text if text is not None else value)
+        except ValueError:
+            raise ValueError("not a number") from None
+        if finite and not math.isfinite(x):
+            raise ValueError("not a finite number")
+        return x
+    if t == "Integer":
+        return _integer(value, text)
+    if t == "Boolean":
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, (int, float)) and value in (0, 1):
+            return bool(value)
+        if text in ("true", "false", "1", "0"):
+            return text in ("true", "1")
+        raise ValueError("a Boolean is true, false, 1 or 0")
+    if t == "Enumeration":
+        items = [(i.name, int(i.value)) for i in v.declaredType.items] if v.declaredType is not None else []
+        known = ", ".join(f"{n} ({k})" for n, k in items)
+        if text is not None and text in dict(items):
+            return dict(items)[text]
+        try:
+            k = _integer(value, text)
+        except ValueError:
+            raise ValueError(f"not an item of {v.declaredType.name if v.declaredType else 'the enumeration'}"
+                             f" (items: {known})") from None
+        if items and k not in (x for _, x in items):
+            raise ValueError(f"{k} is not an item of {v.declaredType.name} (items: {known})")
+        return k
+    if t == "String":
+        if not isinstance(value, str):
+            raise ValueError(f"a String is text, not {type(value).__name__} {value!r}")
+        return value
+    raise ValueError(f"type {t} is not supported")
+
+
+def _integer(value, text):
+    if isinstance(value, bool):
+        raise ValueError("a Boolean is not an Integer")
+    if isinstance(value, int):
+        k = value
+    elif isinstance(value, float) or text is not None:
+        try:
+            k = int(text) if text is not None else None
+        except ValueError:
+            k = None
+        if k is None:
+            try:
+                x = float(text if text is not None else value)
+            except ValueError:
+                raise ValueError("not an integer") from None
+            if not (math.isfinite(x) and x.is_integer()):
+                raise ValueError("not an integer (an Integer is not rounded)")
+            k = int(x)
+    else:
+        raise ValueError(f"not an integer: {type(value).__name__}")
+    if not -2**31 <= k < 2**31:
+        raise ValueError("outside the 32-bit range of an FMI 2.0 Integer")
+    return k
+
+
+def suggest(name, known):
+    """' (did you mean ...?)' for a misspelt name among ``known``, or ''."""
+    import difflib
+    close = difflib.get_close_matches(name, list(known), n=3, cutoff=0.6)
+    return f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
+
+
+def no_variable(md, name):
+    """Why ``name`` is not a variable of the model description ``md``: an
+    array element out of its range names the valid indices, a misspelt name
+    the close ones."""
+    import re
+    names = [v.name for v in md.modelVariables]
+    msg = f"{md.modelName} has no variable '{name}'"
+    m = re.fullmatch(r"(.+)\[(\d+)\]", name)
+    base = m.group(1) if m else name
+    idx = sorted(int(mm.group(1)) for n in names for mm in [re.fullmatch(re.escape(base) + r"\[(\d+)\]", n)] if mm)
+    if idx:
+        return f"{msg}: {base} has indices {idx[0]}..{idx[-1]}" + (
+            "" if idx == list(range(idx[0], idx[-1] + 1)) else f" ({', '.join(map(str, idx))})")
+    return msg + suggest(name, dict.fromkeys(re.sub(r"\[\d+\]$", "", n) for n in names))
+
+
+def check_against(values, fmu, source, prefix="", origins=None):
     """Each name must be a parameter or input of the FMU (a model description
-    or a path) and each number within its range; errors name the source, the
-    parameter (``prefix`` + name, e.g. a component path) and the value."""
-    md = fmu if hasattr(fmu, "modelVariables") else read_model_description(str(fmu))
+    or a path) and each value of its type (see coerce) and within its range;
+    errors name the source (``origins[name]`` where given: the file and
+    element the value came from), the parameter (``prefix`` + name, e.g. a
+    component path) and the value. The values are replaced by their typed
+    form in ``values``."""
+    md = fmu if hasattr(fmu, "modelVariables") else _model_description(fmu)
     variables = {v.name: v for v in md.modelVariables}
-    for name, value in values.items():
+    for name, value in list(values.items()):
         v = variables.get(name)
-        label = f"{source}: Parameter '{prefix}{name}' = {value!r}"
+        label = f"{(origins or {}).get(name, source)}: Parameter '{prefix}{name}' = {value!r}"
         if v is None:
-            raise ArtibusError(f"{label}: {md.modelName} has no variable '{name}'")
+            raise ArtibusError(f"{label}: {no_variable(md, name)}")
         if v.causality not in ("parameter", "input"):
             raise ArtibusError(f"{label}: it is an {v.causality} of {md.modelName} and cannot be set")
+        try:
+            value = values[name] = coerce(v, value)
+        except ValueError as e:
+            raise ArtibusError(f"{label}: not a valid {v.type} for {md.modelName}.{name}: {e}") from None
         if v.type in ("Real", "Integer"):
             x = float(value)
             if v.min is not None and x < float(v.min) or v.max is not None and x > float(v.max):
                 raise ArtibusError(f"{label} is outside [{v.min}, {v.max}] of {md.modelName}")
+    return values
+
+
+def _model_description(path):
+    from pathlib import Path
+    if not Path(str(path)).is_file():
+        raise ArtibusError(f"{path}: no such FMU file")
+    try:
+        return read_model_description(str(path))
+    except Exception as e:
+        raise ArtibusError(f"{path}: not a readable FMI 2.0 FMU: {e}") from None

@@ -72,6 +72,16 @@ class Unit:
     stimuli: list = field(default_factory=list)   # (input index, f(t), base value or None)
     wall: float = 0.0
     raw: object = None                           # _RawCalls, once the variables are known
+    # Integer, Boolean, String and Enumeration variables (artibus.runner._TypedCalls):
+    tout: list = field(default_factory=list)     # outputs read: (name, type, value reference)
+    tin: list = field(default_factory=list)      # connected inputs: (name, type, value reference)
+    typed_sources: list = field(default_factory=list)  # (input index, source unit, output index, convert)
+
+    def column(self, name):
+        """The place of an output in raw.out (Real ones first, then the typed ones)."""
+        if name in self.out_names:
+            return self.out_names.index(name)
+        return len(self.out_names) + [n for n, _, _ in self.tout].index(name)
 
 
 class _RawCalls:
@@ -119,6 +129,121 @@ class _RawCalls:
             raise FMICallException(function="fmi2DoStep", status=status)
 
 
+class _TypedCalls(_RawCalls):
+    """_RawCalls of a unit with Integer, Boolean, String or Enumeration
+    variables connected or recorded: those go through FMPy's calls (one per
+    type), after the Real ones. Their values as read are in ``tout_values``
+    (Python values) and, for the recording, as numbers after the Real outputs
+    in ``out``: a Boolean as 0/1, an Integer or Enumeration as its value, a
+    String as the number of its text in ``texts`` (the order in which each
+    text was first seen). The inputs to set are in ``tin_values``; unchanged
+    ones are not set again. The C stepping core does not run such a bench
+    (Simulation.stepping says so)."""
+
+    def __init__(self, unit):
+        super().__init__(unit)
+        self.slave = unit.fmu.slave
+        n_real = self.n_out
+        self.n_real, self.n_out = n_real, n_real + len(unit.tout)
+        self.out = (c_double * self.n_out)()
+        self.tout_values = [None] * len(unit.tout)
+        self.tin_values = [None] * len(unit.tin)
+        self.tin_written = None
+        self.texts = {}
+        self._get_groups = self._groups(unit.tout)
+        self._set_groups = self._groups(unit.tin)
+        self._string_out = [i for i, (_, t, _) in enumerate(unit.tout) if t == "String"]
+
+    @staticmethod
+    def _groups(variables):
+        """[(FMI type of the call, [indices], [value references])] per type."""
+        groups = {}
+        for i, (_, t, vr) in enumerate(variables):
+            g = groups.setdefault("Integer" if t == "Enumeration" else t, ([], []))
+            g[0].append(i)
+            g[1].append(vr)
+        return [(t, idx, vrs) for t, (idx, vrs) in groups.items()]
+
+    def read(self):
+        if self.n_real:
+            status = self._get(self.comp, self.out_vrs, self._n_out, self.out)
+            if status > 1:  # fmi2Discard or worse
+                raise FMICallException(function="fmi2GetReal", status=status)
+        for t, idx, vrs in self._get_groups:
+            values = getattr(self.slave, f"get{t}")(vrs)
+            for i, x in zip(idx, values):
+                if t == "String":
+                    x = x.decode("utf-8", errors="replace") if x is not None else ""
+                    self.out[self.n_real + i] = self.texts.setdefault(x, len(self.texts))
+                else:
+                    x = bool(x) if t == "Boolean" else int(x)
+                    self.out[self.n_real + i] = x
+                self.tout_values[i] = x
+
+    def write(self):
+        super().write()
+        if self.tin_values and self.tin_values != self.tin_written:
+            for t, idx, vrs in self._set_groups:
+                getattr(self.slave, f"set{t}")(vrs, [self.tin_values[i] for i in idx])
+            self.tin_written = list(self.tin_values)
+
+    def text(self, number):
+        """The String whose number (see above) a recorded column holds."""
+        if not hasattr(self, "_by_number") or len(self._by_number) != len(self.texts):
+            self._by_number = {k: x for x, k in self.texts.items()}
+        return self._by_number.get(number, "")
+
+
+def _typed_convert(label, a, va, b, vb, mapping):
+    """The conversion of a connection's value from the Integer, Boolean,
+    String or Enumeration output va to the input vb: the types must be the
+    same (an error naming both ends otherwise); an Enumeration to one of other
+    items needs a mapping (SSP 1.0's EnumerationMappingTransformation by item
+    names, or IntegerMappingTransformation by values); a mapping (SSP 1.0's
+    Boolean-, Integer- or EnumerationMappingTransformation) maps the values
+    it lists, the others pass unchanged."""
+    ends = (f"{a.path}.{va.name} is {va.type}{' ' + va.declaredType.name if va.declaredType else ''}, "
+            f"{b.path}.{vb.name} is {vb.type}{' ' + vb.declaredType.name if vb.declaredType else ''}")
+    if va.type != vb.type:
+        raise ArtibusError(f"{label}: the types differ ({ends}): a connection joins variables of one type")
+    kind, table = mapping if mapping else (None, None)
+    expect = {"Boolean": ("Boolean",), "Integer": ("Integer",), "Enumeration": ("Integer", "Enumeration")}
+    if kind is not None and kind not in expect.get(va.type, ()):
+        raise ArtibusError(f"{label}: a {kind}MappingTransformation does not apply to {ends}")
+    if va.type == "Enumeration":
+        items_a = {i.name: int(i.value) for i in va.declaredType.items}
+        items_b = {i.name: int(i.value) for i in vb.declaredType.items}
+        if kind == "Enumeration":
+            for src, dst in table.items():
+                if src not in items_a or dst not in items_b:
+                    raise ArtibusError(f"{label}: EnumerationMappingTransformation {src} -> {dst}: "
+                                       f"items of {va.declaredType.name}: {', '.join(items_a)}; "
+                                       f"of {vb.declaredType.name}: {', '.join(items_b)}")
+            names_a = {k: n for n, k in items_a.items()}
+            table = {k: items_b[table.get(name, name)] for k, name in names_a.items()
+                     if table.get(name, name) in items_b}
+            kind = "Integer"
+        elif kind is None and items_a != items_b:
+            raise ArtibusError(f"{label}: the enumerations differ ({ends}: items "
+                               f"{', '.join(f'{n}={k}' for n, k in items_a.items())} against "
+                               f"{', '.join(f'{n}={k}' for n, k in items_b.items())}); "
+                               f"an EnumerationMappingTransformation maps them")
+    if kind is None:
+        return None
+    return lambda x: table.get(x, x)
+
+
+def _last_message(log):
+    """The FMU's last error message, else its last message."""
+    errors = [m for m in log if m.startswith(("[Error]", "[Fatal]"))]
+    return errors[-1] if errors else log[-1] if log else "no message"
+
+
+def _suggest(name, known):
+    from artibus.parameters import suggest
+    return suggest(name, known)
+
+
 def _unit_conversion(md_a, var_a, md_b, var_b, where):
     """factor, offset taking a value in var_a's unit to var_b's unit."""
     ua, ub = _unit_of(md_a, var_a), _unit_of(md_b, var_b)
@@ -146,18 +271,17 @@ def _unit_of(md, var):
 
 
 def _order(units, links, where):
-    """Gauss-Seidel order: a component whose outputs feed another's inputs
+    """links: (source unit, output name, destination unit, input name) of
+    every connection. Gauss-Seidel order: a component whose outputs feed another's inputs
     directly (through feedthrough) goes first. A cycle made only of direct
     feedthrough is an algebraic loop."""
     # graph on (unit, output) -> (unit, input) -> (unit, output via feedthrough)
     feed_edges = {}
-    for l in links:
-        src_out = l.src.out_names[l.src_index]
-        dst_in = l.dst.in_names[l.dst_index]
-        for (i, o) in l.dst.feeds:
+    for src, src_out, dst, dst_in in links:      # (source unit, output, destination unit, input)
+        for (i, o) in dst.feeds:
             if i == dst_in:
-                feed_edges.setdefault((l.src.path, src_out), []).append(
-                    ((l.dst.path, o), f"{l.src.path}.{src_out} -> {l.dst.path}.{dst_in}"))
+                feed_edges.setdefault((src.path, src_out), []).append(
+                    ((dst.path, o), f"{src.path}.{src_out} -> {dst.path}.{dst_in}"))
     # cycle detection on the feedthrough graph
     state, stack = {}, []
 
@@ -179,10 +303,9 @@ def _order(units, links, where):
             visit(n)
     # order components: Kahn on "A feeds B through B's feedthrough", then the rest
     deps = {u.path: set() for u in units}
-    for l in links:
-        dst_in = l.dst.in_names[l.dst_index]
-        if any(i == dst_in for i, _ in l.dst.feeds) and l.src is not l.dst:
-            deps[l.dst.path].add(l.src.path)
+    for src, _, dst, dst_in in links:
+        if any(i == dst_in for i, _ in dst.feeds) and src is not dst:
+            deps[dst.path].add(src.path)
     ordered, done = [], set()
     while len(ordered) < len(units):
         ready = [u for u in units if u.path not in done and deps[u.path] <= done]
@@ -195,6 +318,32 @@ def _order(units, links, where):
 
 
 PLAN_TABLE = 4096       # base steps of the plan's period tabulated at most (see _Plan)
+
+
+def _available_memory():
+    """MemAvailable (bytes) from /proc/meminfo, or None where there is none."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def _check_room(rows, cols, where, available=None):
+    """The results are a table of rows x cols doubles in memory (every base
+    step, every recorded signal): a run whose table would take more than half
+    the memory available is refused before it starts, saying what to change,
+    rather than ending in a MemoryError or the OOM killer hours later."""
+    need = rows * cols * 8
+    available = _available_memory() if available is None else available
+    if available is not None and need > available // 2:
+        raise ArtibusError(f"{where}: {rows} base steps x {cols} columns of results would take "
+                           f"{need / 1e9:.3g} GB, more than half the memory available "
+                           f"({available / 1e9:.3g} GB): give a larger --step, a shorter --stop-time, "
+                           f"or fewer signals with --record")
 
 
 class _Plan:
@@ -268,14 +417,31 @@ class Simulation:
                cut=frozenset()):
         units = {}
         for path, c in self.bench.components.items():
-            fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
+            try:
+                fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
+            except ArtibusError as e:    # a corrupt or missing FMU: named as the bench names it
+                raise ArtibusError(f"{where}:{c.line}: Component '{path}' source=\"{c.source}\": "
+                                   + str(e).replace(f"{Path(self._tmp) / c.source}: ", "")) from None
             de = fmu.md.defaultExperiment
             h = c.step or (step if step is not None else
                            float(de.stepSize) if de is not None and de.stepSize else None)
-            if h is None:
-                raise ArtibusError(f"{where}:{c.line}: Component '{path}': no communication step "
-                                   f"(give --step or a stepSize annotation)")
             units[path] = Unit(path=path, fmu=fmu, step=h)
+            self.units = list(units.values())     # (closed by close() if a later one fails)
+        # a component without a step (its FMU's default experiment has no stepSize, FMI 2.0
+        # allows it; no annotation, no --step): the others' shortest, else the bench's
+        # span / DEFAULT_STEPS
+        from artibus.simulation import DEFAULT_STEPS
+        known = [u.step for u in units.values() if u.step is not None]
+        for u in units.values():
+            if u.step is None:
+                if known:
+                    u.step = min(known)
+                elif self.bench.stop_time is not None and self.bench.stop_time > self.bench.start_time:
+                    u.step = (self.bench.stop_time - self.bench.start_time) / DEFAULT_STEPS
+                else:
+                    c = self.bench.components[u.path]
+                    raise ArtibusError(f"{where}:{c.line}: Component '{u.path}': no communication step "
+                                       f"(give --step or a stepSize annotation)")
         self.units = list(units.values())
         self.base_step = step if step is not None else min(u.step for u in self.units)
         for u in self.units:
@@ -287,6 +453,7 @@ class Simulation:
 
         # parameters: bindings, then the user's overrides ("comp.var" -> value)
         self.parameters = {p: dict(c.parameters) for p, c in self.bench.components.items()}
+        origins = {p: dict(c.origins) for p, c in self.bench.components.items()}
         from artibus.names import expand_all      # Bus.mu[*], Bus.mu[1:6]: each element
 
         def variables_of(full):
@@ -296,9 +463,10 @@ class Simulation:
         for full, value in overrides.items():
             comp, _, var = full.rpartition(".")
             if comp not in self.parameters:
-                raise ArtibusError(f"--set {full}={value}: no component '{comp}' in {where} "
-                                   f"(components: {', '.join(self.parameters)})")
+                raise ArtibusError(f"--set {full}={value}: no component '{comp}' in {where}"
+                                   f"{_suggest(comp, self.parameters)} (components: {', '.join(self.parameters)})")
             self.parameters[comp][var] = value
+            origins.setdefault(comp, {})[var] = "--set/--ssv/--variant"
         # a String parameter "resources/<file>" names a file inside the .ssp: the
         # FMU gets its path in the unpacked copy
         for values in self.parameters.values():
@@ -309,7 +477,7 @@ class Simulation:
                         raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
                     values[var] = str(f)
         for path, values in self.parameters.items():
-            check_against(values, units[path].fmu.md, where, prefix=f"{path}.")
+            check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
 
         # connections (those into a cut input left out)
         connected = {f"{c.end[0]}.{c.end[1]}" for c in self.bench.connections}
@@ -330,13 +498,22 @@ class Simulation:
             a, b = units[c.start[0]], units[c.end[0]]
             va, vb = a.fmu.vars.get(c.start[1]), b.fmu.vars.get(c.end[1])
             if va is None or vb is None:
-                missing = f"{c.start[0]}.{c.start[1]}" if va is None else f"{c.end[0]}.{c.end[1]}"
-                raise ArtibusError(f"{label}: no variable '{missing}'")
-            if va.type != vb.type or va.type != "Real":
-                raise ArtibusError(f"{label}: types {va.type} -> {vb.type} (Real -> Real supported)")
+                from artibus.parameters import no_variable
+                u, var = (a, c.start[1]) if va is None else (b, c.end[1])
+                raise ArtibusError(f"{label}: no variable '{u.path}.{var}' ({no_variable(u.fmu.md, var)})")
+            if va.type != vb.type:
+                raise ArtibusError(f"{label}: types {va.type} -> {vb.type} ({c.start[0]}.{c.start[1]} is "
+                                   f"{va.type}, {c.end[0]}.{c.end[1]} is {vb.type}): a connection joins "
+                                   f"variables of one type")
             if va.causality not in ("output", "parameter", "calculatedParameter") or vb.causality != "input":
                 raise ArtibusError(f"{label}: connects a {va.causality} to a {vb.causality} "
                                    f"(expected output -> input)")
+            if va.type != "Real" or vb.type != "Real":
+                self._typed_link(c, label, a, va, b, vb)
+                continue
+            if c.mapping is not None:
+                raise ArtibusError(f"{label}: a {c.mapping[0]}MappingTransformation on Real variables "
+                                   f"(a LinearTransformation applies to them)")
             if c.factor != 1.0 or c.offset != 0.0:
                 f, o = c.factor, c.offset
             else:
@@ -361,26 +538,38 @@ class Simulation:
                 for d in deps:
                     if d.causality == "input":
                         u.feeds.add((d.name, o.variable.name))
-        self.order = _order(self.units, [l for l in self.links if l.connection.can is None], where)
+        self.order = _order(self.units, [(l.src, l.src.out_names[l.src_index], l.dst, l.dst.in_names[l.dst_index])
+                                         for l in self.links if l.connection.can is None]
+                            + [(src, src.tout[j][0], u, u.tin[i][0])
+                               for u in self.units for i, src, j, _ in u.typed_sources], where)
 
         # recording: every connection's source, plus what was asked for
         self.record = []
         for name in record or []:
             comp, _, var = name.rpartition(".")
-            if comp not in units or var not in units[comp].fmu.vars:
-                raise ArtibusError(f"--record {name}: no such variable in {where}")
+            if comp not in units:
+                raise ArtibusError(f"--record {name}: no component '{comp}' in {where}"
+                                   f"{_suggest(comp, units)} (components: {', '.join(units)})")
+            if var not in units[comp].fmu.vars:
+                from artibus.parameters import no_variable
+                raise ArtibusError(f"--record {name}: {comp}: {no_variable(units[comp].fmu.md, var)}")
             self.record.append((units[comp], var))
         if not record:   # every output connector the bench declares, and every connected output
             for u in self.units:
-                for n in dict.fromkeys(self.bench.components[u.path].outputs + u.out_names):
+                for n in dict.fromkeys(self.bench.components[u.path].outputs + u.out_names
+                                       + [n for n, _, _ in u.tout]):
                     if n not in u.fmu.vars:
                         raise ArtibusError(f"{where}: Component '{u.path}': connector '{n}' is "
                                            f"not a variable of {u.fmu.md.modelName}")
                     self.record.append((u, n))
         for u, n in self.record:
-            if n not in u.out_names:
+            v = u.fmu.var(n)
+            if v.type != "Real":
+                if n not in [m for m, _, _ in u.tout]:
+                    u.tout.append((n, v.type, v.valueReference))
+            elif n not in u.out_names:
                 u.out_names.append(n)
-                u.out_vrs.append(u.fmu.var(n).valueReference)
+                u.out_vrs.append(v.valueReference)
         for name, f in stimuli.items():       # added to the input: f(t) + its connection or base value
             comp, _, var = name.rpartition(".")
             v = units[comp].fmu.vars.get(var) if comp in units else None
@@ -397,7 +586,7 @@ class Simulation:
                 base = float(self.parameters[comp].get(var, v.start))
                 u.stimuli.append((len(u.in_names) - 1, f, base))
         for u in self.units:
-            u.raw = _RawCalls(u)
+            u.raw = (_TypedCalls if u.tout or u.tin else _RawCalls)(u)
             u.out_values = u.raw.out      # read and written in place
             u.in_values = u.raw.inp
         for u in self.units:
@@ -409,9 +598,40 @@ class Simulation:
         self._rec = []
         for u in self.units:
             cols = [k + 1 for k, (v, _) in enumerate(self.record) if v is u]
-            idx = [u.out_names.index(n) for v, n in self.record if v is u]
+            idx = [u.column(n) for v, n in self.record if v is u]
             if cols:
                 self._rec.append((u, np.array(idx), np.array(cols)))
+        # String columns: the recorded numbers turned into their texts (_with_texts)
+        self._text_cols = {f"{u.path}.{n}": u for u, n in self.record if u.fmu.vars[n].type == "String"}
+
+    def _typed_link(self, c, label, a, va, b, vb):
+        """A connection of Integer, Boolean, String or Enumeration variables (see
+        _typed_convert): read and set in Python (_TypedCalls), exact values."""
+        convert = _typed_convert(label, a, va, b, vb, c.mapping)
+        if c.factor != 1.0 or c.offset != 0.0:
+            raise ArtibusError(f"{label}: a LinearTransformation on {va.type} variables "
+                               f"(SSP 1.0: it applies to Real ones)")
+        if c.can is not None:
+            raise ArtibusError(f"{label}: routed over CAN: the runner routes Real variables only")
+        if c.end[1] in [n for n, _, _ in b.tin] or c.end[1] in b.in_names:
+            raise ArtibusError(f"{label}: input {c.end[0]}.{c.end[1]} is connected twice")
+        names = [n for n, _, _ in a.tout]
+        if c.start[1] not in names:
+            a.tout.append((c.start[1], va.type, va.valueReference))
+            names.append(c.start[1])
+        b.tin.append((c.end[1], vb.type, vb.valueReference))
+        b.typed_sources.append((len(b.tin) - 1, a, names.index(c.start[1]), convert))
+
+    def _with_texts(self, result):
+        """A String column's numbers (see _TypedCalls) as Result.strings."""
+        if result is None or not self._text_cols:
+            return result
+        table = result.array()
+        for name, u in self._text_cols.items():
+            j = result.names.index(name)
+            result.strings[name] = [u.raw.text(int(x)) if np.isfinite(x) else "" for x in table[:, j]]
+            table[:, j] = np.nan
+        return result
 
     def _setup_can(self, where, interface, log, faults=None, routed=True):
         """The CAN network of a bench that routes connections over CAN (see artibus.can);
@@ -458,11 +678,15 @@ class Simulation:
         inp = to.in_values
         for i, out, j, factor, offset in to.sources:
             inp[i] = factor * out[j] + offset
+        for i, src, j, convert in to.typed_sources:
+            x = src.raw.tout_values[j]
+            to.raw.tin_values[i] = x if convert is None else convert(x)
         for i, f, base in to.stimuli:
             inp[i] = (inp[i] if base is None else base) + f(t)
 
     def _initialize(self, start):
         for u in self.units:
+            self._busy = u            # the unit being called: a failure names it
             s = u.fmu.slave
             s.setupExperiment(startTime=start)
             s.enterInitializationMode()
@@ -470,25 +694,32 @@ class Simulation:
             u.raw.written = None      # every connected input is set at least once
         for _ in range(MAX_INIT_ITERATIONS):
             before = [list(u.in_values) for u in self.units]
+            typed_before = [list(getattr(u.raw, "tin_values", ())) for u in self.units]
             for u in self.order:
+                self._busy = u
                 u.raw.read()
                 self._propagate(u if self.algorithm == "gauss-seidel" else None, start)
             if self.can is not None:
                 self.can.settle()
             for u in self.order:
+                self._busy = u
                 self._propagate(u, start)
                 u.raw.write()
             for u in self.units:
+                self._busy = u
                 u.raw.read()
             if all(np.allclose(b, list(u.in_values), rtol=1e-12, atol=1e-12)
-                   for b, u in zip(before, self.units)):
+                   and tb == list(getattr(u.raw, "tin_values", ()))
+                   for b, tb, u in zip(before, typed_before, self.units)):
                 break
         else:
             raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
                                f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
         for u in self.units:
+            self._busy = u
             u.fmu.slave.exitInitializationMode()
             u.raw.read()
+        self._busy = None
 
     class _Recorder:
         """At every base step a copy of each recorded component's output buffer
@@ -514,6 +745,24 @@ class Simulation:
             return Result.from_array(self.names, table)
 
     def run(self, stop_time=None, start_time=None, progress=False, core=None):
+        """Run from the start to the stop time (the bench's DefaultExperiment's
+        unless given): the Result, with String columns in Result.strings; the
+        results up to a failure or an interrupt go with the exception (its
+        ``result``). See _run."""
+        from artibus.simulation import check_times, claim_logger_proxy
+        claim_logger_proxy()
+        start = self.bench.start_time if start_time is None else start_time
+        stop = stop_time if stop_time is not None else self.bench.stop_time
+        if stop is not None:
+            check_times(start, stop, None, self.bench.file)
+        try:
+            return self._with_texts(self._run(stop_time, start_time, progress, core))
+        except (SimulationError, KeyboardInterrupt) as e:
+            if getattr(e, "result", None) is not None:
+                e.result = self._with_texts(e.result)
+            raise
+
+    def _run(self, stop_time=None, start_time=None, progress=False, core=None):
         """core: the stepping core in C where it applies (None, the default, unless
         ARTIBUS_CORE=0), True (it must), False (the Python loop below); see
         _core_stepper. self.stepping says which ran."""
@@ -526,6 +775,7 @@ class Simulation:
         rec = self._Recorder(self.names, self._rec)
         h = self.base_step
         n = int(round((stop - start) / h))
+        _check_room(n + 1, len(self.names), self.bench.file)
         t = start
         current = None
         plan = _Plan(self.order, n)
@@ -577,10 +827,11 @@ class Simulation:
                 e.result = rec.result()
             raise
         except FMICallException:
+            current = current or getattr(self, "_busy", None)    # (in the initialisation)
             who = current.path if current else "?"
             log = current.fmu.log if current else [m for u in self.units for m in u.fmu.log]
             raise SimulationError(f"{self.ssp}: component '{who}' failed at t = {t:g} s: "
-                                  f"{log[-1] if log else 'no message'}", rec.result(), list(log)) from None
+                                  f"{_last_message(log)}", rec.result(), list(log)) from None
         self.wall = _time.perf_counter() - wall0
         if self.can is not None:
             self.can.finish()
@@ -710,6 +961,8 @@ def _core_stepper(sim, plan, plan_gs=None, core=None):
             why = "connections routed over CAN (the network ticks in Python)"
         elif any(u.stimuli for u in sim.units):
             why = "stimuli (Python functions of time)"
+        elif any(u.tout or u.tin for u in sim.units):
+            why = "Integer, Boolean, String or Enumeration variables connected or recorded (the core does Real)"
         else:
             lib, why = _core_library()
     if why is not None:
@@ -847,7 +1100,7 @@ class _CoreStepper:
             t = start + k * h
             log = u.fmu.log
             raise SimulationError(f"{sim.ssp}: component '{u.path}' failed at t = {t:g} s: "
-                                  f"{log[-1] if log else 'no message'}",
+                                  f"{_last_message(log)}",
                                   Result.from_array(sim.names, table[:k + 1].copy()), list(log))
         if progress:
             sys.stderr.write("\n")
@@ -876,7 +1129,8 @@ def save(result, path):
             safe = {}
             for i, n in enumerate(result.names):
                 key = "".join(ch if ch.isalnum() else "_" for ch in n).strip("_")[:63] or f"v{i}"
-                safe[key] = data[:, i]
+                safe[key] = (np.array(result.strings[n], dtype=object) if n in result.strings  # a cell array
+                             else data[:, i])
             savemat(str(tmp), safe)
         else:
             result.to_csv(tmp)

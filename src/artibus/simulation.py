@@ -34,7 +34,12 @@ class Result:
         result._array = table
         return result
 
+    #: String columns: {name: [text per row]} (their column in the array is NaN)
+    strings: dict = field(default_factory=dict)
+
     def __getitem__(self, name):
+        if name in self.strings:
+            return np.array(self.strings[name], dtype=object)
         return self.array()[:, self.names.index(name)]
 
     @property
@@ -49,60 +54,117 @@ class Result:
 
     def to_csv(self, path):
         header = ",".join(f'"{n}"' for n in self.names)
-        np.savetxt(path, self.array(), delimiter=",", header=header, comments="", fmt="%.12g")
+        if not self.strings:
+            np.savetxt(path, self.array(), delimiter=",", header=header, comments="", fmt="%.12g")
+            return
+        # a String column as quoted text (CSV's quoting: "" for a quote)
+        cols = [self.strings.get(n) for n in self.names]
+        with open(path, "w") as f:
+            f.write(header + "\n")
+            for i, row in enumerate(self.array()):
+                f.write(",".join('"' + c[i].replace('"', '""') + '"' if c is not None else f"{x:.12g}"
+                                 for x, c in zip(row, cols)) + "\n")
 
 
 def _callbacks(log):
-    """FMI callbacks whose logger appends "[status] category: message" to ``log``
-    (FMPy's logger proxy formats the printf arguments)."""
+    """FMI callbacks of one instance, whose messages go to ``log`` only
+    ("[status] category: message").
+
+    FMPy's logger proxy (fmpy/logging) formats the printf arguments in C and
+    then calls the one logger it keeps in a static pointer, the last one given
+    to addLoggerProxy, passing the componentEnvironment through. Every
+    instance here gets a callback set of its own whose componentEnvironment is
+    a number naming its log, and the proxy's logger is one dispatcher for the
+    whole process: each message reaches the log of the instance that sent it,
+    whichever was instantiated last. The dispatcher lives as long as the
+    process, so the proxy's pointer never dangles."""
     from ctypes import byref
-    from fmpy.fmi2 import (fmi2CallbackFunctions, fmi2CallbackLoggerTYPE,
-                           fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           calloc, free)
-    from fmpy.logging import addLoggerProxy
-
-    status_names = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
-
-    def logger(env, instance, status, category, message):
-        log.append(f"[{status_names[status] if 0 <= status < 6 else status}] "
-                   f"{category.decode()}: {message.decode(errors='replace')}")
-
+    from fmpy.fmi2 import (fmi2CallbackFunctions, fmi2CallbackAllocateMemoryTYPE,
+                           fmi2CallbackFreeMemoryTYPE, calloc, free)
+    env = next(_ENVS)
+    _LOGS[env] = log
     cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(logger)
+    cb.logger = _dispatcher()
     from artibus import memory     # the process's calloc/free (a preloaded ASan sees the FMUs' heap)
     cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(memory.calloc)
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(memory.free)
-    addLoggerProxy(byref(cb))
-    cb._keep = logger  # keep the Python function alive
-    # FMPy's proxy keeps the last logger given to addLoggerProxy in one static
-    # pointer (s_logger in fmpy/logging), which every proxied callback set then
-    # calls, FMPy's own default callbacks included: once this instance is freed
-    # that pointer would dangle (a crash when an FMU logs in fmpy.simulate_fmu
-    # after an Fmu was closed). The callback sets stay alive for the process.
-    _LIVE_CALLBACKS.append(cb)
+    cb.componentEnvironment = env
+    claim_logger_proxy()
+    _proxy().addLoggerProxy(byref(cb))
+    cb._env = env
     return cb
 
 
-_LIVE_CALLBACKS = []
+_LOGS = {}                       # componentEnvironment -> that instance's log
+_ENVS = iter(range(1, 2**62))
+_DISPATCH = []                   # the process's one dispatcher (kept alive here)
+_STATUS = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
+
+
+def _proxy():
+    import fmpy.logging
+    return fmpy.logging
+
+
+def _dispatcher():
+    if not _DISPATCH:
+        from fmpy.fmi2 import fmi2CallbackLoggerTYPE
+
+        def dispatch(env, instance, status, category, message):
+            log = _LOGS.get(env)
+            if log is not None:
+                log.append(f"[{_STATUS[status] if 0 <= status < 6 else status}] "
+                           f"{(category or b'').decode(errors='replace')}: "
+                           f"{(message or b'').decode(errors='replace')}")
+        _DISPATCH.append(fmi2CallbackLoggerTYPE(dispatch))
+    return _DISPATCH[0]
+
+
+def claim_logger_proxy():
+    """Make the dispatcher FMPy's proxied logger again: FMPy's own
+    instantiations (fmpy.simulate_fmu in the same process) take the proxy's
+    one pointer for their logger, which dangles once they are gone; called
+    before each run and initialisation here."""
+    from ctypes import byref
+    from fmpy.fmi2 import fmi2CallbackFunctions
+    cb = fmi2CallbackFunctions()
+    cb.logger = _dispatcher()
+    _proxy().addLoggerProxy(byref(cb))
 
 
 class Fmu:
     """An FMU instance with the variables addressed by name."""
 
     def __init__(self, path, instance_name="artibus", logging=False):
+        from pathlib import Path
         self.path = str(path)
-        self.md = read_model_description(self.path)
+        if not Path(self.path).is_file():
+            raise ArtibusError(f"{self.path}: no such FMU file")
+        try:
+            self.md = read_model_description(self.path)
+        except Exception as e:   # not a zip, no or a broken modelDescription.xml
+            raise ArtibusError(f"{self.path}: not a readable FMI 2.0 FMU: {e}") from None
+        if self.md.fmiVersion != "2.0" or self.md.coSimulation is None:
+            raise ArtibusError(f"{self.path}: {self.md.modelName} is not an FMI 2.0 co-simulation FMU")
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.log = []
-        self._dir = extract(self.path)
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier,
-                               instanceName=instance_name)
+        self.instance_name = instance_name
+        self._dir = None
+        try:
+            self._dir = extract(self.path)
+            self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
+                                   modelIdentifier=self.md.coSimulation.modelIdentifier,
+                                   instanceName=instance_name)
+        except Exception as e:   # a missing or broken binary
+            if self._dir:
+                shutil.rmtree(self._dir, ignore_errors=True)
+            raise ArtibusError(f"{self.path}: {self.md.modelName}'s binary cannot be loaded: {e}") from None
         self._callbacks = _callbacks(self.log)
         try:
             self.slave.instantiate(loggingOn=logging, callbacks=self._callbacks)
         except Exception:
             shutil.rmtree(self._dir, ignore_errors=True)
+            _LOGS.pop(self._callbacks._env, None)
             raise ArtibusError(f"{self.path}: {self.md.modelName} could not be instantiated: "
                                f"{' '.join(self.log) or 'no message'}") from None
 
@@ -110,28 +172,55 @@ class Fmu:
         try:
             return self.vars[name]
         except KeyError:
-            raise ArtibusError(f"{self.path}: {self.md.modelName} has no variable '{name}'") from None
+            from artibus.parameters import no_variable
+            raise ArtibusError(f"{self.path}: {no_variable(self.md, name)}") from None
 
     def set_values(self, values):
+        """Set each {name: value}, the value checked against the variable's
+        declared type first (artibus.parameters.coerce: no rounding, no
+        "yes" for true, an Enumeration by item name or value)."""
+        from artibus.parameters import coerce
         for name, value in values.items():
             v = self.var(name)
+            try:
+                x = coerce(v, value, finite=False)     # NaN, Inf: the FMU refuses them, naming them
+            except ValueError as e:
+                raise ArtibusError(f"{self.instance_name}.{name} = {value!r}: not a valid {v.type} "
+                                   f"for {self.md.modelName}: {e}") from None
             vr = [v.valueReference]
             if v.type == "Real":
-                self.slave.setReal(vr, [float(value)])
+                self.slave.setReal(vr, [x])
             elif v.type in ("Integer", "Enumeration"):
-                self.slave.setInteger(vr, [int(value)])
+                self.slave.setInteger(vr, [x])
             elif v.type == "Boolean":
-                self.slave.setBoolean(vr, [value in (True, 1, "true", "1")])
+                self.slave.setBoolean(vr, [x])
             else:
-                self.slave.setString(vr, [str(value)])
+                self.slave.setString(vr, [x])
 
     def get(self, *names):
+        """The Real variables' values (fmi2GetReal in one call)."""
         reals = [self.var(n).valueReference for n in names]
         return self.slave.getReal(reals)
+
+    def get_values(self, names):
+        """The values of variables of any type, as Python values: float, int
+        (Integer, Enumeration), bool, str; one call per type."""
+        out = [None] * len(names)
+        by_type = {}
+        for i, n in enumerate(names):
+            v = self.var(n)
+            by_type.setdefault("Integer" if v.type == "Enumeration" else v.type, []).append((i, v.valueReference))
+        for t, items in by_type.items():
+            got = getattr(self.slave, f"get{t}")([vr for _, vr in items])
+            for (i, _), x in zip(items, got):
+                out[i] = (bool(x) if t == "Boolean" else x.decode("utf-8", errors="replace")
+                          if t == "String" else x)
+        return out
 
     def initialize(self, values, start_time=0.0):
         """setupExperiment, the values set in initialisation mode, exit it:
         the instance is ready to step from start_time. Returns self."""
+        claim_logger_proxy()
         try:
             self.slave.setupExperiment(startTime=start_time)
             self.slave.enterInitializationMode()
@@ -151,6 +240,7 @@ class Fmu:
             self.slave.freeInstance()
         finally:
             shutil.rmtree(self._dir, ignore_errors=True)
+            _LOGS.pop(self._callbacks._env, None)   # the instance is gone: it logs no more
 
     def __enter__(self):
         return self
@@ -159,27 +249,77 @@ class Fmu:
         self.close()
 
 
+#: a default experiment without stepSize (FMI 2.0 allows it): this many steps
+#: from start to stop
+DEFAULT_STEPS = 500
+#: a default experiment without stopTime: FMPy's default stop time
+DEFAULT_STOP_TIME = 1.0
+
+
+def default_step(md, start_time, stop_time):
+    """The FMU's default experiment's stepSize, else (stop - start) / DEFAULT_STEPS."""
+    de = md.defaultExperiment
+    if de is not None and de.stepSize:
+        return float(de.stepSize)
+    return (stop_time - start_time) / DEFAULT_STEPS
+
+
+def check_times(start_time, stop_time, step, where):
+    """A finite start and stop time, stop after start, a finite step > 0 that
+    fits into the span at least once: else ArtibusError naming the value."""
+    import math
+    for label, x in (("start time", start_time), ("stop time", stop_time), ("step", step)):
+        if x is not None and not math.isfinite(x):
+            raise ArtibusError(f"{where}: {label} = {x} is not a finite number of seconds")
+    if not stop_time > start_time:
+        raise ArtibusError(f"{where}: stop time {stop_time:g} s must be after the start time {start_time:g} s")
+    if step is not None and not step > 0:
+        raise ArtibusError(f"{where}: step = {step:g} s must be > 0")
+
+
+def _row(values, types):
+    """A recorded row as floats: a Boolean as 0/1, an Integer or Enumeration
+    as its number, a String as NaN (its text goes to Result.strings)."""
+    return [float("nan") if t == "String" else float(x) for x, t in zip(values, types)]
+
+
 def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
              outputs=None, start_time=0.0):
     """Simulate one FMU.
 
-    parameters: {name: value} set in initialization mode.
+    parameters: {name: value} set in initialization mode (checked against
+    each variable's type, see artibus.parameters.coerce).
     inputs: {name: f(t)} evaluated at each communication point (held over the step).
-    outputs: names to record (default: every output).
+    outputs: names to record, of any type (default: every output).
+    Without stop_time/step: the default experiment's, else DEFAULT_STOP_TIME
+    and (stop - start) / DEFAULT_STEPS.
     Returns a Result; raises SimulationError (with the partial Result) on failure.
     """
     parameters = parameters or {}
     inputs = inputs or {}
     with Fmu(path) as fmu:
         de = fmu.md.defaultExperiment
-        stop_time = stop_time if stop_time is not None else float(de.stopTime)
-        step = step if step is not None else float(de.stepSize)
-        if not step > 0:
-            raise ArtibusError(f"{path}: step = {step} must be > 0")
+        claim_logger_proxy()
+        if stop_time is None:
+            stop_time = float(de.stopTime) if de is not None and de.stopTime else DEFAULT_STOP_TIME
+        check_times(start_time, stop_time, step, path)
+        if step is None:
+            step = default_step(fmu.md, start_time, stop_time)
+            check_times(start_time, stop_time, step, f"{path}: default experiment")
         if outputs is None:
             outputs = [v.name for v in fmu.md.modelVariables if v.causality == "output"]
+        types = [fmu.var(n).type for n in outputs]
+        strings = [n for n, t in zip(outputs, types) if t == "String"]
         result = Result(["time"] + list(outputs))
-        vrs = [fmu.var(n).valueReference for n in outputs]
+        result.strings = {n: [] for n in strings}
+
+        def record(t):
+            values = fmu.get_values(outputs)
+            result.rows.append([t] + _row(values, types))
+            for n, x, ty in zip(outputs, values, types):
+                if ty == "String":
+                    result.strings[n].append(x)
+
         t = start_time
         try:
             fmu.slave.setupExperiment(startTime=start_time)
@@ -187,19 +327,19 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             fmu.set_values(parameters)
             fmu.set_values({n: f(t) for n, f in inputs.items()})
             fmu.slave.exitInitializationMode()
-            result.rows.append([t] + fmu.slave.getReal(vrs))
+            record(t)
             n = int(round((stop_time - start_time) / step))
             for i in range(n):
                 fmu.slave.doStep(t, step)
                 t = start_time + (i + 1) * step
-                result.rows.append([t] + fmu.slave.getReal(vrs))
+                record(t)
                 fmu.set_values({n_: f(t) for n_, f in inputs.items()})
         except FMICallException:
             # keep the state the FMU stopped in (getters are allowed in the error state)
             try:
                 t_fail = fmu.slave.getRealStatus(2)  # fmi2LastSuccessfulTime
                 if t_fail > result.rows[-1][0] if result.rows else True:
-                    result.rows.append([t_fail] + fmu.slave.getReal(vrs))
+                    record(t_fail)
                     t = t_fail
             except Exception:
                 pass

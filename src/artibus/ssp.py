@@ -73,7 +73,9 @@ def ssp_path(bench):
             _write_pack(q, ssd_file, files)
         return q
     if not q.is_file():
-        raise ArtibusError(f"{bench}: no such bench (known: {', '.join(bench_names()) or 'none'})")
+        from artibus.parameters import suggest
+        raise ArtibusError(f"{bench}: no such bench{suggest(str(bench), bench_names())} "
+                           f"(known: {', '.join(bench_names()) or 'none'})")
     return q
 
 
@@ -241,6 +243,43 @@ def _rebound(ssp, old, new, where):
             if before.components[path].parameters.get(k) != v}     # what the other set changes, only
 
 
+MAPPINGS = {"BooleanMappingTransformation": "Boolean", "IntegerMappingTransformation": "Integer",
+            "EnumerationMappingTransformation": "Enumeration"}
+
+
+def map_transformation(element, where):
+    """SSP 1.0's mapping transformation on a Connection or a MappingEntry
+    (ssc:Boolean-, Integer- or EnumerationMappingTransformation, a table of
+    MapEntry source -> target): (kind, {source: target}) or None."""
+    for kind, name in MAPPINGS.items():
+        el = element.find(f"ssc:{kind}", NS)
+        if el is None:
+            continue
+        table = {}
+        for e in el.findall("ssc:MapEntry", NS):
+            src, dst = e.get("source"), e.get("target")
+            if name == "Boolean":
+                src, dst = src in ("true", "1"), dst in ("true", "1")
+            elif name == "Integer":
+                src, dst = int(src), int(dst)
+            if src in table:
+                raise ArtibusError(f"{where}: {kind}: MapEntry source=\"{e.get('source')}\" is given twice")
+            table[src] = dst
+        return name, table
+    return None
+
+
+def _compose(first, second, line):
+    """Two mapping transformations one after the other (through a system's connector)."""
+    if first is None or second is None:
+        return first or second
+    if first[0] != second[0]:
+        raise ArtibusError(f"line {line}: a {first[0]} mapping followed by a {second[0]} mapping")
+    table = {k: second[1].get(v, v) for k, v in first[1].items()}
+    table.update({k: v for k, v in second[1].items() if k not in first[1]})
+    return first[0], table
+
+
 @dataclass
 class Component:
     path: str                      # e.g. "Bus" or "Sub.Bus"
@@ -249,6 +288,7 @@ class Component:
     line: int                      # line in SystemStructure.ssd
     step: float | None = None      # communication step from our annotation
     parameters: dict = field(default_factory=dict)  # name -> value from bindings
+    origins: dict = field(default_factory=dict)     # name -> the file (and mapping) its value is from
     outputs: list = field(default_factory=list)     # names of its declared output connectors
     connectors: list = field(default_factory=list)  # names of all its declared connectors
 
@@ -261,6 +301,8 @@ class Connection:
     offset: float = 0.0
     line: int = 0
     can: dict | None = None        # routed over CAN: {"message", "signal", "line"}
+    mapping: tuple | None = None   # SSP 1.0 Boolean/Integer/EnumerationMappingTransformation:
+                                   # ("Boolean" | "Integer" | "Enumeration", {source: target})
 
 
 @dataclass
@@ -308,12 +350,17 @@ def read(ssp):
     if can is not None:
         bench.can = {"source": can.get("source"), "period": can.get("period"), "line": can.sourceline}
 
-    def bound_values(element, xml_element, what):
+    def bound_values(element, xml_element, what, origins=None):
+        """origins: filled with {name: where its value comes from (file, element)}."""
         values = {}
         xml_bindings = xml_element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS)
         for b, xb in zip(element.parameterBindings, xml_bindings):
             prefix = b.prefix or ""
             source = {}
+            origin = (f"{ssp}/{xb.get('source')}" if xb.get("source") else f"{where}:{xb.sourceline}")
+            if xb.find("ssd:ParameterMapping", NS) is not None:
+                m = xb.find("ssd:ParameterMapping", NS)
+                origin += f" mapped by {ssp}/{m.get('source')}" if m.get("source") else f" mapped at {where}:{m.sourceline}"
             for pset in b.parameterValues:
                 for p in pset.parameters:
                     try:
@@ -322,7 +369,10 @@ def read(ssp):
                         raise ArtibusError(f"{where}: {what}: parameter '{p.name}' = {p.value!r} "
                                            f"is not a {p.type}") from None
             mapping = xb.find("ssd:ParameterMapping", NS)
-            values.update(source if mapping is None else mapped(source, mapping, what))
+            got = source if mapping is None else mapped(source, mapping, what)
+            values.update(got)
+            if origins is not None:
+                origins.update(dict.fromkeys(got, origin))
         return values
 
     def mapped(source, mapping, what):
@@ -353,8 +403,17 @@ def read(ssp):
                     if not isinstance(value, float):
                         raise ArtibusError(f"{head}: a LinearTransformation needs a Real, got {value!r}")
                     value = float(tr.get("factor", 1.0)) * value + float(tr.get("offset", 0.0))
+                elif kind in MAPPINGS:
+                    mkind, table = map_transformation(e, head)
+                    ok = {"Boolean": isinstance(value, bool),
+                          "Integer": isinstance(value, int) and not isinstance(value, bool),
+                          "Enumeration": isinstance(value, (str, int)) and not isinstance(value, bool)}[mkind]
+                    if not ok:
+                        raise ArtibusError(f"{head}: the {kind} does not apply to the value {value!r}")
+                    value = table.get(value, value)
                 elif kind not in (None, "Annotations"):
-                    raise ArtibusError(f"{head}: {kind} is not supported (LinearTransformation is)")
+                    raise ArtibusError(f"{head}: {kind} is not supported (LinearTransformation and "
+                                       f"the Boolean-, Integer- and EnumerationMappingTransformation are)")
             out[dst] = value
         return out
 
@@ -372,7 +431,7 @@ def read(ssp):
                     raise ArtibusError(f"{where}:{xml_el.sourceline}: Component '{path}': source "
                                        f"\"{el.source}\" is not in the .ssp")
                 c = Component(path=path, source=el.source, element=el, line=xml_el.sourceline)
-                c.parameters = bound_values(el, xml_el, f"Component '{path}'")
+                c.parameters = bound_values(el, xml_el, f"Component '{path}'", c.origins)
                 c.outputs = [k.name for k in el.connectors if k.kind == "output"]
                 c.connectors = [k.name for k in el.connectors]
                 ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
@@ -436,29 +495,30 @@ def read(ssp):
         lt = xc.find("ssc:LinearTransformation", NS)
         factor = float(lt.get("factor", 1.0)) if lt is not None else 1.0
         offset = float(lt.get("offset", 0.0)) if lt is not None else 0.0
+        mapping = map_transformation(xc, label)
         route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
         if route is not None:
             route = {"message": route.get("message"), "signal": route.get("signal"), "line": route.sourceline}
-        edges.append((a, b, factor, offset, line, route))
+        edges.append((a, b, factor, offset, line, route, mapping))
 
     # follow chains through system connectors: comp -> sys ... -> comp
     outgoing = {}
-    for a, b, f, o, line, route in edges:
-        outgoing.setdefault(a, []).append((b, f, o, line, route))
+    for a, b, f, o, line, route, mp in edges:
+        outgoing.setdefault(a, []).append((b, f, o, line, route, mp))
 
-    def ends(n, f, o, line, route, seen):
+    def ends(n, f, o, line, route, mp, seen):
         if n[0] == "comp":
-            yield n, f, o, line, route
+            yield n, f, o, line, route, mp
             return
         if n in seen:
             return
-        for m, f2, o2, l2, r2 in outgoing.get(n, []):
-            yield from ends(m, f2 * f, f2 * o + o2, line, route or r2, seen | {n})
+        for m, f2, o2, l2, r2, mp2 in outgoing.get(n, []):
+            yield from ends(m, f2 * f, f2 * o + o2, line, route or r2, _compose(mp, mp2, line), seen | {n})
 
-    for a, b, f, o, line, route in edges:
+    for a, b, f, o, line, route, mp in edges:
         if a[0] != "comp":
             continue
-        for end, f2, o2, l2, r2 in ends(b, f, o, line, route, frozenset()):
+        for end, f2, o2, l2, r2, mp2 in ends(b, f, o, line, route, mp, frozenset()):
             bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
-                                                factor=f2, offset=o2, line=l2, can=r2))
+                                                factor=f2, offset=o2, line=l2, can=r2, mapping=mp2))
     return bench
