@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES="cmake make g++ libsundials-dev libeigen3-dev python3 python3-venv python3-pip"
+APT_PACKAGES="cmake make g++ libsundials-dev libeigen3-dev python3 python3-venv python3-pip mingw-w64 wine64 dpkg-dev"
 missing=""
 for p in $APT_PACKAGES; do
   dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"
@@ -18,6 +18,16 @@ if [ -n "$missing" ]; then
   echo "setup: installing$missing"
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends $missing >/dev/null
+fi
+
+# Debian's source packages, for SUNDIALS built for win64 (scripts/build_win64.sh):
+# a deb-src entry for this release's main, once
+if ! grep -rqsE '^(deb-src|Types:.*deb-src)' /etc/apt/sources.list /etc/apt/sources.list.d/; then
+  echo "setup: adding a deb-src entry (Debian's source packages)"
+  printf 'Types: deb-src\nURIs: http://deb.debian.org/debian\nSuites: %s\nComponents: main\nSigned-By: /usr/share/keyrings/debian-archive-keyring.gpg\n' \
+    "$(. /etc/os-release && echo "${VERSION_CODENAME:-bookworm}")" \
+    | $SUDO tee /etc/apt/sources.list.d/artibus-deb-src.sources >/dev/null
+  $SUDO apt-get update -qq
 fi
 
 if [ ! -x .venv/bin/python ]; then
@@ -31,7 +41,9 @@ if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
   touch "$stamp"
 fi
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+# the Windows 64-bit DLLs first (mingw-w64), packed by the linux build into binaries/win64
+bash scripts/build_win64.sh build-win64
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DARTIBUS_WIN64_DIR="$PWD/build-win64/win64" >/dev/null
 cmake --build build -j"$(nproc)"
 .venv/bin/artibus pack >/dev/null
 

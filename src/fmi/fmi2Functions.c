@@ -156,6 +156,10 @@ static char *resource_path(ModelInstance *comp, const char *uri) {
         }
         else *o++ = *p;
     }
+#ifdef _WIN32
+    /* file:///C:/dir -> C:/dir */
+    if (out[0] == '/' && out[1] && out[2] == ':') memmove(out, out + 1, strlen(out));
+#endif
     return out;
 }
 

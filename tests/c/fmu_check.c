@@ -6,8 +6,23 @@
  * status fails the test.
  *
  * usage: fmu_check <FMU directory (unzipped)>
+ *        fmu_check <FMU directory> --run STOP H TOL   (no checks: a co-simulation from
+ *        the start values, STOP/H steps of H with tolerance TOL, then every real output
+ *        printed as "name value"; tests/test_win64.py compares the win64 DLL's, run
+ *        under Wine, with the linux64 binary's)
  */
+#ifdef _WIN32
+/* the win64 build (scripts/build_win64.sh), run under Wine: the DLL through LoadLibrary */
+#include <windows.h>
+#define dlopen(path, flags) ((void *)LoadLibraryA(path))
+#define dlsym(so, name) ((void *)GetProcAddress((HMODULE)(so), name))
+#define dlclose(so) FreeLibrary((HMODULE)(so))
+#define dlerror() "LoadLibrary failed"
+#define FMU_BINARY "%s/binaries/win64/%s.dll"
+#else
 #include <dlfcn.h>
+#define FMU_BINARY "%s/binaries/linux64/%s.so"
+#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -64,10 +79,14 @@ static int run(fmi2Component c, double t0, int steps, double h, double *out) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 2) { fprintf(stderr, "usage: fmu_check FMUDIR\n"); return 2; }
+    if (argc != 2 && !(argc == 6 && strcmp(argv[2], "--run") == 0)) {
+        fprintf(stderr, "usage: fmu_check FMUDIR [--run STOP H TOL]\n");
+        return 2;
+    }
     char path[4096], uri[4200];
-    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", argv[1], MODEL_IDENTIFIER);
-    snprintf(uri, sizeof uri, "file://%s/resources", argv[1]);
+    snprintf(path, sizeof path, FMU_BINARY, argv[1], MODEL_IDENTIFIER);
+    /* file:///dir/resources, or file:///C:/dir/resources for a Windows path */
+    snprintf(uri, sizeof uri, "file://%s%s/resources", argv[1][0] == '/' ? "" : "/", argv[1]);
     void *so = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (!so) { fprintf(stderr, "cannot load %s: %s\n", path, dlerror()); return 1; }
 #define LOAD(name) name = (name##TYPE *)dlsym(so, #name); if (!name) { printf("missing %s\n", #name); return 1; }
@@ -82,6 +101,23 @@ int main(int argc, char **argv) {
         if (VARS[i].type == T_REAL) real_vrs[n_real++] = VARS[i].vr;
 
     static double a[MODEL_NVARS], b[MODEL_NVARS];
+    if (argc == 6) {
+        const double stop = atof(argv[3]), hh = atof(argv[4]), tol = atof(argv[5]);
+        const int n = (int)(stop / hh + 0.5);
+        fmi2Component r = make(uri);
+        if (!r || fmi2SetupExperiment(r, fmi2True, tol, 0, fmi2False, 0) != fmi2OK ||
+            fmi2EnterInitializationMode(r) != fmi2OK || fmi2ExitInitializationMode(r) != fmi2OK ||
+            !run(r, 0, n, hh, a)) {
+            printf("run failed: %s\n", last_message);
+            return 1;
+        }
+        for (size_t i = 0, k = 0; i < MODEL_NVARS; i++)
+            if (VARS[i].type == T_REAL && (k++, VARS[i].causality == C_OUTPUT))
+                printf("%s %.17g\n", VARS[i].name, a[k - 1]);
+        fmi2FreeInstance(r);
+        dlclose(so);
+        return 0;
+    }
     const double h = 0.05;
     const int steps = 100;
 
