@@ -112,6 +112,10 @@ double damper_pressure_step(double pValve, double pSet, double tauP, double h, d
     return pValve + (pValve - pSet) * e;
 }
 
+double damper_pressure_rate(double pValve, double pSet, double tauP) {
+    return tauP > 0.0 ? (pSet - pValve) / tauP : 0.0;   /* tauP dp/dt = pSet - p */
+}
+
 double damper_step_energy(const DamperOut *o, double LambdaDot, double pInt, double h) {
     /* dMdp LambdaDot = sum Ap tanh(Ldot_s/v0) Ldot_s: every term of dMdp,
      * Ap tanh(h_s LambdaDot/v0) h_s, has the sign of LambdaDot, so the product

@@ -113,6 +113,11 @@ int damper_eval(const DamperParams *p, double Lambda, double LambdaDot, double p
  * the new pressure and its exact integral over the step in *pInt [Pa s]. */
 double damper_pressure_step(double pValve, double pSet, double tauP, double h, double *pInt);
 
+/* The same lag as an ODE (for an integrator outside, Model Exchange): the
+ * rate dpValve/dt = (pSet - pValve)/tauP that damper_pressure_step solves in
+ * closed form; 0 for tauP = 0 (the valve is static, pValve is not used) [Pa/s]. */
+double damper_pressure_rate(double pValve, double pSet, double tauP);
+
 /* The energy the damper dissipates over that step (inputs held), exactly:
  * LambdaDot (dMdp int p dt + MstopC h) >= 0 [J]. The stop spring's work is
  * not dissipated and not counted. */

@@ -57,6 +57,12 @@ void model_outputs(ModelInstance *comp) {
     }
     D->Mmax = o.Mmax;
     D->Ediss = S->Ediss;
+    /* the Model Exchange state pValve and the derivatives */
+    double dx[MODEL_NX];
+    model_derivatives(comp, dx);
+    D->pValve = S->pValve;
+    D->der_pValve = dx[0];
+    D->der_Ediss = dx[1];
 }
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
@@ -92,3 +98,43 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
 }
 
 fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+
+/* ---- Model Exchange: x = [pValve, Ediss]. Co-simulation solves the valve lag
+ * in closed form over a step with the inputs held (damper_pressure_step) and
+ * integrates the power exactly (damper_step_energy); here an outside
+ * integrator gets the ODE that closed form solves and the power itself. The
+ * event indicators mark the end stop (Lambda = +-LambdaStop) and the reversal
+ * of the motion (LambdaDot = 0: the check valves and the stop damper switch). */
+
+void model_get_x(ModelInstance *comp, double x[]) {
+    x[0] = S->pValve;
+    x[1] = S->Ediss;
+}
+
+void model_set_x(ModelInstance *comp, const double x[]) {
+    S->pValve = x[0];
+    S->Ediss = x[1];
+}
+
+fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
+    const double pv = valve_pressure(comp);
+    DamperOut o;
+    damper_eval(&S->par, D->Lambda, D->LambdaDot, pv, &o);
+    dx[0] = damper_pressure_rate(S->pValve, damper_pset(&S->par, D->pct), D->tauP);
+    /* the energy over a unit time at this pressure: the power */
+    dx[1] = damper_step_energy(&o, D->LambdaDot, pv, 1.0);
+    return fmi2OK;
+}
+
+void model_event_indicators(ModelInstance *comp, double z[]) {
+    z[0] = D->Lambda - D->LambdaStop;
+    z[1] = D->Lambda + D->LambdaStop;
+    z[2] = D->LambdaDot;
+}
+
+fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+    (void)comp;
+    *terminate = false;
+    *tNext = INFINITY;
+    return fmi2OK;
+}
