@@ -53,7 +53,8 @@ LEAD_FOLLOW = dict(
     connections=connection("Lead", "beta[1]", "Follow", "gammaF", 'factor="2.0" offset="0.01"'),
 )
 L0 = 5.9  # BusKinematics default
-QUIET = {"Follow.testSteerAmp": 0.0}  # the follower steers only by its input
+# the leader steers by its built-in test stimulus (off by default), the follower only by its input
+QUIET = {"Lead.testSteerAmp": 0.2, "Follow.testSteerAmp": 0.0}
 
 
 def test_gauss_seidel_follower_sees_the_leader_at_the_end_of_the_step(tmp_path):
@@ -136,7 +137,7 @@ def test_parameters_from_bindings_and_overrides(tmp_path):
     ssp = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"), ssv={"p.ssv": ssv})
     r = run(ssp, step=0.05, overrides=QUIET)
     np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(r["Lead.beta[1]"]) / 4.0, rtol=1e-12)
-    r = run(ssp, step=0.05, overrides={"Follow.L0": 8.0, "Lead.testSteerAmp": 0.0, **QUIET})
+    r = run(ssp, step=0.05, overrides={**QUIET, "Follow.L0": 8.0, "Lead.testSteerAmp": 0.0})
     np.testing.assert_allclose(r["Follow.kappa[0]"], 0.0, atol=1e-15)   # no steering at all now
 
 
@@ -315,7 +316,7 @@ def test_a_bench_by_name_is_packed_again_when_a_file_it_packs_is_newer(tmp_path,
     monkeypatch.setenv("ARTIBUS_FMU_DIR", str(fmus))
 
     def kappa_times_L0(L0):   # BusKinematics eq. 19: kappa0 = tan(gammaF) / L0, gammaF its test steering
-        r = run("Tiny", step=0.1)
+        r = run("Tiny", step=0.1, overrides={"Car.testSteerAmp": 0.2})
         k = r["Car.kappa[0]"]
         assert np.max(np.abs(k)) > 1e-3
         return k * L0

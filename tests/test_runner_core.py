@@ -104,7 +104,7 @@ def test_multi_rate_three_rates(tmp_path, algorithm):
                    + connection("Follow", "beta[1]", "Third", "gammaF", 'offset="0.02"'))
     path = make_ssp(tmp_path, elements, connections, stop=12.0)
     core, python = both(path, step=0.05, algorithm=algorithm,
-                        overrides={"Follow.testSteerAmp": 0.0, "Third.testSteerAmp": 0.0})
+                        overrides={"Lead.testSteerAmp": 0.2, "Follow.testSteerAmp": 0.0, "Third.testSteerAmp": 0.0})
     assert_bit_for_bit(core, python)
     ka = core["Follow.kappa[0]"]
     np.testing.assert_array_equal(ka[1::2], ka[0:-1:2])          # held over its 0.1 s
@@ -181,7 +181,7 @@ def test_failing_set_real_same_error_and_partial_results(tmp_path, algorithm):
     elements = component("Lead", [("beta[1]", "output"), ("kappa[0]", "output")]) + damper
     connections = connection("Lead", "beta[1]", "Damper", "pct", 'factor="1000" offset="25"')
     path = bench_with(tmp_path, elements, connections, ["BusKinematics", "ArticulationDamper"])
-    e = failures(path, algorithm)
+    e = failures(path, algorithm, overrides={"Lead.testSteerAmp": 0.2})
     assert "component 'Damper' failed at t = " in str(e) and "pct" in str(e)
     assert 0.5 < e.result.time[-1] < 10.0
     beta = e.result["Lead.beta[1]"]
