@@ -210,3 +210,44 @@ def test_win64_cosimulation_equals_linux64(name):
         # variable's size (measured: within 2e-14 absolute, most outputs bit-equal)
         scale = max(abs(lin[n]), np.max(np.abs(res[n])), 1e-3)
         assert abs(win[n] - lin[n]) <= tol * scale, (n, win[n], lin[n])
+
+
+def test_win64_csv_road_from_the_resources(tmp_path):
+    """A Windows resource location (file:///Z:/dir/resources, the importer given a drive
+    path) reaches the model as Z:/dir/resources: RoadFollowDriver's CSV road named
+    relative to its resources/ is read under Wine, and the driver, placed on the slalom
+    beside the road, steers as the linux64 binary does with the same file by its path."""
+    wine = _wine()
+    exe, tree = _importer("RoadFollowDriver")
+    fmu = FMU_DIR / "RoadFollowDriver.fmu"
+    if not fmu.is_file():
+        pytest.skip(f"{fmu} not built")
+    csv = ROOT / "ssp" / "roads" / "Bus36m_Slalom.csv"
+    win_tree = tmp_path / "RoadFollowDriver"
+    shutil.copytree(tree, win_tree)
+    shutil.copy(csv, win_tree / "resources" / "slalom.csv")
+    drive_path = "Z:" + str(win_tree).replace("/", "\\")
+    # on the slalom's first bend (x = 50 m, the road at y = 1.3 m), 0.5 m to its left,
+    # heading 0.1 rad, at 10 m/s
+    place = {"x": 50.0, "y": 1.8, "psi": 0.1, "v": 10.0}
+    stop, h, tol = 1.0, 0.01, 1e-6
+
+    def win_run(road_file):
+        args = [f"{k}={v!r}" for k, v in place.items()] + ["road=0", f"roadFile={road_file}"]
+        return subprocess.run([wine, str(exe), drive_path, "--run", repr(stop), repr(h), repr(tol)]
+                              + args, capture_output=True, text=True, env=_wine_env(), timeout=300)
+
+    p = win_run("slalom.csv")
+    assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
+    win = {k: float(v) for k, v in (line.split() for line in p.stdout.splitlines())}
+    # the road is really read: a file that is not there is refused
+    missing = win_run("no_such_road.csv")
+    assert missing.returncode != 0 and "run failed" in missing.stdout
+
+    res = simulate_fmu(str(fmu), stop_time=stop, output_interval=h, relative_tolerance=tol,
+                       start_values=dict(place, road=0, roadFile=str(csv)),
+                       output=list(win), set_stop_time=False)
+    assert abs(win["delta"]) > 1e-3, win          # it steers back towards the road
+    assert win["eLat"] > 0.1, win                 # left of the road (a 0.5 m offset)
+    for n, value in win.items():
+        assert abs(value - res[n][-1]) <= tol * max(abs(res[n][-1]), 1e-3), (n, value, res[n][-1])

@@ -6,10 +6,11 @@
  * status fails the test.
  *
  * usage: fmu_check <FMU directory (unzipped)>
- *        fmu_check <FMU directory> --run STOP H TOL   (no checks: a co-simulation from
- *        the start values, STOP/H steps of H with tolerance TOL, then every real output
- *        printed as "name value"; tests/test_win64.py compares the win64 DLL's, run
- *        under Wine, with the linux64 binary's)
+ *        fmu_check <FMU directory> --run STOP H TOL [NAME=VALUE...]   (no checks: a
+ *        co-simulation from the start values and the parameters given, STOP/H steps
+ *        of H with tolerance TOL, then every real output printed as "name value";
+ *        tests/test_win64.py compares the win64 DLL's, run under Wine, with the
+ *        linux64 binary's)
  */
 #ifdef _WIN32
 /* the win64 build (scripts/build_win64.sh), run under Wine: the DLL through LoadLibrary */
@@ -56,7 +57,7 @@ API(fmi2EnterInitializationMode); API(fmi2ExitInitializationMode); API(fmi2Termi
 API(fmi2Reset); API(fmi2GetReal); API(fmi2SetReal); API(fmi2SetInteger); API(fmi2DoStep);
 API(fmi2GetFMUstate); API(fmi2SetFMUstate); API(fmi2FreeFMUstate);
 API(fmi2SerializedFMUstateSize); API(fmi2SerializeFMUstate); API(fmi2DeSerializeFMUstate);
-API(fmi2SetDebugLogging); API(fmi2GetRealStatus);
+API(fmi2SetDebugLogging); API(fmi2GetRealStatus); API(fmi2SetBoolean); API(fmi2SetString);
 
 static fmi2ValueReference real_vrs[MODEL_NVARS];
 static size_t n_real = 0;
@@ -79,8 +80,8 @@ static int run(fmi2Component c, double t0, int steps, double h, double *out) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 2 && !(argc == 6 && strcmp(argv[2], "--run") == 0)) {
-        fprintf(stderr, "usage: fmu_check FMUDIR [--run STOP H TOL]\n");
+    if (argc != 2 && !(argc >= 6 && strcmp(argv[2], "--run") == 0)) {
+        fprintf(stderr, "usage: fmu_check FMUDIR [--run STOP H TOL [NAME=VALUE...]]\n");
         return 2;
     }
     char path[4096], uri[4200];
@@ -95,16 +96,33 @@ int main(int argc, char **argv) {
     LOAD(fmi2Reset); LOAD(fmi2GetReal); LOAD(fmi2SetReal); LOAD(fmi2SetInteger); LOAD(fmi2DoStep);
     LOAD(fmi2GetFMUstate); LOAD(fmi2SetFMUstate); LOAD(fmi2FreeFMUstate);
     LOAD(fmi2SerializedFMUstateSize); LOAD(fmi2SerializeFMUstate); LOAD(fmi2DeSerializeFMUstate);
-    LOAD(fmi2SetDebugLogging); LOAD(fmi2GetRealStatus);
+    LOAD(fmi2SetDebugLogging); LOAD(fmi2GetRealStatus); LOAD(fmi2SetBoolean); LOAD(fmi2SetString);
 
     for (size_t i = 0; i < MODEL_NVARS; i++)
         if (VARS[i].type == T_REAL) real_vrs[n_real++] = VARS[i].vr;
 
     static double a[MODEL_NVARS], b[MODEL_NVARS];
-    if (argc == 6) {
+    if (argc >= 6) {
         const double stop = atof(argv[3]), hh = atof(argv[4]), tol = atof(argv[5]);
         const int n = (int)(stop / hh + 0.5);
         fmi2Component r = make(uri);
+        for (int i = 6; r && i < argc; i++) {
+            const char *eq = strchr(argv[i], '=');
+            const VarInfo *v = NULL;
+            for (size_t k = 0; eq && k < MODEL_NVARS; k++)
+                if (strlen(VARS[k].name) == (size_t)(eq - argv[i]) &&
+                    strncmp(VARS[k].name, argv[i], (size_t)(eq - argv[i])) == 0) v = &VARS[k];
+            if (!v) { printf("unknown variable: %s\n", argv[i]); return 1; }
+            const double d = atof(eq + 1);
+            const fmi2Integer in = atoi(eq + 1);
+            const fmi2Boolean b = in != 0;
+            const fmi2String str = eq + 1;
+            fmi2Status st = v->type == T_REAL ? fmi2SetReal(r, &v->vr, 1, &d)
+                          : v->type == T_INTEGER ? fmi2SetInteger(r, &v->vr, 1, &in)
+                          : v->type == T_BOOLEAN ? fmi2SetBoolean(r, &v->vr, 1, &b)
+                          : fmi2SetString(r, &v->vr, 1, &str);
+            if (st != fmi2OK) { printf("cannot set %s: %s\n", argv[i], last_message); return 1; }
+        }
         if (!r || fmi2SetupExperiment(r, fmi2True, tol, 0, fmi2False, 0) != fmi2OK ||
             fmi2EnterInitializationMode(r) != fmi2OK || fmi2ExitInitializationMode(r) != fmi2OK ||
             !run(r, 0, n, hh, a)) {
