@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES="cmake make g++ libsundials-dev libeigen3-dev python3 python3-venv python3-pip mingw-w64 wine64 dpkg-dev"
+APT_PACKAGES="cmake make g++ libsundials-dev libeigen3-dev python3 python3-venv python3-pip mingw-w64 wine64 dpkg-dev chromium"
 missing=""
 for p in $APT_PACKAGES; do
   dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"

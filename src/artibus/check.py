@@ -223,8 +223,10 @@ def _dynamics(values, get):
             for a, Fa in zip(axles, F):
                 if Fa < 0:
                     probs.append(Problem(f"xA[{a}]", get[f"xA[{a}]"],
-                                         f"the static load of axle {a} would be {Fa:.4g} N (negative): the centre "
-                                         f"of mass of module {k} is not between its supports"))
+                                         f"the static load of axle {a} would be {Fa:.4g} N (negative): module "
+                                         f"{k}'s weight" + (f" and the {passed:.4g} N hinge {k} passes on "
+                                                            f"(from module {k + 1})" if passed else "")
+                                         + " do not rest between its supports"))
             passed = float(F[-1]) if hinge else 0.0
     # yaw inertia against mass and body length
     for k in range(1, nm + 1):
