@@ -77,10 +77,11 @@ def hinge_oscillation_kpis(r, t_after, what):
         a = r[f"Bus.artAngle[{k}]"]
         osc = kpi.oscillation(t, a, t_from=t_after)
         settled = " (settles without oscillating: fewer than 3 extrema)" if osc.periods == 0 else ""
+        why = "settles without oscillating" if osc.periods == 0 else ""
         kpis.append(Kpi(f"articulation hinge {k} after the {what}: damping ratio{settled}", osc.damping_ratio, "-",
                         "stable on dry and wet roads (decays)", "seed 000, sec. IV",
-                        None if osc.periods == 0 else osc.damping_ratio > 0))
-        kpis.append(Kpi(f"articulation hinge {k} after the {what}: frequency", osc.frequency, "Hz"))
+                        None if osc.periods == 0 else osc.damping_ratio > 0, why=why))
+        kpis.append(Kpi(f"articulation hinge {k} after the {what}: frequency", osc.frequency, "Hz", why=why))
         kpis.append(Kpi(f"max |articulation angle| hinge {k} after the {what}",
                         kpi.peak(a[t >= t_after]) * DEG, "deg"))
     return kpis

@@ -264,7 +264,7 @@ def report(r, out):
                  k["option1"].oscillations, "-", f"option 1 oscillates longer (option 2: {k['option2'].oscillations})",
                  src, k["option1"].oscillations > k["option2"].oscillations))
     K.append(Kpi("  same: settling below 1 deg, option 2 / floor only", k["option2"].settling, "s",
-                 f"at most half the floor's ({_fmt(k['floor'].settling)})", "issue 11",
+                 f"at most half the floor's ({_fmt(k['floor'].settling)})", f"{src}; the bound (half) is ours",
                  k["option2"].settling <= 0.5 * k["floor"].settling))
     lo = min(k[f].min_pct for f in ("option1", "option2", "option3", "revised", "baseline"))
     hi = max(k[f].peak_pct for f in ("option1", "option2", "option3", "revised", "baseline"))

@@ -23,9 +23,11 @@ def kpis(r):
         Kpi("rear axle A3: initial overshoot beyond the 3.25 m offset", kpi.overshoot(y3[~after], 3.25), "m", "",
             "seed 001, initial overshoot"),
         Kpi("free articulation oscillation after the lane change: frequency", osc.frequency, "Hz",
-            "0.7-1.0 at friction 1.0; the plant's rear-sway mode at rear friction 0.2: 0.39", "seed 001, ch. 4; issue 3"),
+            "0.7-1.0 at friction 1.0 (here rear friction 0.2: the plant's linear rear-sway mode is at 0.39)",
+            "seed 001, 4.4.2 (Fig. 4.10)"),
         Kpi("free articulation oscillation: damping ratio", osc.damping_ratio, "-",
-            "the plant's rear-sway mode at rear friction 0.2, steering held: 0.069", "issue 3"),
+            "not given", "ours: the plant's linear rear-sway mode at rear friction 0.2, steering held, 0.069 "
+            "(tests/test_bus_dynamics_vehicles.py)"),
         Kpi("max |articulation angle|", kpi.peak(r["Bus.artAngle[1]"]) * DEG, "deg"),
         Kpi("max |articulation rate|", kpi.peak(r["Bus.artRate[1]"]) * DEG, "deg/s"),
         Kpi("front axle: max |lateral error| while driving", kpi.peak(r["Driver.eLat"][~after]), "m"),
