@@ -215,8 +215,9 @@ def test_win64_cosimulation_equals_linux64(name):
 def test_win64_csv_road_from_the_resources(tmp_path):
     """A Windows resource location (file:///Z:/dir/resources, the importer given a drive
     path) reaches the model as Z:/dir/resources: RoadFollowDriver's CSV road named
-    relative to its resources/ is read under Wine, and the driver, placed on the slalom
-    beside the road, steers as the linux64 binary does with the same file by its path."""
+    relative to its resources/ is read under Wine, so is one named by a Windows absolute
+    path, and the driver, placed on the slalom beside the road, steers as the linux64
+    binary does with the same file by its path."""
     wine = _wine()
     exe, tree = _importer("RoadFollowDriver")
     fmu = FMU_DIR / "RoadFollowDriver.fmu"
@@ -243,6 +244,10 @@ def test_win64_csv_road_from_the_resources(tmp_path):
     # the road is really read: a file that is not there is refused
     missing = win_run("no_such_road.csv")
     assert missing.returncode != 0 and "run failed" in missing.stdout
+    # a Windows absolute path (drive letter, backslashes) is taken as it is
+    p = win_run("Z:" + str(csv).replace("/", "\\"))
+    assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
+    assert {k: float(v) for k, v in (line.split() for line in p.stdout.splitlines())} == win
 
     res = simulate_fmu(str(fmu), stop_time=stop, output_interval=h, relative_tolerance=tol,
                        start_values=dict(place, road=0, roadFile=str(csv)),

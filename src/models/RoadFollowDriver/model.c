@@ -64,10 +64,16 @@ static void params(ModelInstance *comp, DriverParams *p) {
     p->Ts = D->Ts;
 }
 
-/* the file: an absolute path as given, else a file name in resources/ */
+/* the file: an absolute path as given (on Windows also C:\dir, C:/dir, \\server),
+   else a file name in resources/ */
 static void road_path(ModelInstance *comp, char *path, size_t len) {
     const char *f = D->roadFile;
-    if (f[0] == '/' || !comp->resourceDir) snprintf(path, len, "%s", f);
+#ifdef _WIN32
+    const bool absolute = f[0] == '/' || f[0] == '\\' || (f[0] && f[1] == ':');
+#else
+    const bool absolute = f[0] == '/';
+#endif
+    if (absolute || !comp->resourceDir) snprintf(path, len, "%s", f);
     else snprintf(path, len, "%s/%s", comp->resourceDir, f);
 }
 
