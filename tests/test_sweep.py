@@ -112,25 +112,27 @@ def test_grid_of_60_cases_table_plot_and_worst_cases(tmp_path, client):
     assert "Driver.roadBefore=2.0" in cmds[0] and "--stop-time 3" in cmds[0]
 
 
-def test_reused_instances_give_a_fresh_instances_results():
-    """A worker's FMU instances, reset and initialised again, give what new ones give, bit for bit."""
-    p = SSP
+@pytest.mark.parametrize("bench", [BENCH, "Bus36m_Circle_GuidedForceMin"])
+def test_reused_instances_give_a_fresh_instances_results(bench, tmp_path):
+    """A worker's FMU instances (the plant, the driver, and the controllers with
+    their path memories), reset and initialised again, give what new ones give, bit for bit."""
+    p = SSP if bench == BENCH else str(tmp_path / f"{bench}.ssp")
+    if p != SSP:
+        Path(p).write_bytes(ssp.ssp_path(bench).read_bytes())
     a = {**FIXED, "Driver.vSet": 6.0, "Driver.R": 12.5}
     b = {**FIXED, "Driver.vSet": 3.0, "Driver.R": 20.0}
-    sw._local.__dict__.clear()
+    sw.release()
     sw._simulate(p, a, STOP, None)
-    assert (p, None) in sw._local.sims               # kept for the next case
+    assert [k[1:] for k in sw._SIMS] == [(p, None)]            # kept for the next case
     again = sw._simulate(p, b, STOP, None)
     with pytest.raises(ArtibusError, match="Driver.vSet"):
         sw._simulate(p, {**FIXED, "Driver.vSet": 500.0}, STOP, None)   # out of range: refused
     after_error = sw._simulate(p, b, STOP, None)
-    fresh = runner.run(SSP, overrides=b, stop_time=STOP)
+    fresh = runner.run(p, overrides=b, stop_time=STOP)
     assert again.names == fresh.names
     assert np.array_equal(again.array(), fresh.array())
     assert np.array_equal(after_error.array(), fresh.array())
-    for sim in sw._local.sims.values():
-        sim.close()
-    sw._local.__dict__.clear()
+    assert sw.release() == 1
 
 
 def test_a_failing_case_is_recorded_and_the_rest_complete(tmp_path, client):

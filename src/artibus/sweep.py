@@ -29,6 +29,7 @@ the .ssv of the case's variants, its bench.py), the run's settings and the
 case's values: a rerun skips finished cases, a changed FMU or .ssv reruns the
 cases it touches, an interrupted sweep resumes.
 """
+import atexit
 import csv
 import hashlib
 import json
@@ -350,26 +351,51 @@ def case_key(info, case, settings):
 
 # --- on a worker -------------------------------------------------------------------
 
-_local = threading.local()
 #: FMU instances reused across cases (fmi2Reset and a new initialisation); False: a fresh Simulation each case
 REUSE = os.environ.get("ARTIBUS_SWEEP_REUSE", "1") != "0"
+_LOCK = threading.Lock()
+_SIMS = {}          # (thread, .ssp, step) -> a Simulation not in use, kept for the thread's next case
+_SSPS = {}          # (bench, content) -> the .ssp's path on this worker
+_DIRS = []          # folders this worker made for .ssp files
 
 
 def _worker_ssp(bench_name, common_hash, ssp_path, ssp_bytes):
     """The bench's .ssp on this worker: the path where it exists with the same
     content, else the bytes written once to a local file."""
-    cache = getattr(_local, "ssp", None)
-    if cache is None:
-        cache = _local.ssp = {}
     key = (bench_name, common_hash, hashlib.sha256(ssp_bytes).hexdigest() if ssp_bytes else ssp_path)
-    if key not in cache:
-        p = Path(ssp_path)
-        if ssp_bytes and not (p.is_file() and p.read_bytes() == ssp_bytes):
-            d = Path(tempfile.mkdtemp(prefix="artibus-sweep-worker-"))
-            p = d / f"{bench_name}.ssp"
-            p.write_bytes(ssp_bytes)
-        cache[key] = str(p)
-    return cache[key]
+    with _LOCK:
+        if key not in _SSPS:
+            p = Path(ssp_path)
+            if ssp_bytes and not (p.is_file() and p.read_bytes() == ssp_bytes):
+                d = Path(tempfile.mkdtemp(prefix="artibus-sweep-worker-"))
+                _DIRS.append(d)
+                p = d / f"{bench_name}.ssp"
+                p.write_bytes(ssp_bytes)
+            _SSPS[key] = str(p)
+        return _SSPS[key]
+
+
+def release():
+    """Close the instances this process keeps and remove its .ssp copies (the
+    sweep calls it on every worker at its end; also at exit). Returns how many."""
+    import shutil
+    with _LOCK:
+        sims = list(_SIMS.values())
+        _SIMS.clear()
+        _SSPS.clear()
+        dirs = list(_DIRS)
+        _DIRS.clear()
+    for sim in sims:
+        try:
+            sim.close()
+        except Exception:
+            pass
+    for d in dirs:
+        shutil.rmtree(d, ignore_errors=True)
+    return len(sims)
+
+
+atexit.register(release)
 
 
 def _parameters(sim, overrides):
@@ -397,24 +423,26 @@ def _parameters(sim, overrides):
 
 
 def _simulate(ssp, overrides, stop_time, step):
-    """A Result; the Simulation kept for the next case where it may be reused."""
+    """A Result; the Simulation kept for this thread's next case where it may
+    be reused (one a thread: another bench's is closed)."""
     from artibus import runner
-    sims = getattr(_local, "sims", None)
-    if sims is None:
-        sims = _local.sims = {}
-    key = (ssp, step)
-    sim = sims.pop(key, None)
+    me = threading.get_ident()
+    key = (me, ssp, step)
+    with _LOCK:
+        sim = _SIMS.pop(key, None)
+        others = [k for k in _SIMS if k[0] == me]
+        stale = [_SIMS.pop(k) for k in others]
+    for old in stale:
+        old.close()
     if sim is not None:
         try:
             for u in sim.units:
                 u.fmu.slave.reset()
             sim.parameters = _parameters(sim, overrides)
-        except Exception:
+        except BaseException:
             sim.close()
-            sim = None
-            if isinstance(sys.exc_info()[1], ArtibusError):
-                raise
-    if sim is None:
+            raise
+    else:
         sim = runner.Simulation(ssp, step=step, overrides=overrides)
     ok = False
     try:
@@ -423,7 +451,8 @@ def _simulate(ssp, overrides, stop_time, step):
         return r
     finally:
         if ok and REUSE and sim.can is None:
-            sims[key] = sim
+            with _LOCK:
+                _SIMS[key] = sim
         else:
             sim.close()
 
@@ -634,6 +663,10 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                 if bar:
                     bar.update(bad)
         finally:
+            try:
+                client.run(release)              # the workers' instances and .ssp copies
+            except Exception:
+                pass
             if own:
                 client.close()
                 if cluster is not None:
