@@ -60,8 +60,8 @@ LICENSE_FILES = {
 }
 LICENSE_TEXT = {
     "artibus": "BSD-2-Clause",
-    "SUNDIALS": "SUNDIALS (BSD-3-Clause), linked statically",
-    "Eigen": "Eigen (MPL-2.0), header-only, compiled in",
+    "SUNDIALS": "SUNDIALS (BSD-3-Clause, linked statically)",
+    "Eigen": "Eigen (MPL-2.0, header-only)",
 }
 
 INCLUDE_RE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
@@ -112,16 +112,15 @@ def closure(root, name, sources):
 
 
 def needs_beyond_libc(files, system):
-    """A reason the model cannot be shipped as C sources alone, or None."""
+    """Why the model cannot be shipped as C sources alone (None: it can)."""
+    why = []
     for f in files:
-        if not f.endswith((".c", ".h")):
-            return f"{f} is not C"
         if os.path.basename(f) == "ode.h":
-            return "it integrates with SUNDIALS (ode.h)"
-    for inc in system:
-        if "/" in inc or not inc.endswith(".h"):
-            return f"it includes <{inc}>"
-    return None
+            why.append("it integrates with SUNDIALS (ode.h)")
+        elif not f.endswith((".c", ".h")):
+            why.append(f"{f} is not C")
+    why += [f"it includes <{inc}>" for inc in sorted(system) if "/" in inc or not inc.endswith(".h")]
+    return "; ".join(why) or None
 
 
 def uses_eigen(root, files):
