@@ -73,9 +73,10 @@ def ssp_path(bench):
             _write_pack(q, ssd_file, files)
         return q
     if not q.is_file():
-        from artibus.parameters import suggest
-        raise ArtibusError(f"{bench}: no such bench{suggest(str(bench), bench_names())} "
-                           f"(known: {', '.join(bench_names()) or 'none'})")
+        import difflib
+        close = difflib.get_close_matches(str(bench), bench_names(), n=3, cutoff=0.6)
+        hint = f"; did you mean {' or '.join(close)}?" if close else ""
+        raise ArtibusError(f"{bench}: no such bench{hint} (known: {', '.join(bench_names()) or 'none'})")
     return q
 
 
