@@ -2,9 +2,12 @@
 
 - parameters from the bench's bindings (.ssv inside the .ssp), then from
   ``--ssv`` files and ``--set comp.var=value`` given by the user;
+- every value checked against the FMU's declared type (artibus.parameters.coerce);
 - connections between component variables, through nested systems, with SSP
   linear transformations; without one, values are converted between the
   connected variables' units (FMI unit definitions, base units and factor/offset);
+  Integer, Boolean, String and Enumeration connections join variables of one
+  type, exactly, with SSP's mapping transformations (_TypedCalls, _typed_convert);
 - initialisation: every FMU in initialization mode, connected inputs set from
   the outputs they are connected to, repeated to a fixed point (bounded);
 - stepping: Gauss-Seidel in an order derived from the connection graph (an
@@ -12,7 +15,8 @@
   multi-rate: each component has its own communication step, a multiple of the
   base step; slower components hold their inputs;
 - one batched getReal/setReal per component per step;
-- recording of every connection (or a chosen list) at every base step;
+- recording of every connection (or a chosen list) at every base step, of any
+  type (a Boolean as 0/1, a String's text in Result.strings);
 - on a failure midway, the results so far are kept with the failing time and
   the FMU's log.
 """

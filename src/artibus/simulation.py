@@ -79,8 +79,7 @@ def _callbacks(log):
     whichever was instantiated last. The dispatcher lives as long as the
     process, so the proxy's pointer never dangles."""
     from ctypes import byref
-    from fmpy.fmi2 import (fmi2CallbackFunctions, fmi2CallbackAllocateMemoryTYPE,
-                           fmi2CallbackFreeMemoryTYPE, calloc, free)
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
     env = next(_ENVS)
     _LOGS[env] = log
     cb = fmi2CallbackFunctions()
