@@ -12,6 +12,11 @@ turns it into
                       causality, variability, range), per-type look-up arrays
                       and vars_set_start_values().
 
+A model description with <ModelExchange> (a plant) also gets MODEL_NX (its
+continuous states, in the order of <ModelStructure><Derivatives>), MODEL_NZ
+(event indicators), X_NAME[] and X_NOMINAL[]; a derivative named der(x) or
+der(x[i]) becomes the field der_x (der_x[i]).
+
 Array fields are sized max index + 1 so that C code indexes them exactly as the
 paper does (``d->L[i]`` for i = 1..N, ``d->theta[i]`` for i = 0..N).
 

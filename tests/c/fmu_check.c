@@ -280,6 +280,24 @@ int main(int argc, char **argv) {
         CHECK(ok, "ME Euler steps: %s", last_message);
         CHECK(fmi2GetReal(m, real_vrs, n_real, a) == fmi2OK, "ME outputs");
         for (size_t i = 0; i < n_real; i++) CHECK(isfinite(a[i]), "ME output vr %u not finite", real_vrs[i]);
+        /* FMU state in continuous-time mode: save, go on, restore, go on again: the same */
+        fmi2FMUstate ms = NULL;
+        double xa[MODEL_NX], xb[MODEL_NX];
+        CHECK(fmi2GetFMUstate(m, &ms) == fmi2OK, "ME GetFMUstate: %s", last_message);
+        for (int pass = 0; pass < 2; pass++) {
+            double *xe = pass ? xb : xa;
+            ok = fmi2GetContinuousStates(m, xe, MODEL_NX) == fmi2OK;
+            for (int k = 1; k <= 10 && ok; k++) {
+                ok = fmi2GetDerivatives(m, dx, MODEL_NX) == fmi2OK;
+                for (int i = 0; i < MODEL_NX; i++) xe[i] += dt * dx[i];
+                ok = ok && fmi2SetTime(m, 0.1 + k * dt) == fmi2OK
+                        && fmi2SetContinuousStates(m, xe, MODEL_NX) == fmi2OK;
+            }
+            CHECK(ok, "ME steps after the state was %s: %s", pass ? "restored" : "saved", last_message);
+            if (!pass) CHECK(fmi2SetFMUstate(m, ms) == fmi2OK, "ME SetFMUstate: %s", last_message);
+        }
+        CHECK(memcmp(xa, xb, sizeof xa) == 0, "ME run after SetFMUstate differs");
+        fmi2FreeFMUstate(m, &ms);
         x[0] = NAN;
         last_message[0] = 0;
         CHECK(fmi2SetContinuousStates(m, x, MODEL_NX) == fmi2Error, "ME NaN state accepted");
