@@ -136,15 +136,22 @@ def test_reused_instances_give_a_fresh_instances_results(bench, tmp_path):
 
 
 def test_a_failing_case_is_recorded_and_the_rest_complete(tmp_path, client):
-    res = _run(tmp_path / "s", client, grid={"Driver.vSet": "3,500,5", "Driver.R": "15,20"})
+    kw = dict(grid={"Driver.vSet": "3,500,5", "Driver.R": "15,20"}, keep_series=True)
+    res = _run(tmp_path / "s", client, **kw)
     rows = res.table.to_pylist()
     assert len(rows) == 6 and res.failed == 2
     for r in rows:
+        series = tmp_path / "s" / "series" / f"{r['key']}.parquet"
         if r["Driver.vSet"] == 500:
             assert r["status"] == "failed" and "Driver.vSet" in r["error"] and "500" in r["error"]
             assert r[KPI] is None or np.isnan(r[KPI])
+            assert not series.exists()
         else:
             assert r["status"] == "ok" and r[KPI] > 0
+            s = pq.read_table(series)       # the case's time series: its KPI again from them
+            assert s["time"].to_pylist()[-1] == pytest.approx(STOP)
+            assert np.degrees(np.max(np.abs(s["Bus.artAngle[1]"].to_numpy()))) == pytest.approx(r[KPI], rel=1e-12)
+    assert _run(tmp_path / "s", client, **kw).ran == 0             # failures recorded are not run again
     text = (tmp_path / "s" / "worst.txt").read_text()
     assert "Failed cases (2)" in text and "--set Driver.vSet=500.0" in text
 

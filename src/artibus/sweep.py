@@ -613,8 +613,13 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
         (out / SERIES_DIR).mkdir(exist_ok=True)
 
     def finished(k):
-        return (out / CASES_DIR / f"{k}.parquet").is_file() and (
-            not keep_series or (out / SERIES_DIR / f"{k}.parquet").is_file())
+        f = out / CASES_DIR / f"{k}.parquet"
+        if not f.is_file():
+            return False
+        if not keep_series or (out / SERIES_DIR / f"{k}.parquet").is_file():
+            return True
+        import pyarrow.parquet as pq          # a failed case has no series
+        return pq.read_table(f, columns=["status"])["status"][0].as_py() != STATUS_OK
 
     todo = [i for i, k in enumerate(keys) if not finished(k)]
     seen, unique = set(), []
