@@ -85,3 +85,21 @@ def test_non_finite_output_is_an_error():
         assert any("not finite" in m or "m[1]" in m for m in f.log), f.log
     finally:
         f.close()
+
+
+def test_fmus_allocate_through_a_preloaded_sanitizer():
+    """FMPy's default calloc is libc's own (looked up in libc.so.6), which a
+    preloaded ASan never sees; artibus's callbacks use the process's calloc.
+    Meaningful in the sanitizer pass (LD_PRELOAD=libasan.so); elsewhere both
+    must at least be libc's."""
+    import ctypes
+    import os
+    import fmpy
+    from artibus import memory
+    addr = lambda f: ctypes.cast(f, ctypes.c_void_p).value   # noqa: E731
+    preload = [p for p in os.environ.get("LD_PRELOAD", "").split() if "libasan" in p]
+    if preload:
+        assert addr(memory.calloc) == addr(ctypes.CDLL(preload[0]).calloc)
+        assert addr(memory.calloc) != addr(fmpy.calloc)      # the blind spot this closes
+    else:
+        assert addr(memory.calloc) == addr(fmpy.calloc)

@@ -287,8 +287,15 @@ fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNex
 /* FMU state: the coordinates and their rates; the integrator (its size from
  * nModules) is made again at the next step */
 bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
-    (void)d; (void)time;
+    (void)time;
     if (!finite_all(s->z, 6) || !finite_all(s->zd, 6)) return STATE_INVALID("a coordinate z or rate zd is not finite");
+    /* the parameters as model_init checks them (each axle on an existing module, ...) */
+    ModelInstance *scratch = calloc(1, sizeof *scratch);    /* no logger: silent */
+    if (!scratch) return STATE_INVALID("out of memory");
+    scratch->v.d = *d;
+    const fmi2Status st = check_parameters(scratch);
+    free(scratch);
+    if (st != fmi2OK) return STATE_INVALID("its parameters are not consistent (as fmi2ExitInitializationMode checks them)");
     return true;
 }
 

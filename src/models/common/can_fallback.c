@@ -71,7 +71,7 @@ unsigned cf_sample(CfFallback *f, const double *counters, unsigned used, int bad
     for (int j = 0; j < p->nOut; j++) wantOk &= isfinite(want[j]) != 0;
 
     if (f->mode != CF_NORMAL) {
-        f->fresh = (!trouble && allNew) ? f->fresh + 1 : 0;
+        f->fresh = (!trouble && allNew) ? (f->fresh < CF_AGE_CAP ? f->fresh + 1 : f->fresh) : 0;
         if (f->fresh >= p->nRecover && wantOk) {    /* recovered: slew back from here */
             f->mode = CF_NORMAL;
             f->rejoin = 1;
@@ -113,7 +113,8 @@ int cf_state_valid(const CfFallback *f) {
           p->nStale >= 0 && p->nStale <= 1000 && p->nRecover >= 1 && p->nRecover <= 100000 &&
           isfinite(p->tHold) && isfinite(p->rampRate) && p->rampRate > 0 && isfinite(p->Ts) && p->Ts > 0))
         return 0;
-    if (f->nHold < 1 || f->mode < CF_NORMAL || f->mode > CF_SAFE || f->cycles < 0 || f->fresh < 0 ||
+    if (f->nHold < 1 || f->nHold > 1000000000 || f->mode < CF_NORMAL || f->mode > CF_SAFE ||
+        f->cycles < 0 || f->cycles > f->nHold + 1 || f->fresh < 0 || f->fresh > CF_AGE_CAP ||
         (f->rejoin != 0 && f->rejoin != 1))
         return 0;
     for (int i = 0; i < CF_MAX_MSG; i++)
