@@ -9,7 +9,7 @@ from artibus import report
 from artibus.report import Kpi
 
 SPEEDS = (5.0, 10.0, 20.0, 30.0)
-DELTA1 = 0.02                       # the bench's step (Steering.testSteerAmp)
+DELTA1 = 0.02                       # the bench's step (Steering.delta1)
 
 TEXT = ("Vehicle data: ssp/parameters/Bus15mTagAxle.ssv (estimates: seed 004 gives none). "
         "Zero-side-slip steering trades yaw-rate gain at speed for zero side-slip.")
@@ -61,7 +61,7 @@ def study(r, out):
     outputs = ["Vehicle.w_r", "Vehicle.a_y"]
     resp = {o: {} for o in outputs}
     for zs in (True, False):
-        o = {**_variant(20.0, zs), "Steering.testSteerAmp": 0.0}
+        o = {**_variant(20.0, zs), "Steering.delta1": 0.0}      # the sine alone, without the step
         # 5 s of transient are many times the linear model's slowest time constant at 20 m/s (the step
         # responses settle within about 2 s), so no longer settling at the low frequencies; 3 periods fitted
         f = bode.frequency_response("MultiAxle_StepSteer", "Steering.delta1", outputs, freqs, 0.01, periods=3,
