@@ -79,7 +79,7 @@ CASES = {
     # a lane change at 50 km/h (Bus36m_LaneChange's speed): one sine period of front steering
     "BusDynamics": ({"testSteerAmp": 0.0, "vx_start": 50 / 3.6},
                     {"delta[1]": lambda t: 0.03 * math.sin(2 * math.pi * t / 3.0) if t < 3.0 else 0.0},
-                    8.0),
+                    5.0),
     # MultiAxle_StepSteer's speed, a steering ramp to 0.02 rad then a sine
     "MultiAxle3DOF": ({"testSteerAmp": 0.0},
                       {"u": lambda t: 20.0, "delta[1]": lambda t: 0.02 * min(t, 1.0) + 0.01 * math.sin(2 * t)},
