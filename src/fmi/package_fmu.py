@@ -314,7 +314,7 @@ def fmt_display(value, unit, md_units):
     return f' <span class="du">({y:.6g} {html.escape(dname)})</span>'
 
 
-def documentation(md, name, readme, libraries, platforms, source_files, version, why_not):
+def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=()):
     e = html.escape
     units = {}
     for u in md.iter("Unit"):
@@ -345,7 +345,8 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
     for lib in libraries:
         fname = LICENSE_FILES[lib][1]
         what = {"artibus": "artibus itself (BSD-2-Clause)",
-                "SUNDIALS": "SUNDIALS CVODE/ARKODE, linked statically into the binaries (BSD-3-Clause)",
+                "SUNDIALS": "SUNDIALS CVODE/ARKODE, linked statically into " + " and ".join(with_sundials)
+                            + " (BSD-3-Clause)",
                 "Eigen": "Eigen 3, header-only, compiled into the binaries (MPL-2.0; its source: "
                          "https://gitlab.com/libeigen/eigen)"}[lib]
         lic_items.append(f'<li><a href="licenses/{fname}">{fname}</a>: {e(what)}</li>')
@@ -513,7 +514,9 @@ def main(argv=None):
 
     files, system = closure(root, name, a.sources)
     libraries = ["artibus"]
-    if any(any(m in open(b, "rb").read() for m in SUNDIALS_MARKERS) for b in binaries):
+    with_sundials = [os.path.basename(b) for b in binaries
+                     if any(m in open(b, "rb").read() for m in SUNDIALS_MARKERS)]
+    if with_sundials:
         libraries.append("SUNDIALS")
     if uses_eigen(root, files):
         libraries.append("Eigen")
@@ -548,7 +551,7 @@ def main(argv=None):
         copy(os.path.join(root, src), os.path.join(tree, "documentation", "licenses", fname))
     readme_path = os.path.join(model_dir, "README.md")
     readme = open(readme_path, encoding="utf-8").read() if os.path.isfile(readme_path) else ""
-    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not)
+    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials)
     with open(os.path.join(tree, "documentation", "index.html"), "w", encoding="utf-8") as f:
         f.write(page)
 
