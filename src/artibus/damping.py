@@ -200,8 +200,8 @@ def _overlay(path, runs, signals, title, t_window=None):
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].set_title(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    from artibus.report import save_figure
+    save_figure(fig, path, dpi=110)
 
 
 def _rear_path(path, runs, case, title):
@@ -231,8 +231,8 @@ def _rear_path(path, runs, case, title):
         ax.grid(True, alpha=0.3)
     axes[0].legend(loc="lower right", fontsize=8, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    from artibus.report import save_figure
+    save_figure(fig, path, dpi=110)
 
 
 def _fmt(x, nd=3):

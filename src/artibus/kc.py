@@ -157,7 +157,8 @@ def write_ssv(path, rows, command, f_lo=F_LO, f_check=F_CHECK, amplitude=AMPLITU
               '      <Source xmlns="urn:artibus">']
     lines += [f"        {escape(t)}" for t in how]
     lines += ["      </Source>", "    </ssc:Annotation>", "  </ssv:Annotations>", "</ssv:ParameterSet>", ""]
-    Path(path).write_text("\n".join(lines))
+    from artibus.files import write_text
+    write_text(path, "\n".join(lines))
     return Path(path)
 
 
@@ -184,8 +185,8 @@ def plot_kc(path, rows, f_lo=F_LO, f_check=F_CHECK):
     sec = ax.secondary_xaxis("top", functions=(lambda x: x / 3.6, lambda x: x * 3.6))
     sec.set_xlabel("speed v [m/s]")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    from artibus.report import save_figure
+    save_figure(fig, path, dpi=110)
 
 
 def plot_bode(path, v, points, geo, kc=1.0, title=""):
@@ -217,7 +218,8 @@ def sway_peak(v, points, geo, amplitude=AMPLITUDE, n=9):
 
 
 def write_bode_csv(path, v, points, geo, kc_value):
-    with open(path, "w") as f:
+    from artibus.files import atomic_write
+    with atomic_write(path) as f:
         f.write("frequency [Hz],plant gain [rad/rad],plant phase [deg],reference gain [rad/rad],"
                 "reference phase [deg],reference gain times Kc [rad/rad]\n")
         ph = np.degrees(np.unwrap([p.phase for p in points]))
