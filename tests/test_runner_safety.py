@@ -302,3 +302,37 @@ def test_concurrent_runs_of_a_stale_bench(tmp_path):
         texts = {(tmp_path / f"r{round_}{i}.csv").read_text() for i in range(4)}
         assert len(texts) == 1 and len(next(iter(texts)).splitlines()) > 10
     assert sorted(p.name for p in fmus.iterdir() if p.suffix not in (".fmu",)) == ["Scania18m_OpenLoop.ssp"]
+
+
+def test_results_too_large_for_memory_refused_before_the_run(tmp_path, long_bench):
+    """A run whose result table cannot fit (10^11 base steps) is one line before
+    it starts, not a MemoryError or the OOM killer later."""
+    with pytest.raises(ArtibusError, match=r"3 columns of results would take 2\.4 GB, more than half"):
+        runner._check_room(100_000_000, 3, "b.ssd", available=4_000_000_000)
+    runner._check_room(100_000_000, 3, "b.ssd", available=8_000_000_000)
+    t0 = time.perf_counter()
+    r = artibus("run", str(long_bench), "--step", "1e-9", "--stop-time", "100", "-o", str(tmp_path / "r.csv"),
+                cwd=tmp_path, timeout=120)
+    assert r.returncode == 1 and "Traceback" not in r.stderr and "--record" in r.stderr
+    assert time.perf_counter() - t0 < 60 and not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_interrupt_in_the_python_loop_keeps_partial_results(tmp_path, long_bench, sig):
+    """As test_interrupt_while_simulating_keeps_partial_results, through the runner's
+    Python loop (ARTIBUS_CORE=0: stimuli, CAN routes, or no C core)."""
+    out = tmp_path / "r.csv"
+    tmpdir = tmp_path / "tmpdir"
+    tmpdir.mkdir()
+    proc = subprocess.Popen([sys.executable, "-m", "artibus", "run", str(long_bench), "--stop-time", "1e5",
+                             "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), "ARTIBUS_CORE": "0"})
+    assert _wait_for(lambda: any(tmpdir.iterdir()))
+    time.sleep(4.0)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig and "Traceback" not in err, err
+    table = np.loadtxt(runner.partial_path(out), delimiter=",", skiprows=1)
+    assert table.shape[0] > 10
+    np.testing.assert_allclose(np.diff(table[:, 0]), 0.05, rtol=1e-6)
+    assert not out.exists() and list(tmpdir.iterdir()) == []

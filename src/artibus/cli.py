@@ -308,6 +308,9 @@ def cmd_replay(args):
 
 def cmd_can_decode(args):
     from artibus import ROOT, can
+    from artibus.files import check_output
+    if args.csv:
+        check_output(args.csv, "--csv")
     rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc")
     header = "time_s,message,signal,value,unit,e2e"
     lines = [f"{t:.6f},{m},{s},{v!r},{u},{e}" for t, m, s, v, u, e in rows]
@@ -335,6 +338,9 @@ def cmd_bode(args):
                 if args.output and not args.output.endswith(".csv") else "")
         raise ArtibusError("bode: give the output to measure, --measure COMP.VAR" + hint)
     out = _check_output(Path(args.output or "bode.csv"))
+    if args.plot:
+        from artibus.files import check_output
+        check_output(args.plot, "--plot")
     overrides = {**ssp.variant_overrides(args.bench, args.variant), **_parse_set(args.set)}
     freqs = np.geomspace(args.fmin, args.fmax, args.n) if args.n > 1 else [args.fmin]
     resp = bode.frequency_response(args.bench, args.input, args.measure, freqs, args.amplitude,
