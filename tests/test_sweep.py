@@ -152,6 +152,8 @@ def test_a_failing_case_is_recorded_and_the_rest_complete(tmp_path, client):
             assert s["time"].to_pylist()[-1] == pytest.approx(STOP)
             assert np.degrees(np.max(np.abs(s["Bus.artAngle[1]"].to_numpy()))) == pytest.approx(r[KPI], rel=1e-12)
     assert _run(tmp_path / "s", client, **kw).ran == 0             # failures recorded are not run again
+    retry = _run(tmp_path / "s", client, retry_failed=True, **kw)   # unless asked
+    assert retry.ran == 2 and retry.failed == 2 and retry.skipped == 4
     text = (tmp_path / "s" / "worst.txt").read_text()
     assert "Failed cases (2)" in text and "--set Driver.vSet=500.0" in text
 

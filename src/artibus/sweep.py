@@ -568,12 +568,13 @@ class SweepResult:
 
 def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep", stop_time=None, step=None,
           fixed=None, keep_series=False, scheduler=None, workers=None, client=None, kpi=None, plot=True,
-          progress=sys.stderr, argv=None):
+          progress=sys.stderr, argv=None, retry_failed=False):
     """Run the cases of a bench as Dask tasks; returns a SweepResult (its table
     a pyarrow.Table). grid: {name: [values] or "start:stop:step"}; variants:
     [[names]] (each list an axis) or [names] (one axis); design: a design file;
     cases: [{name: value, 'variant': 'a+b'}]; fixed: {name: value} for every
-    case (after its variants, before its own values). scheduler: an existing
+    case (after its variants, before its own values); retry_failed: run the
+    cases recorded as failed again (else a rerun skips them too). scheduler: an existing
     scheduler's address; client: a dask.distributed Client to use (else a
     local cluster of `workers` processes, default one per core). See the
     module's docstring."""
@@ -616,10 +617,14 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
         f = out / CASES_DIR / f"{k}.parquet"
         if not f.is_file():
             return False
-        if not keep_series or (out / SERIES_DIR / f"{k}.parquet").is_file():
+        has_series = not keep_series or (out / SERIES_DIR / f"{k}.parquet").is_file()
+        if has_series and not retry_failed:
             return True
-        import pyarrow.parquet as pq          # a failed case has no series
-        return pq.read_table(f, columns=["status"])["status"][0].as_py() != STATUS_OK
+        import pyarrow.parquet as pq
+        failed = pq.read_table(f, columns=["status"])["status"][0].as_py() != STATUS_OK
+        if retry_failed:
+            return not failed and has_series
+        return failed                         # a failed case has no series
 
     todo = [i for i, k in enumerate(keys) if not finished(k)]
     seen, unique = set(), []
@@ -877,6 +882,7 @@ def add_parser(sub):
     s.add_argument("--keep-series", action="store_true", help="keep each case's time series (series/<key>.parquet)")
     s.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler (tcp://host:8786)")
     s.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    s.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
     s.add_argument("--kpi", help="the KPI of the study plot and the worst cases (default: the bench's first)")
     s.set_defaults(func=main)
     return s
@@ -903,6 +909,7 @@ def main(args):
                 design=args.design, out=out, stop_time=args.stop_time, step=args.step,
                 fixed=_parse_set(args.set),
                 keep_series=args.keep_series, scheduler=args.scheduler, workers=args.workers, kpi=args.kpi,
+                retry_failed=args.retry_failed,
                 argv=sys.argv)
     n = res.table.num_rows
     print(f"sweep {Path(args.bench).stem}: {n} cases, {res.ran} run now ({res.failed} failed), "
