@@ -31,4 +31,4 @@ ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   -k "not binary_depends_only_on_system_libraries and not only_fmi_symbols_exported and not fmi_sim and not bus36m_hinge_forces_on_a_circle and not bench_bit_for_bit and not bench_variant_bit_for_bit" \
   --ignore=tests/test_benches.py --ignore=tests/test_benches_roads.py \
   --ignore=tests/test_bus36m_equilibrium.py --ignore=tests/test_steering_controllers_benches.py \
-  --ignore=tests/test_damping_benches.py --ignore=tests/test_kc.py --ignore=tests/test_can.py --ignore=tests/test_can_faults.py --ignore=tests/test_replay_can.py --ignore=tests/test_win64.py --ignore=tests/test_fmu_packaging.py --ignore=tests/test_sweep.py --ignore=tests/test_reports.py "$@"
+  --ignore=tests/test_damping_benches.py --ignore=tests/test_kc.py --ignore=tests/test_can.py --ignore=tests/test_can_faults.py --ignore=tests/test_replay_can.py --ignore=tests/test_win64.py --ignore=tests/test_fmu_packaging.py --ignore=tests/test_sweep.py --ignore=tests/test_reports.py --ignore=tests/test_runner_safety.py --ignore=tests/test_cli.py "$@"

@@ -249,7 +249,7 @@ def test_interrupt_while_simulating_keeps_partial_results(tmp_path, long_bench, 
     out.parent.mkdir()
     proc, tmpdir = _run_in_background(tmp_path, long_bench, out, 1e5)
     assert _wait_for(lambda: any(tmpdir.iterdir()))        # the bench unpacked: setting up
-    time.sleep(4.0)                                           # set up, initialised, stepping
+    time.sleep(2.0)                                           # set up, initialised, stepping
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + sig, err
@@ -283,14 +283,13 @@ def test_interrupt_while_writing_leaves_no_torn_file(tmp_path, long_bench, sig):
 
 def test_concurrent_runs_of_a_stale_bench(tmp_path):
     """Issue 15: runs of a stale bench by name raced on one <bench>.ssp.part (5 of
-    24 died). Four at once, twice, with the bench's .ssp missing (stale): all
-    succeed with identical results, no temporary pack left."""
+    24 died). Four at once with the bench's .ssp missing (stale: each packs it):
+    all succeed with identical results, no temporary pack left."""
     fmus = tmp_path / "fmus"
     fmus.mkdir()
-    for f in fmu_path("BusDynamics").parent.glob("*.fmu"):
-        shutil.copy(f, fmus / f.name)
+    shutil.copy(fmu_path("BusDynamics"), fmus / "BusDynamics.fmu")     # the bench's one FMU
     env = {"ARTIBUS_FMU_DIR": str(fmus)}
-    for round_ in range(2):
+    for round_ in range(1):
         (fmus / "Scania18m_OpenLoop.ssp").unlink(missing_ok=True)
         procs = [subprocess.Popen([sys.executable, "-m", "artibus", "run", "Scania18m_OpenLoop",
                                    "--stop-time", "0.5", "-o", str(tmp_path / f"r{round_}{i}.csv")],
@@ -328,7 +327,7 @@ def test_interrupt_in_the_python_loop_keeps_partial_results(tmp_path, long_bench
                              "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), "ARTIBUS_CORE": "0"})
     assert _wait_for(lambda: any(tmpdir.iterdir()))
-    time.sleep(4.0)
+    time.sleep(2.0)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + sig and "Traceback" not in err, err
