@@ -123,3 +123,9 @@ def test_run_sets_every_element(tmp_path):
                     "-o", str(tmp_path / "r.csv"), cwd=tmp_path)
     line = one_line_error(r)
     assert f"Bus.mu has elements 1..{n}" in line and not (tmp_path / "r.csv").exists()
+
+
+def test_o_with_all_is_refused(tmp_path):
+    """-o is one results file: --all wrote every bench's results over the same one."""
+    line = one_line_error(artibus_cli("run", "--all", "-o", str(tmp_path / "r.csv"), cwd=tmp_path))
+    assert line.startswith("artibus: error: -o names one results file") and list(tmp_path.iterdir()) == []

@@ -200,6 +200,9 @@ def cmd_run(args):
         raise ArtibusError("give one BENCH or --all")
     if args.all and args.variant:
         raise ArtibusError("--variant selects a variant of one BENCH, not of --all")
+    if args.all and args.output:
+        raise ArtibusError("-o names one results file: with --all each bench writes <bench>.csv, "
+                           "or DIR/<bench>/results.csv with --report DIR")
     user = {}
     for f in args.ssv or []:
         user.update(read_parameters(f))
