@@ -271,3 +271,34 @@ def test_state_corruption_fuzzer(name):
         assert counts["serialized refused"] >= N_FUZZ // 4 - 5
     finally:
         f.close()
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_state_from_before_initialisation_restores_and_initialises_again(name):
+    """a state taken right after instantiation, restored into a running
+    instance: it is instantiated again, and initialises and steps as new"""
+    f = Fmu(fmu_file(name))
+    try:
+        st = f.slave.getFMUstate()
+        f.initialize({})
+        h = experiment(f)
+        for k in range(5):
+            f.slave.doStep(k * h, h)
+        f.slave.setFMUstate(st)
+        f.slave.freeFMUstate(st)
+        with pytest.raises(FMICallException):       # instantiated again: no step before initialising
+            f.slave.doStep(5 * h, h)
+        f.slave.setFMUstate(f.slave.deSerializeFMUstate(serialized_fresh(name)))
+        f.initialize({})
+        f.slave.doStep(0.0, h)
+        assert np.all(np.isfinite(read_outputs(f)))
+    finally:
+        f.close()
+
+
+def serialized_fresh(name):
+    g = Fmu(fmu_file(name))
+    try:
+        return serialized(g)
+    finally:
+        g.close()

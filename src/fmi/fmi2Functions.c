@@ -493,8 +493,11 @@ static fmi2Status check_state(ModelInstance *comp, const char *fn, const FmuStat
             return log_error(comp, "%s: the state's %s = %.15g is outside its range [%g, %g]",
                              fn, v->name, x, v->min, v->max);
     }
+    /* before initialisation model_init sets the ModelState from the variables
+       before any use of it (refresh, fmi2ExitInitializationMode): not checked */
     char why[512] = "";
-    if (!model_state_valid(&s->v.d, &s->v.s, s->v.time, why, sizeof why))
+    if (!(st & (S_INSTANTIATED | S_INIT_MODE)) &&
+        !model_state_valid(&s->v.d, &s->v.s, s->v.time, why, sizeof why))
         return log_error(comp, "%s: the state is not valid: %s", fn, why[0] ? why : "(no reason given)");
     return fmi2OK;
 }

@@ -236,6 +236,8 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
 
 /* the road of the restored parameters (built again unless it is the one built) */
 fmi2Status model_restored(ModelInstance *comp) {
+    /* before initialisation the road is built by model_init, from the parameters then */
+    if (comp->v.state & (S_INSTANTIATED | S_INIT_MODE)) return fmi2OK;
     Work *w = comp->solver;
     const RoadKey key = road_key(comp);
     if (w && w->built && D->road != ROAD_CSV && memcmp(&key, &w->key, sizeof key) == 0) {
