@@ -9,7 +9,9 @@ Debian's source package, build-win64/win64/<Name>.dll, packed into binaries/win6
   whole check against every DLL without a failure;
 - a co-simulation of the default experiment from the start values, run by that
   importer in the win64 DLL under Wine, ends where FMPy's run of the linux64
-  binary ends (within the solver tolerance).
+  binary ends (within the solver tolerance);
+- a Windows resource location (file:///Z:/...) and a Windows absolute path reach
+  the model as Windows paths (RoadFollowDriver's CSV road under Wine).
 
 Skipped with the reason where the win64 build or Wine is missing (scripts/setup.sh
 installs both and builds it).
