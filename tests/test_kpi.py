@@ -68,3 +68,29 @@ def test_overshoot_peak_energy():
     assert kpi.peak([-3, 2]) == 3
     t = np.linspace(0, 2, 201)
     assert kpi.energy(t, 2 * np.ones_like(t), 0.5 * np.ones_like(t)) == pytest.approx(2.0)
+
+
+def test_swept_path_along_a_straight_and_a_circle():
+    """A 2.5 m wide, 12 m long body drives a straight, a full circle of radius
+    15 m tangent to it and the straight on, through the circle's start, its
+    reference sampled at the outlines' instants (each instant located near its
+    own reference point): the width is the annulus's on the circle
+    (sqrt((R + W/2)^2 + (L/2)^2) - (R - W/2) for a body centred on the path)
+    and W on the straights."""
+    R, W, L = 15.0, 2.5, 12.0
+    s = np.arange(-40.0, 2 * math.pi * R + 40.0, 0.1)
+    on = (s >= 0) & (s <= 2 * math.pi * R)
+    ang = np.where(on, s / R, 0.0)
+    x = np.where(s < 0, s, np.where(on, R * np.sin(ang), s - 2 * math.pi * R))
+    y = np.where(on, R * (1 - np.cos(ang)), 0.0)
+    hx, hy = np.cos(ang), np.sin(ang)
+    nx, ny = -hy, hx
+    corners = np.stack([np.column_stack([x + a * L / 2 * hx + b * W / 2 * nx, y + a * L / 2 * hy + b * W / 2 * ny])
+                        for a, b in ((1, 1), (1, -1), (-1, -1), (-1, 1))], axis=1)
+    sp = kpi.swept_path(x[::5], y[::5], corners[::5], bin_length=0.5, samples_per_edge=40)
+    annulus = math.hypot(R + W / 2, L / 2) - (R - W / 2)
+    mid = (sp.s > 0.3 * 2 * math.pi * R + 40) & (sp.s < 0.7 * 2 * math.pi * R + 40)
+    assert np.median(sp.width[mid]) == pytest.approx(annulus, abs=0.05)
+    assert sp.max_width < annulus + 0.3
+    straight = sp.s > 2 * math.pi * R + 40 + L
+    assert np.median(sp.width[straight]) == pytest.approx(W, abs=0.02)

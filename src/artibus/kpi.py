@@ -101,16 +101,53 @@ def _outline_points(outlines, samples_per_edge):
     return np.concatenate(pts)
 
 
-def swept_path(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8):
+def _project_local(ref, frames, centre, window):
+    """_project for the outline samples of each instant (frames [time, n, 2])
+    onto only the part of the reference within ``window`` m of arc length of
+    that instant's reference point (centre: its segment index): a path that
+    crosses itself (a full circle and the straight through it) does not mix
+    one pass's outlines into another's."""
+    a, d = ref[:-1], np.diff(ref, axis=0)
+    seg = np.hypot(d[:, 0], d[:, 1])
+    s0 = np.concatenate([[0.0], np.cumsum(seg)])[:-1]
+    s_out, off_out, in_out = [], [], []
+    for k in range(len(frames)):
+        sc = s0[centre[k]]
+        lo, hi = np.searchsorted(s0, sc - window), np.searchsorted(s0, sc + window, side="right")
+        lo, hi = max(0, lo - 1), min(len(seg), max(hi, lo + 1))
+        s, off, inside = _project(ref[lo:hi + 1], frames[k])    # beyond the window: dropped (window > reach)
+        s_out.append(s + s0[lo])
+        off_out.append(off)
+        in_out.append(inside)
+    return np.concatenate(s_out), np.concatenate(off_out), np.concatenate(in_out)
+
+
+def swept_path(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8, window=None):
     """The swept path (SweptPath): the body outlines (an array [time, corner, 2]
     of polygon corners, any number of modules stacked along the corner axis in
     groups of 4) are sampled along their edges, each sample is located along the
     reference path (arc length) and across it (signed lateral offset); only
-    samples beside the reference (not beyond its ends) count."""
-    ref = _polyline(ref_x, ref_y)
+    samples beside the reference (not beyond its ends) count. When the reference
+    is sampled at the outlines' instants (as many points), each instant's samples
+    are located on the reference only within ``window`` m of arc length of its
+    own reference point (default: 1.5 times the vehicle's reach from it, plus
+    5 m), so a path crossing itself does not mix its passes."""
+    rx, ry = np.asarray(ref_x, float), np.asarray(ref_y, float)
+    ref = _polyline(rx, ry)
     if len(ref) < 2:
         raise ValueError("the reference path needs at least 2 distinct points")
-    s_all, off_all, inside = _project(ref, _outline_points(outlines, samples_per_edge))
+    out = np.asarray(outlines, float)
+    if len(rx) == len(out):
+        full = np.column_stack([rx, ry])
+        keep = np.concatenate([[True], np.any(np.diff(full, axis=0) != 0, axis=1)])
+        centre = np.clip(np.cumsum(keep) - 1, 0, len(ref) - 2)
+        frames = _outline_points(out, samples_per_edge).reshape(-1, len(out), 2).transpose(1, 0, 2)
+        if window is None:
+            reach = np.max(np.hypot(frames[..., 0] - rx[:, None], frames[..., 1] - ry[:, None]))
+            window = 1.5 * reach + 5.0
+        s_all, off_all, inside = _project_local(ref, frames, centre, window)
+    else:
+        s_all, off_all, inside = _project(ref, _outline_points(out, samples_per_edge))
     s_all, off_all = s_all[inside], off_all[inside]   # only beside the reference path
     bins = np.floor(s_all / bin_length).astype(int)
     order = np.argsort(bins, kind="stable")

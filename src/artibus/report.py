@@ -233,8 +233,8 @@ def birds_eye(path, traces, outlines=None, road=None, title="", every=10, envelo
         axw.plot(sp.s, run, color="tab:red", lw=1.4, label="running maximum over 2 m")
         axw.set_xlabel("distance along the path of the outermost corner [m]")
         axw.set_ylabel("swept width [m]")
-        axw.set_title(f"swept-path width across that path (max {sp.max_width:.2f} m; "
-                      "where the path crosses itself the width is that of one pass)", fontsize=9)
+        axw.set_title(f"swept-path width across that path (max {sp.max_width:.2f} m, the KPI's definition: "
+                      "kpi.swept_path)", fontsize=9)
         axw.legend(loc="best", fontsize=7)
         axw.grid(True, alpha=0.3)
     fig.tight_layout()
