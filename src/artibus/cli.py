@@ -232,6 +232,7 @@ def cmd_run(args):
             except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
                 _partial(e, out)
                 raise
+            _print_warnings((u.path, u.fmu.log) for u in sim.units)
             can_summary = None
             if sim.can is not None:
                 can_summary = sim.can.summary(result.time[-1] - result.time[0])
@@ -261,6 +262,19 @@ def cmd_run(args):
                   "and pathMemory side by side")] if page else []
         print(write_index(Path(args.report), summary, pages))
     return 0
+
+
+def _print_warnings(logs):
+    """An FMU's warnings (e.g. a parameter that does not act in its
+    configuration) printed once each, naming the component."""
+    for name, log in logs:
+        seen = set()
+        for m in log:
+            if m.startswith("[Warning]") and m not in seen:
+                seen.add(m)
+                text = m[len("[Warning]"):].strip()
+                text = text.split(": ", 1)[1] if text.startswith("log") and ": " in text else text
+                print(f"warning: {name}: {text}", file=sys.stderr)
 
 
 def _fault_free_kpis(bench, args, overrides, out_dir, kpis):

@@ -85,6 +85,12 @@ static fmi2Status check_parameters(ModelInstance *comp) {
             return log_error(comp, "Fz0[%d] = %.12g N: an axle load must be >= 0", a, D->Fz0[a]);
     }
     if (!(D->vSlip > 0)) return log_error(comp, "vSlip = %.12g m/s: must be > 0", D->vSlip);
+    /* a parameter that does not act in this configuration is said so (issue 15) */
+    if (D->tyreModel == 0)
+        for (int a = 1; a <= D->nAxles; a++)
+            if (D->mu[a] != 1.0)
+                log_warning(comp, "mu[%d] = %g has no effect: tyreModel 0 is the linear tyre Fy = C alpha "
+                                  "without friction (seed 000, eq. 24); use tyreModel 1, 2 or 3", a, D->mu[a]);
     return fmi2OK;
 }
 
