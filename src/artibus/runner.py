@@ -324,6 +324,14 @@ def _order(units, links, where):
 PLAN_TABLE = 4096       # base steps of the plan's period tabulated at most (see _Plan)
 
 
+def _settled(before, now, tol=1e-12):
+    """np.allclose(before, now, rtol=tol, atol=tol), without NumPy's cost on a few
+    values: |b - x| <= tol + tol * |x| for each pair, NaN never settled, an infinity
+    settled only on itself."""
+    return len(before) == len(now) and all(
+        b == x or (math.isfinite(x) and abs(b - x) <= tol + tol * abs(x)) for b, x in zip(before, now))
+
+
 def _available_memory():
     """MemAvailable (bytes) from /proc/meminfo, or None where there is none."""
     try:
@@ -712,7 +720,7 @@ class Simulation:
             for u in self.units:
                 self._busy = u
                 u.raw.read()
-            if all(np.allclose(b, list(u.in_values), rtol=1e-12, atol=1e-12)
+            if all(_settled(b, u.in_values)
                    and tb == list(getattr(u.raw, "tin_values", ()))
                    for b, tb, u in zip(before, typed_before, self.units)):
                 break

@@ -2,6 +2,7 @@
 recorded at every communication point. If the FMU fails midway the result up
 to the failure is kept and handed over with the error and the FMU's log."""
 import shutil
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,8 +30,9 @@ class Result:
 
     @classmethod
     def from_array(cls, names, table):
-        """A result from a filled table (a row per time), kept as its array."""
-        result = cls(list(names), list(table))
+        """A result from a filled table (a row per time), kept as its array;
+        its rows a view of the table's (no list of a row object per time)."""
+        result = cls(list(names), _ArrayRows(table))
         result._array = table
         return result
 
@@ -64,6 +66,19 @@ class Result:
             for i, row in enumerate(self.array()):
                 f.write(",".join('"' + c[i].replace('"', '""') + '"' if c is not None else f"{x:.12g}"
                                  for x, c in zip(row, cols)) + "\n")
+
+
+class _ArrayRows(Sequence):
+    """Result.rows of a result made from a table: its rows without copying them."""
+
+    def __init__(self, table):
+        self._table = table
+
+    def __len__(self):
+        return len(self._table)
+
+    def __getitem__(self, i):
+        return self._table[i]
 
 
 def _callbacks(log):

@@ -40,7 +40,7 @@ typedef struct {
     int has_written;                /* 0: never set, the next write sets them */
     int n_sources;
     const ac_source *sources;
-    double wall;                    /* seconds inside fmi2DoStep + fmi2GetReal, accumulated */
+    double wall;                    /* seconds inside fmi2DoStep, fmi2GetReal, fmi2SetReal, accumulated */
 } ac_unit;
 
 /* what the plan does with a unit */

@@ -1,0 +1,300 @@
+"""The performance suite (issue 13): prints one table, the targets checked at its end.
+
+1. FMUs: each FMU's cost per fmi2DoStep at its nominal step (its default
+   experiment's stepSize), alone from its default experiment with its default
+   inputs: the library's fmi2DoStep called directly through ctypes on FMPy's
+   instance (no FMPy wrapper), best of REPEAT blocks, in us per step; next to it
+   its cost in the benches (doStep + getReal + setReal per step, timed by the C
+   stepping core around each call, from the first bench that has it).
+2. Benches (every bench of ssp/benches, the C stepping core where it applies):
+   real-time factor (simulated span / wall time of Simulation.run, the
+   initialisation included, the set-up -- unpacking, loading -- not), best and
+   median of REPEAT runs, and the runner's own share of the best run's wall time:
+   1 - (time inside the FMUs' functions) / wall. The time inside the FMUs'
+   functions is what the C core measures around each fmi2DoStep, fmi2GetReal and
+   fmi2SetReal call (clock_gettime, CLOCK_MONOTONIC) plus, in the
+   initialisation (done in Python), the FMUs' calls timed by wrapping them
+   (benchmarks/runner.py's _timed_initialization). "loop" is the own share of
+   the stepping alone, "init" the initialisation's wall time.
+3. Ours against fmpy.ssp.simulate_ssp, each with its set-up (reading, unpacking,
+   loading), on the benches fmpy.ssp runs as we do: fmpy.ssp has no parameter
+   files (our .ssv values are given as its parameter_set), no linear
+   transformations or unit conversions, one step for all (no multi-rate), a
+   Jacobi step, and no initialisation of the connected inputs (it sets them to
+   0 before the first step): a bench qualifies when it has none of these (its
+   connected inputs settling at 0, checked by the results). The two-
+   BusKinematics bench of benchmarks/runner.py (26 recorded connectors) is one
+   of them. Ours runs Jacobi here; the results are compared over every column
+   both record (fmpy.ssp's row k is the state after the step from t_k, ours
+   row k + 1) and the largest difference printed.
+4. Sweep throughput (benchmarks/sweep.py's functions): cases per minute after a
+   warm-up grid with a local cluster of 1 and of 2 worker processes and through
+   an external scheduler with two workers.
+
+usage: .venv/bin/python benchmarks/suite.py [--quick]
+  --quick: one run per bench, short FMU blocks, the comparison on the
+  two-BusKinematics bench only, 12 sweep cases and no external scheduler.
+"""
+import importlib.util
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(ROOT / "tests"))
+
+from artibus import fmu_dir, runner, ssp  # noqa: E402
+from artibus.simulation import default_step  # noqa: E402
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", HERE / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+bench_runner = _load("runner")     # _timed_initialization, the two-BusKinematics bench
+bench_sweep = _load("sweep")       # local, external, timed, close
+
+QUICK = "--quick" in sys.argv[1:]
+REPEAT = 1 if QUICK else 5
+FMU_STEPS = 300 if QUICK else 2000
+SWEEP_CASES = 12 if QUICK else 60
+SWEEP_REPEAT = 1 if QUICK else 2
+TEST_FMUS = {"TypesTest"}          # the runner's test FMU (every FMI type), no model
+TARGETS = []                       # (what, met)
+
+
+def line(text=""):
+    print(text, flush=True)
+
+
+# --- 1. FMUs -------------------------------------------------------------------------
+
+def fmu_cost(path):
+    """(nominal step, us per fmi2DoStep best of REPEAT blocks) or (None, why not)."""
+    from ctypes import c_double, c_int, c_void_p
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    import shutil
+    md = read_model_description(str(path))
+    de = md.defaultExperiment
+    start = float(de.startTime) if de is not None and de.startTime else 0.0
+    stop = float(de.stopTime) if de is not None and de.stopTime else start + 1.0
+    h = default_step(md, start, stop)
+    d = extract(str(path))
+    try:
+        s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="bench")
+        s.instantiate()
+        s.setupExperiment(startTime=start)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        do = s.dll.fmi2DoStep
+        do.argtypes, do.restype = [c_void_p, c_double, c_double, c_int], c_int
+        comp = s.component
+        best, t, k = float("inf"), start, 0
+        for _ in range(max(3, REPEAT)):
+            t0 = time.perf_counter()
+            for _ in range(FMU_STEPS):
+                if do(comp, start + k * h, h, 1) > 1:
+                    return h, None
+                k += 1
+            best = min(best, (time.perf_counter() - t0) / FMU_STEPS)
+        s.terminate()
+        s.freeInstance()
+        return h, best
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+# --- 2. benches ----------------------------------------------------------------------
+
+def bench(name, in_bench):
+    rows = []
+    for _ in range(REPEAT):
+        with runner.Simulation(name) as sim:
+            init = bench_runner._timed_initialization(sim)
+            r = sim.run()
+            span = r.time[-1] - r.time[0]
+            fmu = sum(u.wall for u in sim.units)
+            rows.append((sim.wall, 1 - (fmu + init[1]) / sim.wall, 1 - fmu / (sim.wall - init[0]), init[0],
+                         sim.stepping))
+            for u in sim.units:
+                model = u.fmu.md.modelName
+                steps = round(span / u.step)
+                if sim.stepping == "C core" and steps and model not in in_bench:
+                    in_bench[model] = (u.wall / steps, name)
+    walls = [w for w, *_ in rows]
+    w, own, loop, init, stepping = min(rows)
+    return SimpleNamespace(name=name, span=span, h=sim.base_step, rt=span / w, rt_median=span / statistics.median(walls),
+                           wall=w, own=own, loop=loop, init=init, stepping=stepping)
+
+
+# --- 3. against fmpy.ssp -------------------------------------------------------------
+
+def fmpy_applies(name):
+    """(parameter_set, None) when fmpy.ssp runs the bench as we do (see the module's
+    docstring), else (None, why not)."""
+    with runner.Simulation(name) as sim:
+        if any(u.ratio != 1 for u in sim.units):
+            return None, "multi-rate"
+        if any((f, o) != (1.0, 0.0) for u in sim.units for _, _, _, f, o in u.sources):
+            return None, "linear transformations or unit conversions"
+        if any(u.typed_sources for u in sim.units) or sim.can is not None:
+            return None, "typed or CAN connections"
+        params = [SimpleNamespace(name=f"{p}.{k}", value=v) for p, values in sim.parameters.items()
+                  for k, v in values.items()]
+    return SimpleNamespace(parameters=params), None
+
+
+def against_fmpy(path, label, stop, h, overrides=None, pset=None):
+    from fmpy.ssp.simulation import simulate_ssp
+    t_fmpy, t_ours = [], []
+    for _ in range(max(REPEAT, 2) if QUICK else REPEAT):     # alternately, each with its set-up
+        t0 = time.perf_counter()
+        theirs = simulate_ssp(str(path), stop_time=stop, step_size=h, parameter_set=pset)
+        t_fmpy.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        with runner.Simulation(path, step=h, algorithm="jacobi", overrides=overrides) as sim:
+            ours = sim.run(stop_time=stop)
+            stepping = sim.stepping
+        t_ours.append(time.perf_counter() - t0)
+    cols = [c for c in theirs.dtype.names if c in ours.names and c != "time"]
+    n = min(len(theirs), len(ours.time) - 1)
+    diff = max((float(np.max(np.abs(theirs[c][:n] - ours[c][1:n + 1]))) for c in cols), default=float("nan"))
+    scale = max((float(np.max(np.abs(ours[c]))) for c in cols), default=0.0)
+    return SimpleNamespace(label=label, fmpy=min(t_fmpy), ours=min(t_ours), cols=len(cols), diff=diff,
+                           equal=diff <= 1e-9 * max(scale, 1.0), stepping=stepping, stop=stop, h=h)
+
+
+def two_buskinematics(tmp, steer):
+    from test_runner import component, connection, make_ssp
+    outs = [(f"{n}[{i}]", "output") for n in ("theta", "x", "y", "omega", "vel", "kappa", "beta")
+            for i in (0, 1) if (n, i) != ("beta", 0)]
+    params = {"Follow.testSteerAmp": 0.0}
+    if not steer:
+        params["Lead.testSteerAmp"] = 0.0
+    d = Path(tmp) / ("steer" if steer else "straight")
+    d.mkdir()
+    path = make_ssp(d, component("Lead", outs) + component("Follow", [("gammaF", "input")] + outs),
+                    connection("Lead", "beta[1]", "Follow", "gammaF"), stop=60.0)
+    pset = SimpleNamespace(parameters=[SimpleNamespace(name=k, value=v) for k, v in params.items()])
+    return path, params, pset
+
+
+# --- 4. sweep ------------------------------------------------------------------------
+
+def sweep_rates(tmp):
+    configs = ["1 worker (local)", "2 workers (local)"] + ([] if QUICK else ["2 workers (external scheduler)"])
+    rates = {c: [] for c in configs}
+    bench = str(Path(tmp) / f"{bench_sweep.BENCH}.ssp")
+    Path(bench).write_bytes(ssp.ssp_path(bench_sweep.BENCH).read_bytes())
+    for r in range(SWEEP_REPEAT):
+        for name in configs:
+            client, owned = (bench_sweep.local(1) if name.startswith("1") else
+                             bench_sweep.local(2) if "local" in name else bench_sweep.external(tmp))
+            try:
+                out = Path(tmp) / f"sweep-{r}-{name.split()[0]}-{'ext' if 'external' in name else 'loc'}"
+                rates[name].append(bench_sweep.timed(bench, client, SWEEP_CASES, out))
+            finally:
+                bench_sweep.close(client, owned)
+    return rates
+
+
+def main():
+    t_start = time.time()
+    load0 = os.getloadavg()
+    line(f"artibus performance suite{' (--quick)' if QUICK else ''}: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
+         f"{os.cpu_count()} cores, load average {load0[0]:.1f} (1 min) {load0[1]:.1f} (5 min) at the start; "
+         f"stepping core {runner.core_library_path()}")
+
+    # 2 first: the benches give the FMUs' cost inside a bench too
+    in_bench, results = {}, []
+    for name in ssp.bench_names():
+        results.append(bench(name, in_bench))
+
+    line(f"\n1. FMUs: us per fmi2DoStep at the nominal step, alone (default experiment, direct ctypes calls, "
+         f"best of {max(3, REPEAT)} x {FMU_STEPS} steps) and in a bench (doStep + getReal + setReal, C core)")
+    line(f"   {'FMU':24s} {'step s':>7s} {'alone us':>9s} {'in bench us':>12s}  bench")
+    for path in sorted(fmu_dir().glob("*.fmu")):
+        if path.stem in TEST_FMUS:
+            continue
+        try:
+            h, us = fmu_cost(path)
+            alone = f"{1e6 * us:9.2f}" if us is not None else f"{'failed':>9s}"
+        except Exception as e:       # say so, go on
+            h, alone = float("nan"), f"error {e}"[:9]
+        ib = in_bench.get(path.stem)
+        line(f"   {path.stem:24s} {h:7.3g} {alone} {(f'{1e6 * ib[0]:12.2f}' if ib else f'{chr(45):>12s}')}  "
+             f"{ib[1] if ib else ''}")
+
+    line(f"\n2. Benches: real-time factor and the runner's own share (best of {REPEAT} runs; "
+         "own = 1 - time inside the FMUs' functions / wall, the initialisation included)")
+    line(f"   {'bench':32s} {'span s':>7s} {'h s':>6s} {'x real time':>11s} {'median':>7s} {'wall ms':>8s} "
+         f"{'own %':>6s} {'loop %':>7s} {'init ms':>8s}  stepping")
+    for b in results:
+        line(f"   {b.name:32s} {b.span:7.1f} {b.h:6.3g} {b.rt:11.0f} {b.rt_median:7.0f} {1e3 * b.wall:8.1f} "
+             f"{100 * b.own:6.1f} {100 * b.loop:7.1f} {1e3 * b.init:8.1f}  {b.stepping}")
+    worst = max(results, key=lambda b: b.own)
+    TARGETS.append((f"runner's own share <= 10 % on every bench (worst {worst.name}: {100 * worst.own:.1f} %)",
+                    worst.own <= 0.10))
+    gfm = next((b for b in results if b.name == "Bus36m_Circle_GuidedForceMin"), None)
+    if gfm is not None:
+        TARGETS.append((f"Bus36m_Circle_GuidedForceMin >= 1000 x real time ({gfm.rt:.0f} x)", gfm.rt >= 1000))
+
+    line("\n3. Ours against fmpy.ssp.simulate_ssp, each with its set-up, best of "
+         f"{max(REPEAT, 2) if QUICK else REPEAT}; ours Jacobi (as fmpy.ssp)")
+    line(f"   {'bench':44s} {'fmpy.ssp s':>10s} {'ours s':>8s} {'faster':>7s} {'columns':>8s} {'max diff':>9s}  equal")
+    with tempfile.TemporaryDirectory(prefix="artibus-suite-") as tmp:
+        cmp = []
+        for steer in (False, True):
+            path, params, pset = two_buskinematics(tmp, steer)
+            label = f"2 x BusKinematics ({'leader on an S-curve' if steer else 'both straight'})"
+            cmp.append(against_fmpy(path, label, 60.0, 0.01, params, pset))
+        skipped = []
+        if not QUICK:
+            for name in ssp.bench_names():
+                pset, why = fmpy_applies(name)
+                if why:
+                    skipped.append(f"{name} ({why})")
+                    continue
+                with runner.Simulation(name) as sim:
+                    stop, h = sim.bench.stop_time, sim.base_step
+                cmp.append(against_fmpy(ssp.ssp_path(name), name, stop, h, None, pset))
+        for c in cmp:
+            line(f"   {c.label:44s} {c.fmpy:10.3f} {c.ours:8.3f} {c.fmpy / c.ours:6.1f}x {c.cols:8d} {c.diff:9.2g}  "
+                 f"{'yes' if c.equal else 'NO'} ({c.stop:g} s at {c.h:g} s, {c.stepping})")
+        if skipped:
+            line("   not run by fmpy.ssp as by us: " + "; ".join(skipped))
+        same = [c for c in cmp if c.equal]
+        if same:
+            slow = min(same, key=lambda c: c.fmpy / c.ours)
+            TARGETS.append((f"ours >= 10 x faster than fmpy.ssp with equal results (least: {slow.label}, "
+                            f"{slow.fmpy / slow.ours:.1f} x)", slow.fmpy / slow.ours >= 10))
+
+        line(f"\n4. Sweep throughput: artibus sweep {bench_sweep.BENCH} ({SWEEP_CASES} cases of {bench_sweep.STOP:g} s), "
+             f"cases per minute after a warm-up grid, best of {SWEEP_REPEAT}")
+        rates = sweep_rates(tmp)
+        for name, v in rates.items():
+            line(f"   {name:34s} {max(v):7.0f}")
+        ratio = max(rates["2 workers (local)"]) / max(rates["1 worker (local)"])
+        line(f"   2 workers / 1 worker: {ratio:.2f}")
+        TARGETS.append((f"sweep: 2 workers >= 1.8 x 1 worker ({ratio:.2f})", ratio >= 1.8))
+
+    load1 = os.getloadavg()
+    line(f"\nTargets (issue 13), load average {load1[0]:.1f} (1 min) at the end, {time.time() - t_start:.0f} s in all:")
+    for what, met in TARGETS:
+        line(f"   [{'met' if met else 'MISSED'}] {what}")
+
+
+if __name__ == "__main__":
+    main()
