@@ -88,7 +88,7 @@ def can_runs(tmp_path_factory):
 
 def test_dbc_frames_carry_counter_crc_at_10_ms():
     db = cantools.database.load_file(str(DBC))
-    assert len(db.messages) == 6 and {n.name for n in db.nodes} >= {"TractorECU", "Module2ECU", "Module3ECU"}
+    assert len(db.messages) == 8 and {n.name for n in db.nodes} >= {"TractorECU", "Module2ECU", "Module3ECU"}
     for m in db.messages:
         assert m.cycle_time == 10 and not m.is_extended_frame
         names = {s.name: s for s in m.signals}
@@ -200,8 +200,9 @@ def test_two_runs_give_identical_traffic(can_runs):
     assert len(a) == len(b) > 0
     assert all(x.arbitration_id == y.arbitration_id and bytes(x.data) == bytes(y.data) for x, y in zip(a, b))
     assert max(abs(x.timestamp - y.timestamp) for x, y in zip(a, b)) < 1e-6
-    ids = [x.arbitration_id for x in a[:12]]
-    assert ids[:6] == sorted(ids[:6]) and ids[6:] == ids[:6]      # ordered by identifier in each tick
+    n = len(cantools.database.load_file(str(DBC)).messages)     # every message once per 10 ms tick
+    ids = [x.arbitration_id for x in a[:2 * n]]
+    assert ids[:n] == sorted(ids[:n]) and ids[n:] == ids[:n]      # ordered by identifier in each tick
 
 
 def test_bus_load_and_response_times(can_runs):
@@ -371,8 +372,9 @@ def test_errors_name_file_message_signal_and_leave_no_log(tmp_path, case, words)
     if case == "malformed":
         dbc = lambda t: t.replace("BO_ 258 SensorG1_Angle: 4 HingeSensorG1", "BO_ 258 SensorG1_Angle 4 HingeSensorG1")
     elif case == "no_crc":
-        dbc = lambda t: t.replace(' SG_ CRC : 0|8@1+ (1,0) [0|255] "" Module2ECU,Module3ECU\n SG_ AliveCounter : 8|4@1+ (1,0) [0|15] "" Module2ECU,Module3ECU\n SG_ ArtAngleG2',
-                                  ' SG_ AliveCounter : 8|4@1+ (1,0) [0|15] "" Module2ECU,Module3ECU\n SG_ ArtAngleG2')
+        rx = "TractorECU,Module2ECU,Module3ECU"
+        dbc = lambda t: t.replace(f' SG_ CRC : 0|8@1+ (1,0) [0|255] "" {rx}\n SG_ AliveCounter : 8|4@1+ (1,0) [0|15] "" {rx}\n SG_ ArtAngleG2',
+                                  f' SG_ AliveCounter : 8|4@1+ (1,0) [0|15] "" {rx}\n SG_ ArtAngleG2')
     elif case == "signal":
         ssd = lambda t: t.replace('message="SensorG1_Angle" signal="ArtAngleG1"', 'message="SensorG1_Angle" signal="ArtAngleG9"', 1)
     elif case == "message":
@@ -404,7 +406,7 @@ def test_cli_run_and_decode(tmp_path):
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     lines = out.read_text().splitlines()
-    assert lines[0] == "time_s,message,signal,value,unit,e2e" and len(lines) == 1 + 50 * (3 * 3 + 4 + 4 + 4)
+    assert lines[0] == "time_s,message,signal,value,unit,e2e" and len(lines) == 1 + 50 * (4 * 3 + 4 + 3 * 4)   # 4 sensor frames of 3 signals, the tractor state, 3 command frames
     r = subprocess.run([sys.executable, "-m", "artibus", "run", CAN_BENCH, "--can", "nosuch"],
                        capture_output=True, text=True)
     assert r.returncode == 1 and "Traceback" not in r.stderr and "--can nosuch" in r.stderr

@@ -8,7 +8,11 @@
  * outputs hold for tHold, then ramp to 0 at rampRate (the cycle counts
  * worked out here from the parameters), only messages the module uses count,
  * recovery after nRecover fresh cycles with a slew back; a driving direction
- * other than forwards is a fallback; the actuator's lag and rate limit
+ * neither forwards nor backwards is a fallback; backwards (the A6 end
+ * leads) the ECUs of modules 1 and 2 command exactly what TrainGuidance and
+ * ForceMinimization with backwards = true command (A6's angle as gamma1,
+ * -v, the hinges through leading_hinges.h), module 3 steers nothing, and the
+ * tractor ECU (module 1) decides the direction from v with its hysteresis; the actuator's lag and rate limit
  * against their closed forms; bad parameters named; never a NaN. Run by
  * ctest; exit status 1 on any failure. */
 #include <math.h>
@@ -29,14 +33,14 @@ static const TgParams TG = { .l1 = 5.9, .lg1 = 3.15, .l2 = 9.05, .lg2 = 3.15, .l
 static const FmParams FM = { .l1 = 5.9, .lg1 = 3.15, .l2 = 9.05, .lA3 = 3.15, .lg2 = 3.15,
                              .l3 = 9.05, .lA5 = 3.15, .gamma3Max = 0.75, .gamma5Max = 0.75 };
 
-static SteeringEcu ecu2, ecu3;
+static SteeringEcu ecu1, ecu2, ecu3;
 static TgGuidance tg;
 static FmSteering fm;
 static SteeringAct act;
 
 static EcuParams params(int module) {
     EcuParams p = { .module = module, .tg = TG, .fm = FM, .nStale = 3, .nRecover = 5,
-                    .tHold = 0.2, .rampRate = 0.1 };
+                    .tHold = 0.2, .rampRate = 0.1, .vDir = 0.05 };
     return p;
 }
 
@@ -143,7 +147,14 @@ static void direction_and_no_check(void) {
         in.direction = k >= 10 ? 1.0 : 0.0;
         ecu_sample(&ecu2, &in);
     }
-    CHECK(ecu2.cf.mode != CF_NORMAL && (ecu2.fault & ECU_FAULT_DIRECTION), "backwards is not a fallback");
+    CHECK(ecu2.cf.mode == CF_NORMAL && !(ecu2.fault & ECU_FAULT_DIRECTION) && ecu2.direction == 1,
+          "backwards is a fallback (mode %d, fault %u)", ecu2.cf.mode, ecu2.fault);
+    for (int k = 50; k < 60; k++) {
+        in = drive(k);
+        in.direction = 2.0;                       /* J1939 error */
+        ecu_sample(&ecu2, &in);
+    }
+    CHECK(ecu2.cf.mode != CF_NORMAL && (ecu2.fault & ECU_FAULT_DIRECTION), "direction 'error' is not a fallback");
     p.nStale = 0;                                 /* direct connections: counters never change */
     in = drive(0);
     ecu_setup(&ecu2, &p, &in);
@@ -231,7 +242,73 @@ static void actuator(void) {
     CHECK(err < 1e-12, "rate limit off the ramp by %g", err);
 }
 
+/* backwards: the A6 end leads; the drive's gamma1 is A6's angle, its speed
+   negative (module 1's, backwards), the hinges as measured */
+static EcuInputs drive_back(int k) {
+    EcuInputs in = drive(k);
+    in.gammaA6 = in.gamma1;
+    in.gamma1 = 0.1;                              /* A1's angle: not the leading one backwards */
+    in.v = -in.v;
+    in.direction = 1.0;
+    return in;
+}
+
+static void backwards_same_algorithm_as_the_controllers(void) {
+    EcuParams p1 = params(1), p2 = params(2), p3 = params(3);
+    EcuInputs in = drive_back(0);
+    CHECK(ecu_setup(&ecu1, &p1, &in) == 0 && ecu_setup(&ecu2, &p2, &in) == 0 && ecu_setup(&ecu3, &p3, &in) == 0,
+          "setup backwards");
+    CHECK(ecu1.direction == 1 && ecu2.direction == 1 && ecu3.direction == 1, "not backwards from the start");
+    tg_setup(&tg, &TG);
+    fm_setup(&fm, &FM);
+    tg_reset(&tg, in.gammaA6);
+    int mismatch = 0, moved = 0;
+    for (int k = 1; k < 4000; k++) {
+        in = drive_back(k);
+        ecu_sample(&ecu1, &in);
+        ecu_sample(&ecu2, &in);
+        ecu_sample(&ecu3, &in);
+        /* Bus36m_Circle_Backwards: TrainGuidance and ForceMinimization with backwards = true:
+           gamma1 = A6's angle, v = the leading module's speed, hinges -dPsi2, -dPsi1 */
+        tg_sample(&tg, in.gammaA6, -in.v);
+        fm_sample(&fm, in.gammaA6, -in.dPsi2, -in.dPsi1, tg.gamma4, tg.gamma6);
+        if (ecu2.cf.out[0] != tg.gamma4 || ecu2.cf.out[1] != fm.gamma3 ||      /* A3, A4 */
+            ecu1.cf.out[0] != tg.gamma6 || ecu1.cf.out[1] != fm.gamma5 ||      /* A1, A2 */
+            ecu3.cf.out[0] != 0.0 || ecu3.cf.out[1] != 0.0 ||                  /* A5 rigid, A6 the driver's */
+            ecu1.cf.mode || ecu2.cf.mode || ecu3.cf.mode || ecu1.stale || ecu2.stale || ecu3.stale)
+            mismatch++;
+        if (fabs(ecu1.cf.out[0]) > 0.05) moved = 1;
+    }
+    CHECK(mismatch == 0, "%d cycles where the module ECUs differ from the controllers' backwards algorithms", mismatch);
+    CHECK(moved, "the backwards drive did not steer A1: the comparison cannot fail");
+    /* backwards, module 2 watches A6 and G2, not A1; module 1 not its own TractorECU_State */
+    CHECK(ecu2.used == (1u << ECU_MSG_A6 | 1u << ECU_MSG_G1 | 1u << ECU_MSG_G2 | 1u << ECU_MSG_STATE) &&
+          ecu3.used == 0 && ecu1.used == (ecu2.used & ~(1u << ECU_MSG_STATE)), "used masks backwards %u %u %u", ecu1.used, ecu2.used, ecu3.used);
+}
+
+/* the tractor ECU decides the direction from its speed: backwards below -vDir,
+   forwards above vDir, unchanged in between */
+static void tractor_direction_hysteresis(void) {
+    EcuParams p1 = params(1);
+    EcuInputs in = drive(0);
+    in.v = 0.0;
+    ecu_setup(&ecu1, &p1, &in);
+    CHECK(ecu1.direction == 0, "standing start not forwards");
+    const double v[] = { 0.04, -0.04, -0.06, -0.01, 0.03, 0.051, -0.049 };
+    const int want[] = { 0, 0, 1, 1, 1, 0, 0 };
+    for (int i = 0; i < 7; i++) {
+        in.v = v[i];
+        in.direction = 3.0;                       /* module 1 ignores what it receives */
+        ecu_sample(&ecu1, &in);
+        CHECK(ecu1.direction == want[i], "v = %g: direction %d, expected %d", v[i], ecu1.direction, want[i]);
+    }
+    p1.vDir = -1;
+    CHECK(strcmp(ecu_param_name(ecu_setup(&ecu1, &p1, &in)), "vDir") == 0, "vDir -1 accepted");
+}
+
 int main(void) {
+    backwards_same_algorithm_as_the_controllers();
+    tractor_direction_hysteresis();
     same_algorithm_as_the_controllers();
     stale_hold_ramp_recover(2, ECU_MSG_A1, 1);
     stale_hold_ramp_recover(2, ECU_MSG_G1, 1);

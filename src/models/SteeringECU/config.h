@@ -14,6 +14,7 @@ typedef struct {
     unsigned fault;         /* fault bits of the last sample (a warning when a bit turns on) */
     unsigned stale;         /* stale mask of the last sample */
     int mode;               /* fallback state of the last sample */
+    int direction;          /* driving direction of the last sample (an event when it changes) */
 } ModelState;
 
 #endif

@@ -1,5 +1,6 @@
-/* SteeringECU: the steering ECU of one trailing module of seed 000's 36 m
- * bus on the steering CAN (section IV; issue 12) as a discrete FMU: at each
+/* SteeringECU: the steering ECU of one module of seed 000's 36 m bus on
+ * the steering CAN (section IV; issue 12), either driving direction (ecu.h),
+ * as a discrete FMU: at each
  * sample instant t0 + k Ts inside a communication step it reads the inputs
  * (held over the step: what the CAN delivered at the tick), runs the
  * module's algorithm (ecu.c: guidance.c and forcemin.c, the same code as
@@ -14,14 +15,14 @@
 #define S (&comp->v.s)
 
 static const char *const MSG_NAME[ECU_NMSG] = {
-    "SensorA1_Angle", "SensorG1_Angle", "SensorG2_Angle", "TractorECU_State"
+    "SensorA1_Angle", "SensorG1_Angle", "SensorG2_Angle", "TractorECU_State", "SensorA6_Angle"
 };
 static const char *const MODE_NAME[] = { "normal", "holding", "ramping to straight", "at the safe angle" };
 
 static EcuInputs inputs(ModelInstance *comp) {
-    const EcuInputs in = { .gamma1 = D->gamma1, .v = D->v, .dPsi1 = D->dPsi[1], .dPsi2 = D->dPsi[2],
-                           .direction = D->direction,
-                           .alive = { D->aliveA1, D->aliveG1, D->aliveG2, D->aliveState } };
+    const EcuInputs in = { .gamma1 = D->gamma1, .gammaA6 = D->gammaA6, .v = D->v, .dPsi1 = D->dPsi[1],
+                           .dPsi2 = D->dPsi[2], .direction = D->direction,
+                           .alive = { D->aliveA1, D->aliveG1, D->aliveG2, D->aliveState, D->aliveA6 } };
     return in;
 }
 
@@ -32,10 +33,11 @@ fmi2Status model_init(ModelInstance *comp) {
                 .S4 = D->S4, .S6 = D->S6, .Ts = D->Ts, .gamma4Max = D->gamma4Max, .gamma6Max = D->gamma6Max },
         .fm = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lA3 = D->lA3, .lg2 = D->lg2, .l3 = D->l3,
                 .lA5 = D->lA5, .gamma3Max = D->gamma3Max, .gamma5Max = D->gamma5Max },
-        .nStale = D->nStale, .nRecover = D->nRecover, .tHold = D->tHold, .rampRate = D->rampRate };
+        .nStale = D->nStale, .nRecover = D->nRecover, .tHold = D->tHold, .rampRate = D->rampRate,
+        .vDir = D->vDir };
     const EcuInputs in = inputs(comp);
     const int bad = ecu_setup(&S->e, &p, &in);
-    if (bad) return log_error(comp, "parameter %s is not valid for the steering ECU (module 2 or 3, lengths "
+    if (bad) return log_error(comp, "parameter %s is not valid for the steering ECU (module 1, 2 or 3, lengths "
                                     "and Ts > 0, S >= 0, 0 < limit < pi/2, nRecover >= 1, rampRate > 0)",
                               ecu_param_name(bad));
     S->t0 = comp->v.time;
@@ -43,6 +45,7 @@ fmi2Status model_init(ModelInstance *comp) {
     S->fault = 0;
     S->stale = 0;
     S->mode = CF_NORMAL;
+    S->direction = S->e.direction;
     return fmi2OK;
 }
 
@@ -54,6 +57,7 @@ void model_outputs(ModelInstance *comp) {
     D->fault = (double)S->e.fault;
     D->gammaFrontCalc = S->e.calc[0];
     D->gammaRearCalc = S->e.calc[1];
+    D->drivingDirection = (double)S->e.direction;
 }
 
 /* warnings when a message turns stale, the fallback starts or ends, a fault appears */
@@ -78,8 +82,13 @@ static void report(ModelInstance *comp, double t) {
     }
     const unsigned now = e->fault & ~S->fault;
     if (now & ECU_FAULT_DIRECTION)
-        log_warning(comp, "t = %.6g s: direction = %g: the module ECU steers forwards (0) only: fallback; "
-                          "warned once until it clears", t, D->direction);
+        log_warning(comp, "t = %.6g s: direction = %g is neither forwards (0) nor backwards (1) (J1939: error or "
+                          "not available): fallback; warned once until it clears", t, D->direction);
+    if (e->direction != S->direction && (e->direction == 0 || e->direction == 1))
+        log_event(comp, "t = %.6g s: module %d: driving direction now %s: %s", t, e->module,
+                  e->direction ? "backwards (the A6 end leads)" : "forwards (the A1 end leads)",
+                  "the guidance's lags restart from the steady state of the leading angle");
+    S->direction = e->direction;
     if (now & (TG_FAULT_GEOMETRY | TG_FAULT_SPEED | FM_FAULT_NAN))
         log_warning(comp, "t = %.6g s: gamma1 = %g rad, v = %g m/s, dPsi[1] = %g, dPsi[2] = %g rad: fault %u "
                           "(2 v < 0, treated as 0; 4 no steady-state triangle or a hinge not moving forward: "
@@ -106,7 +115,8 @@ void model_free(ModelInstance *comp) { (void)comp; }
 /* FMU state: parameters, lag states, the fallback, the sample counter */
 bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
     const SteeringEcu *e = &s->e;
-    if ((e->module != 2 && e->module != 3) || !cf_state_valid(&e->cf) || s->mode < CF_NORMAL || s->mode > CF_SAFE)
+    if (e->module < 1 || e->module > 3 || e->direction < 0 || e->direction > 3 ||
+        (e->backwards != 0 && e->backwards != 1) || !cf_state_valid(&e->cf) || s->mode < CF_NORMAL || s->mode > CF_SAFE)
         return STATE_INVALID("module %d, fallback counts or mode %d out of range", e->module, s->mode);
     if (!finite_all((const double *)&e->g, sizeof e->g / sizeof(double)) ||
         !finite_all((const double *)&e->f, sizeof e->f / sizeof(double)) || !finite_all(e->calc, 2))

@@ -30,7 +30,7 @@
 #ifndef ARTIBUS_CAN_FALLBACK_H
 #define ARTIBUS_CAN_FALLBACK_H
 
-#define CF_MAX_MSG 4      /* messages per receiver */
+#define CF_MAX_MSG 5      /* messages per receiver */
 #define CF_MAX_OUT 2      /* set-points per receiver */
 
 enum { CF_NORMAL = 0, CF_HOLD = 1, CF_RAMP = 2, CF_SAFE = 3 };

@@ -1,0 +1,69 @@
+"""Bus36m_Circle_CAN_Backwards: seed 000's circle driven backwards (the A6
+end leads) with the steering on CAN: the KPIs of Bus36m_Circle_Backwards,
+what the receivers saw (each one's fallback state and each message's
+longest run without a good frame, as Bus36m_Circle_CAN) and the driving
+direction each ECU steered for (artibus.benches)."""
+import numpy as np
+
+from artibus import benches, report
+from artibus.benchkit import DEG, circle_road, outlines
+from artibus.report import Kpi
+
+direct = benches.load("Bus36m_Circle_Backwards")
+
+TEXT = direct.TEXT + (" The steering signals travel over CAN (ssp/can/Bus36m.dbc) in the paper's topology, one "
+                      "SteeringECU per module: the tractor ECU (module 1) decides the driving direction from the "
+                      "sign of the wheel speed and sends it, and steers A1 and A2 backwards; module 2's ECU steers "
+                      "A3 and A4; module 3's steers nothing backwards. The bus summary (load, response times, "
+                      "frames) is printed by the run and in can_bus.txt.")
+
+
+def _receivers(r):
+    return [n[:-len(".fallback")] for n in r.names if n.endswith(".fallback")]
+
+
+def _lost(r):
+    return [n for n in r.names if n.startswith("can.") and n.endswith(".sinceGood")]
+
+
+def kpis(r):
+    k = direct.kpis(r)
+    t = r.time
+    for c in _receivers(r):
+        fb = r[f"{c}.fallback"]
+        k.append(Kpi(f"{c}: worst fallback state (0 normal, 1 holding, 2 ramping, 3 straight; 0 expected "
+                     f"without faults)", float(np.max(fb)), "-", "", "our fallback: seed 000 (sec. I) gives "
+                     "ECUs on CAN, no fallback"))
+        k.append(Kpi(f"{c}: time in fallback", float(np.sum(fb > 0)) * (t[1] - t[0]), "s"))
+    for n in _lost(r):
+        k.append(Kpi(f"{n[4:-len('.sinceGood')]}: longest run of cycles without a good frame",
+                     float(np.max(r[n])), "cycles"))
+    return k
+
+
+def figures(r, out):
+    ax = {a: (r[f"Bus.xAxle[{a}]"][::5], r[f"Bus.yAxle[{a}]"][::5]) for a in range(1, 7)}
+    report.birds_eye(out / "path.png", {f"A{a}": ax[a] for a in range(1, 7)}, outlines=outlines(r, 3),
+                     road=circle_road(), every=300,
+                     title="36 m bus driven backwards on CAN (A6 end leads), guidance + force minimisation, 3 m/s")
+    images = [("path.png", "Bird's-eye view: road (grey, followed by the outermost leading point), "
+                           "body outlines every 3 s, axle traces.")]
+    panels = []
+    steer = {f"A{a}": r[f"Bus.delta[{a}]"] * DEG for a in range(1, 7) if f"Bus.delta[{a}]" in r.names}
+    if steer:
+        panels.append(("steering [deg]", steer))
+    ecus = [c for c in ("ECU1", "ECU2", "ECU3") if f"{c}.drivingDirection" in r.names]
+    if ecus:
+        panels.append(("driving direction (0 forwards, 1 backwards)", {c: r[f"{c}.drivingDirection"] for c in ecus}))
+    receivers, lost = _receivers(r), _lost(r)
+    if receivers:
+        panels.append(("fallback state", {c: r[f"{c}.fallback"] for c in receivers}))
+    if lost:
+        panels.append(("cycles since a good frame", {n[4:-len(".sinceGood")]: r[n] for n in lost}))
+    if panels:
+        report.signals(out / "network.png", r.time, panels,
+                       title="Backwards on CAN: steering, driving direction, what the receivers saw")
+        images.append(("network.png", "Steered angles, the driving direction each ECU steered for, each "
+                                      "receiver's fallback state and each message's cycles since its last good "
+                                      "frame (E2E check)."))
+    return images
