@@ -115,9 +115,10 @@ void model_free(ModelInstance *comp) { (void)comp; }
 /* FMU state: parameters, lag states, the fallback, the sample counter */
 bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
     const SteeringEcu *e = &s->e;
-    if (e->module < 1 || e->module > 3 || e->direction < 0 || e->direction > 3 ||
+    if (e->module < 1 || e->module > 3 || e->direction < 0 || e->direction > 3 || !(e->vDir >= 0.0 && e->vDir < 10.0) ||
         (e->backwards != 0 && e->backwards != 1) || !cf_state_valid(&e->cf) || s->mode < CF_NORMAL || s->mode > CF_SAFE)
-        return STATE_INVALID("module %d, fallback counts or mode %d out of range", e->module, s->mode);
+        return STATE_INVALID("module %d, direction %d, vDir %g, fallback counts or mode %d out of range",
+                             e->module, e->direction, e->vDir, s->mode);
     if (!finite_all((const double *)&e->g, sizeof e->g / sizeof(double)) ||
         !finite_all((const double *)&e->f, sizeof e->f / sizeof(double)) || !finite_all(e->calc, 2))
         return STATE_INVALID("a parameter, lag state or angle is not finite");
