@@ -146,6 +146,32 @@ def claim_logger_proxy():
     _proxy().addLoggerProxy(byref(cb))
 
 
+_MDS = {}                        # modelDescription.xml's (CRC-32, size) -> its description
+_MDS_KEPT = 64
+
+
+def _model_description(path):
+    """fmpy.read_model_description (validated against the XSD), once per content:
+    an FMU whose modelDescription.xml has the CRC-32 and size of one read before
+    (the zip's directory says, without unpacking) gets that description again. A
+    bench's instances of one FMU, each run's unpacked copy of it and a sweep's
+    cases parse it once; the last _MDS_KEPT descriptions are kept."""
+    import zipfile
+    try:
+        with zipfile.ZipFile(path) as z:
+            info = z.getinfo("modelDescription.xml")
+        key = (info.CRC, info.file_size)
+    except (OSError, KeyError, zipfile.BadZipFile):
+        return read_model_description(path)       # its own error, named
+    md = _MDS.get(key)
+    if md is None:
+        md = read_model_description(path)
+        if len(_MDS) >= _MDS_KEPT:
+            _MDS.pop(next(iter(_MDS)))
+        _MDS[key] = md
+    return md
+
+
 class Fmu:
     """An FMU instance with the variables addressed by name."""
 
@@ -155,7 +181,7 @@ class Fmu:
         if not Path(self.path).is_file():
             raise ArtibusError(f"{self.path}: no such FMU file")
         try:
-            self.md = read_model_description(self.path)
+            self.md = _model_description(self.path)
         except Exception as e:   # not a zip, no or a broken modelDescription.xml
             raise ArtibusError(f"{self.path}: not a readable FMI 2.0 FMU: {e}") from None
         if self.md.fmiVersion != "2.0" or self.md.coSimulation is None:
