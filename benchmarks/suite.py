@@ -187,9 +187,9 @@ def two_buskinematics(tmp, steer):
     from test_runner import component, connection, make_ssp
     outs = [(f"{n}[{i}]", "output") for n in ("theta", "x", "y", "omega", "vel", "kappa", "beta")
             for i in (0, 1) if (n, i) != ("beta", 0)]
-    params = {"Follow.testSteerAmp": 0.0}
-    if not steer:
-        params["Lead.testSteerAmp"] = 0.0
+    # the leader's built-in S-curve (testSteerAmp, off by default) set here, in both
+    # masters: so the results agree only where fmpy.ssp's parameters reach the FMU too
+    params = {"Follow.testSteerAmp": 0.0, "Lead.testSteerAmp": 0.2 if steer else 0.0}
     d = Path(tmp) / ("steer" if steer else "straight")
     d.mkdir()
     path = make_ssp(d, component("Lead", outs) + component("Follow", [("gammaF", "input")] + outs),
