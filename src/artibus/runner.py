@@ -606,6 +606,8 @@ class Simulation:
         if self.can is not None:
             self.can.bind()
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
+        self._col_units = {"time": "s", **{f"{u.path}.{n}": _unit_of(u.fmu.md, u.fmu.vars[n]) or ""
+                                           for u, n in self.record}}
         # recording: per component, which of its outputs go to which columns
         self._rec = []
         for u in self.units:
@@ -635,8 +637,13 @@ class Simulation:
         b.typed_sources.append((len(b.tin) - 1, a, names.index(c.start[1]), convert))
 
     def _with_texts(self, result):
-        """A String column's numbers (see _TypedCalls) as Result.strings."""
-        if result is None or not self._text_cols:
+        """A String column's numbers (see _TypedCalls) as Result.strings; the
+        columns' units (Result.units: the recorded variables' units from their
+        model descriptions, "s" for time, "" for none and the CAN columns)."""
+        if result is None:
+            return result
+        result.units = {n: self._col_units.get(n, "") for n in result.names}
+        if not self._text_cols:
             return result
         table = result.array()
         for name, u in self._text_cols.items():
@@ -1131,22 +1138,55 @@ def save(result, path):
     """CSV, or MATLAB .mat (one variable per signal, names made MATLAB-safe),
     written to a temporary name beside ``path`` and renamed (artibus.files):
     ``path`` is the complete file or is left as it was, never torn by a
-    Ctrl-C, a SIGTERM or a full disk."""
+    Ctrl-C, a SIGTERM or a full disk.
+
+    Units (Result.units): a CSV keeps its one header line of names; the units go
+    to the sidecar ``units_path(path)`` (``out.csv`` -> ``out.units.csv``: a CSV
+    with the columns ``name,unit``, a row per column of the results in their
+    order, "" for none), written after the results (an interrupt in between
+    leaves the results without their units, never units without results). A .mat holds a struct
+    ``units`` with a field per signal (the signal's MATLAB-safe name) holding its
+    unit; a signal whose safe name is ``units`` is saved as ``units_``."""
+    import csv
     from artibus.files import atomic_path
     path = Path(path)
+    units = getattr(result, "units", None) or {}
     with atomic_path(path) as tmp:
         if path.suffix == ".mat":
             from scipy.io import savemat
             data = result.array()
-            safe = {}
+            safe, safe_units = {}, {}
             for i, n in enumerate(result.names):
                 key = "".join(ch if ch.isalnum() else "_" for ch in n).strip("_")[:63] or f"v{i}"
+                key = "units_" if key == "units" else key
                 safe[key] = (np.array(result.strings[n], dtype=object) if n in result.strings  # a cell array
                              else data[:, i])
+                safe_units[key] = units.get(n, "")
+            safe["units"] = safe_units
             savemat(str(tmp), safe)
         else:
             result.to_csv(tmp)
+    if path.suffix != ".mat":
+        with atomic_path(units_path(path)) as tmp:
+            with open(tmp, "w", newline="") as f:
+                w = csv.writer(f, quoting=csv.QUOTE_NONNUMERIC)
+                w.writerow(["name", "unit"])
+                w.writerows([n, units.get(n, "")] for n in result.names)
     return path
+
+
+def units_path(path):
+    """The units' sidecar of a CSV of results: ``out.csv`` -> ``out.units.csv``."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}.units.csv")
+
+
+def read_units(path):
+    """{name: unit} of a CSV of results (its sidecar, see save)."""
+    import csv
+    with open(units_path(path), newline="") as f:
+        rows = list(csv.reader(f))
+    return {n: u for n, u in rows[1:]}
 
 
 def partial_path(path):

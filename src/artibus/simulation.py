@@ -38,6 +38,9 @@ class Result:
 
     #: String columns: {name: [text per row]} (their column in the array is NaN)
     strings: dict = field(default_factory=dict)
+    #: {name: unit} of the columns, from the FMUs' model descriptions (the variable's
+    #: unit, else its declaredType's; "" for none; "s" for time)
+    units: dict = field(default_factory=dict)
 
     def __getitem__(self, name):
         if name in self.strings:
@@ -66,6 +69,14 @@ class Result:
             for i, row in enumerate(self.array()):
                 f.write(",".join('"' + c[i].replace('"', '""') + '"' if c is not None else f"{x:.12g}"
                                  for x, c in zip(row, cols)) + "\n")
+
+
+def unit_of(var):
+    """A model variable's unit: its own unit=, else its declaredType's, else ""."""
+    if getattr(var, "unit", None):
+        return var.unit
+    declared = getattr(var, "declaredType", None)
+    return getattr(declared, "unit", None) or ""
 
 
 class _ArrayRows(Sequence):
@@ -352,6 +363,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         strings = [n for n, t in zip(outputs, types) if t == "String"]
         result = Result(["time"] + list(outputs))
         result.strings = {n: [] for n in strings}
+        result.units = {"time": "s", **{n: unit_of(fmu.var(n)) for n in outputs}}
 
         def record(t):
             values = fmu.get_values(outputs)
