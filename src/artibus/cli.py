@@ -410,7 +410,11 @@ def cmd_simulate(args):
         extra = expand_all(extra, lambda full: ("", names))
     check_against(extra, fmu, "--set")
     params.update(extra)
-    result = simulate(fmu, parameters=params, stop_time=args.stop_time, step=args.step)
+    try:
+        result = simulate(fmu, parameters=params, stop_time=args.stop_time, step=args.step)
+    except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
+        _partial(e, out)
+        raise
     from artibus.runner import save
     save(result, out)
     print(f"{out}: {len(result.rows)} rows")

@@ -386,6 +386,13 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
                 t = start_time + (i + 1) * step
                 record(t)
                 fmu.set_values({n_: f(t) for n_, f in inputs.items()})
+        except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the rows so far go with it
+            n_rows = min([len(result.rows)] + [len(c) for c in result.strings.values()])
+            del result.rows[n_rows:]     # (a row whose texts were not all taken)
+            for c in result.strings.values():
+                del c[n_rows:]
+            e.result = result
+            raise
         except FMICallException:
             # keep the state the FMU stopped in (getters are allowed in the error state)
             try:
