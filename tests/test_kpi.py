@@ -94,3 +94,58 @@ def test_swept_path_along_a_straight_and_a_circle():
     assert sp.max_width < annulus + 0.3
     straight = sp.s > 2 * math.pi * R + 40 + L
     assert np.median(sp.width[straight]) == pytest.approx(W, abs=0.02)
+
+
+def test_deviation_from_a_coarsely_sampled_straight_trace_has_no_step():
+    """The distance is to the reference's polyline, not to its nearest sample:
+    a straight reference of three samples 50 m apart gives 0 for points on it
+    and exactly 1 m for points 1 m beside it (the nearest sample would be up
+    to sqrt(25^2 + 1) m away)."""
+    rx, ry = np.array([0.0, 50.0, 100.0]), np.zeros(3)
+    x = np.linspace(0.0, 100.0, 101)
+    assert kpi.trace_deviation(rx, ry, x, np.zeros_like(x)) == pytest.approx(0.0, abs=1e-12)
+    d, inside = kpi.lateral_distance(rx, ry, x, np.full_like(x, -1.0))
+    assert inside.all() and np.allclose(d, -1.0, atol=1e-12)     # right of the direction of travel
+
+
+def self_crossing(offset, ds=0.05):
+    """A straight (y = offset, x from -20 to 0), a left arc of radius 10 - offset
+    about (0, 10) over 270 deg, a straight down x = -10 + offset to y = -20:
+    the exit crosses the entry at x = -10 (offset = 0), and the path offset to the
+    left by ``offset`` stays exactly ``offset`` from the one with 0."""
+    R = 10.0 - offset
+    x1 = np.arange(-20.0, 0.0, ds)
+    a = np.arange(0.0, 1.5 * math.pi, ds / 10.0)
+    y3 = np.arange(10.0, -20.0 - ds / 2, -ds)
+    x = np.concatenate([x1, R * np.sin(a), np.full_like(y3, -R)])
+    y = np.concatenate([np.full_like(x1, offset), 10.0 - R * np.cos(a), y3])
+    return x, y
+
+
+def test_deviation_where_the_reference_crosses_itself_has_no_step():
+    """A circle's exit crossing its entry straight (as on the 17.5 m circle): a
+    trace 0.5 m left of the reference all along is 0.5 m from it at every point.
+    The foot on the reference nearest anywhere jumps to the other pass near the
+    crossing (distance down to 0); each point's foot near the previous one's does not."""
+    rx, ry = self_crossing(0.0)
+    x, y = self_crossing(0.5)
+    d, inside = kpi.lateral_distance(rx, ry, x, y)
+    assert inside.all()
+    np.testing.assert_allclose(d, 0.5, atol=2e-4)                 # chord error of the arc: 1.3e-5 m
+    assert kpi.trace_deviation(rx, ry, x, y) == pytest.approx(0.5, abs=2e-4)
+    anywhere, _ = kpi.lateral_distance(rx, ry, x, y, window=None)
+    assert np.min(np.abs(anywhere)) < 0.05                        # the step the tracked foot avoids
+
+
+def test_hinge_force_peak_only_while_moving():
+    """A spike of 5 kN while standing (|v| <= 0.1 m/s: the start-up transient)
+    is not the manoeuvre's peak; the 3 kN sine while moving, forwards or
+    backwards (v < 0), is."""
+    t = np.linspace(0.0, 20.0, 2001)
+    v = np.where(t < 2.0, 0.05, np.where(t < 11.0, 3.0, -2.0))
+    F = np.where(t < 1.0, 5000.0, 0.0) + np.where(t >= 2.0, 3000.0 * np.sin(2 * math.pi * 0.25 * t), 0.0)
+    assert kpi.peak(F) == 5000.0
+    assert kpi.peak_while_moving(F, v) == pytest.approx(3000.0, rel=1e-9)
+    assert kpi.peak_while_moving(np.where(t > 11.0, F, 0.0), v) == pytest.approx(3000.0, rel=1e-3)   # backwards
+    assert math.isnan(kpi.peak_while_moving(F, np.zeros_like(t)))
+    assert kpi.peak_while_moving([7.0, 1.0], [0.1, 0.2]) == 1.0   # |v| = 0.1 is standing still

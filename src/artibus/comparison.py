@@ -49,7 +49,8 @@ def _figures(r):
     swept = report.swept(outl).max_width if outl is not None else float("nan")
     return {"traces": ax, "s": s5, "dev": dev, "F1": F1,
             "peak": {"A4": float(np.nanmax(dev[4])), "A6": float(np.nanmax(dev[6])),
-                     "F1": kpi.peak(r["Bus.FjointY[1]"]) / 1e3, "swept": swept}}     # every sample, as the benches
+                     "F1": kpi.peak_while_moving(r["Bus.FjointY[1]"], r["Bus.v"]) / 1e3,   # as the benches
+                     "swept": swept}}
 
 
 def _run_extra(bench, overrides):

@@ -10,7 +10,8 @@ Each function takes plain arrays, so it works on any bench's results:
   change (seed 001, "initial overshoot" of the rear section);
 - oscillation: frequency and damping ratio of a decaying oscillation
   (articulation angle after a manoeuvre), from its successive peaks;
-- peak, energy: the largest magnitude of a signal; the work of a torque.
+- peak, energy: the largest magnitude of a signal; the work of a torque;
+  peak_while_moving: the largest magnitude while the vehicle moves (|v| > 0.1 m/s).
 """
 import math
 from dataclasses import dataclass
@@ -48,23 +49,62 @@ def _project(ref, pts, chunk=2000):
     return np.concatenate(s_out), np.concatenate(off_out), np.concatenate(in_out)
 
 
-def lateral_distance(ref_x, ref_y, x, y):
+def _project_tracked(ref, pts, window):
+    """As _project, for the points of a trace in time order: the first point's
+    foot is the nearest on the whole reference, every later point's the nearest
+    within ``window`` m of arc length of the previous point's foot. A reference
+    that crosses itself (a circle's exit across its entry straight) does not
+    make the foot jump to the other pass and back, a step in the distance that
+    is not the trace's."""
+    a, d = ref[:-1], np.diff(ref, axis=0)
+    seg = np.hypot(d[:, 0], d[:, 1])
+    s0 = np.concatenate([[0.0], np.cumsum(seg)])
+    n = len(pts)
+    s_out, off_out, in_out = np.empty(n), np.empty(n), np.empty(n, bool)
+    s_prev = None
+    for k in range(n):
+        if s_prev is None:
+            lo, hi = 0, len(d)
+        else:
+            lo = max(int(np.searchsorted(s0, s_prev - window, side="right")) - 1, 0)
+            hi = min(int(np.searchsorted(s0, s_prev + window, side="left")) + 1, len(d))
+        s, off, inside = _project(ref[lo:hi + 1], pts[k:k + 1])
+        first, last = lo == 0, hi == len(d)
+        if not inside[0] and ((s[0] > 0 and not last) or (s[0] == 0 and not first)):
+            inside[0] = True          # beyond the window's end, not the reference's: on it
+        s_out[k], off_out[k], in_out[k] = s0[lo] + s[0], off[0], inside[0]
+        s_prev = s_out[k]
+    return s_out, off_out, in_out
+
+
+def lateral_distance(ref_x, ref_y, x, y, window=5.0):
     """Signed distance of each point (x, y) from the reference polyline (left of
     the reference's direction of travel positive), and a mask that is True
-    where the point's foot lies on the reference, not beyond its ends."""
+    where the point's foot lies on the reference, not beyond its ends.
+
+    The distance is to the polyline through the reference's samples (its
+    segments, not its nearest sample: a coarsely sampled straight trace gives
+    0 for a point on it). (x, y) is a trace in time order: each point's foot is
+    looked for within ``window`` m of arc length of the previous point's
+    (_project_tracked); window=None: anywhere on the reference."""
     ref = _polyline(ref_x, ref_y)
     if len(ref) < 2:
         raise ValueError("the reference trace needs at least 2 distinct points")
     pts = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
-    _, dist, inside = _project(ref, pts)
+    if window is None:
+        _, dist, inside = _project(ref, pts)
+    else:
+        _, dist, inside = _project_tracked(ref, pts, window)
     return dist, inside
 
 
-def trace_deviation(ref_x, ref_y, x, y):
+def trace_deviation(ref_x, ref_y, x, y, window=5.0):
     """Largest lateral distance of a trace from a reference trace, counting only
     the part of the trace that lies where the reference has been (the rear axles
-    start behind the reference's first point)."""
-    dist, inside = lateral_distance(ref_x, ref_y, x, y)
+    start behind the reference's first point). The distance to the reference's
+    polyline, each point's foot near the previous one's (lateral_distance): no
+    step where the reference crosses itself."""
+    dist, inside = lateral_distance(ref_x, ref_y, x, y, window)
     if not inside.any():
         return float("nan")
     return float(np.max(np.abs(dist[inside])))
@@ -234,6 +274,19 @@ def oscillation(t, x, t_from=None):
 
 def peak(x):
     return float(np.max(np.abs(np.asarray(x, float))))
+
+
+#: below this speed, m/s, the bus stands (peak_while_moving)
+STANDSTILL = 0.1
+
+
+def peak_while_moving(x, v, v_min=STANDSTILL):
+    """The largest |x| over the samples where |v| > v_min (m/s): a hinge force's
+    peak in the manoeuvre, not the start-up transient at standstill (a tyre's
+    low-speed blend, the settling of a bus pulling away); NaN if it never moves."""
+    x, v = np.asarray(x, float), np.asarray(v, float)
+    moving = np.abs(v) > v_min
+    return float(np.max(np.abs(x[moving]))) if moving.any() else float("nan")
 
 
 def energy(t, torque, rate):

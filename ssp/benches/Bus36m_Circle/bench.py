@@ -46,8 +46,9 @@ def circle_kpis(r, steered, paper_dev, paper_F, F_ok):
         dev, inside = kpi.lateral_distance(*ax[2], *ax[a])
         sel = inside & on_circle
         steady[a] = float(np.max(np.abs(dev[sel]))) if sel.any() else float("nan")
-    F1 = kpi.peak(r["Bus.FjointY[1]"]) / 1e3
-    F2 = kpi.peak(r["Bus.FjointY[2]"]) / 1e3
+    # the hinge forces' peaks while the bus moves (kpi.peak_while_moving: |v| > 0.1 m/s)
+    F1 = kpi.peak_while_moving(r["Bus.FjointY[1]"], r["Bus.v"]) / 1e3
+    F2 = kpi.peak_while_moving(r["Bus.FjointY[2]"], r["Bus.v"]) / 1e3
     outl = outlines(r, 3)
     front = ((outl[:, 1, 0]), (outl[:, 1, 1]))   # the right front corner of the tractor
     swept = kpi.swept_path_width(front[0][::20], front[1][::20], outl[::20], bin_length=0.5, samples_per_edge=4)

@@ -34,8 +34,8 @@ def kpis(r):
     d3 = kpi.trace_deviation(*ax[5], *ax[3])
     d1 = kpi.trace_deviation(*ax[5], *ax[1])
     G2, G1 = _hinge_forces(r)
-    F2 = kpi.peak(G2) / 1e3
-    F1 = kpi.peak(G1) / 1e3
+    F2 = kpi.peak_while_moving(G2, r["Bus.v"]) / 1e3     # while the bus moves (|v| > 0.1 m/s)
+    F1 = kpi.peak_while_moving(G1, r["Bus.v"]) / 1e3
     outl = outlines(r, 3)
     lead = (outl[:, 11, 0], outl[:, 11, 1])     # module 3's rear left corner: the leading right corner
     swept = kpi.swept_path_width(lead[0][::20], lead[1][::20], outl[::20], bin_length=0.5, samples_per_edge=4)
