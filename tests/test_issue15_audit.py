@@ -102,3 +102,35 @@ def test_tiny_step_runs_in_bounded_memory(tmp_path):
     assert kb < 300 * 1024, f"{kb / 1024:.0f} MB"
     assert len(np.loadtxt(out, delimiter=",", skiprows=1)) == 101   # 1e-6 s in steps of 1e-8, and t = 0
     assert runner.read_units(out)["time"] == "s"
+
+
+def test_bode_page_has_enough_frequencies_and_a_panel_per_output(tmp_path, monkeypatch):
+    """'The Bode page has 6 frequencies and one dB axis for two quantities.'
+    MultiAxle_StepSteer's study (its step runs real, the sine runs stubbed: a
+    first-order lag per output) asks for at least 20 log-spaced frequencies over
+    more than a decade and draws a column per output, each with its own unit."""
+    from artibus import bode
+    asked, drawn = [], {}
+
+    def fake_response(bench, input, outputs, frequencies, amplitude, **kw):
+        asked.append(np.asarray(frequencies, float))
+        return {o: [bode.Point(f, 1 / math.hypot(1, f), -math.atan(f)) for f in frequencies] for o in outputs}
+
+    real_plot = bode.plot
+
+    def spy_plot(path, responses, title, units=None, **kw):
+        drawn.update(responses=responses, units=units)
+        return real_plot(path, responses, title, units=units, **kw)
+
+    monkeypatch.setattr(bode, "frequency_response", fake_response)
+    monkeypatch.setattr(bode, "plot", spy_plot)
+    b = benches.load("MultiAxle_StepSteer")
+    b.study(None, tmp_path)
+    f = asked[0]
+    assert len(f) >= 20 and f[-1] / f[0] > 10
+    np.testing.assert_allclose(np.diff(np.log(f)), np.log(f[1] / f[0]))      # log spaced
+    assert list(drawn["responses"]) == ["Vehicle.w_r", "Vehicle.a_y"]
+    assert drawn["units"] == {"Vehicle.w_r": "rad/s", "Vehicle.a_y": "m/s2"}
+    from PIL import Image
+    with Image.open(tmp_path / "bode.png") as im:
+        assert im.width > im.height                   # the two outputs side by side
