@@ -33,7 +33,7 @@ def eq5_yaw_rate(u, freqs, h, zs=True):
 
 @pytest.mark.parametrize("zs", [True, False], ids=["zero side-slip", "front-axle steering"])
 def test_bode_matches_eq5(zs):
-    overrides = {"Steering.testSteerAmp": 0.0}
+    overrides = {"Steering.delta1": 0.0}
     if not zs:
         overrides["Vehicle.steerable[3]"] = False
     resp = frequency_response("MultiAxle_StepSteer", "Steering.delta1", ["Vehicle.w_r"], FREQS, 0.01,
@@ -46,7 +46,7 @@ def test_bode_matches_eq5(zs):
 
 def test_bode_cli_writes_csv_and_plot(tmp_path):
     r = subprocess.run([sys.executable, "-m", "artibus", "bode", "MultiAxle_StepSteer", "--input", "Steering.delta1",
-                        "--measure", "Vehicle.w_r", "--set", "Steering.testSteerAmp=0", "--fmin", "0.2",
+                        "--measure", "Vehicle.w_r", "--set", "Steering.delta1=0", "--fmin", "0.2",
                         "--fmax", "1", "--n", "2", "-o", str(tmp_path / "b.csv"), "--plot", str(tmp_path / "b.png")],
                        capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
