@@ -1,6 +1,6 @@
 """CAN in the loop (artibus.can, issue 12): Bus36m_Circle_CAN (the paper's
-topology: a SteeringECU per trailing module, a SteeringActuator per module's
-axles) against the direct bench Bus36m_Circle_GuidedForceMin, logs read back
+topology: a SteeringECU per module, the tractor ECU sending the driving
+direction, a SteeringActuator per module's axles) against the direct bench Bus36m_Circle_GuidedForceMin, logs read back
 with python-can and decoded with cantools against what the receivers used,
 bus load and response times, determinism, a corrupted frame never used, a
 silent module ECU ending in its actuators' fallback, errors naming file,
@@ -34,6 +34,10 @@ DIRECT_OF = {
     "ECU3.dPsi[2]": ["ForceMin.dPsi[2]"],
     "Act2.cmd[1]": ["Bus.delta[3]"], "Act2.cmd[2]": ["Bus.delta[4]"],
     "Act3.cmd[1]": ["Bus.delta[5]"], "Act3.cmd[2]": ["Bus.delta[6]"],
+    # the tractor ECU has no counterpart there: forwards it steers nothing (set-points 0 to Act1,
+    # whose A2 stays straight as in the direct bench) and sends forwards (0), both exact on the bus
+    "ECU1.gamma1": [], "Act1.cmd[1]": [], "Act1.cmd[2]": [], "ECU2.direction": [], "ECU3.direction": [],
+    "ECU1.gammaFront": [], "ECU1.gammaRear": [], "ECU1.drivingDirection": [],
 }
 
 
@@ -58,7 +62,12 @@ DATA_ROUTES = {k: v for k, v in ROUTES.items() if k[1] != COUNTER}
 RECEIVERS = sorted({e for _, ends in ROUTES.values() for e in ends})
 SOURCES = sorted({s for s, _ in ROUTES.values()})
 KPI_RECORD = [f"Bus.{n}[{a}]" for n in ("xAxle", "yAxle") for a in range(1, 7)] + ["Bus.FjointY[1]", "Driver.s"]
-FALLBACK = ["ECU2.fallback", "ECU3.fallback", "Act2.fallback", "Act3.fallback"]
+FALLBACK = ["ECU2.fallback", "ECU3.fallback", "Act2.fallback", "Act3.fallback", "ECU1.fallback", "Act1.fallback"]
+
+
+#: the tractor ECU's outputs, the direction each ECU steers for, the speed it decides from
+TRACTOR = ["ECU1.gammaFront", "ECU1.gammaRear", "Act1.delta[1]", "Act1.delta[2]", "Bus.vx[1]"] + \
+    [f"ECU{m}.drivingDirection" for m in (1, 2, 3)]
 
 
 def kpis(r):
@@ -80,7 +89,8 @@ def can_runs(tmp_path_factory):
     out = {}
     for suffix in ("blf", "asc"):
         log = d / f"run.{suffix}"
-        with Simulation(CAN_BENCH, record=list(dict.fromkeys(KPI_RECORD + RECEIVERS + FALLBACK)), can_log=log) as sim:
+        with Simulation(CAN_BENCH, record=list(dict.fromkeys(KPI_RECORD + RECEIVERS + FALLBACK + TRACTOR)),
+                        can_log=log) as sim:
             r = sim.run()
             out[suffix] = (r, log, sim.can.report(r.time[-1] - r.time[0]))
     return out
@@ -138,6 +148,8 @@ def test_can_bench_reproduces_the_direct_kpis_within_a_derived_bound(direct, can
     bound = np.zeros(3)
     h = direct.time[1] - direct.time[0]
     for (msg, sig), (src, ends) in DATA_ROUTES.items():
+        if not direct_names(ends):      # the tractor ECU's: 0 and forwards, exact (test_tractor_ecu_...)
+            continue
         s = db.get_message_by_name(msg).get_signal_by_name(sig)
         u = direct[direct_names([src])[0]]
         e = s.scale * TO_SI[s.unit] / 2 + T * np.max(np.abs(np.diff(u))) / h
@@ -182,7 +194,7 @@ def test_log_decodes_to_the_values_the_receivers_used(can_runs, suffix):
         # simulated time: frame k queued at tick k, on the wire for less than a cycle
         times = np.array([f.timestamp for f in fs])
         assert np.all((times > np.arange(n) * T) & (times < np.arange(n) * T + T))
-        values = np.array([m.decode(bytes(f.data))[sig] for f in fs])
+        values = np.array([m.decode(bytes(f.data), decode_choices=False)[sig] for f in fs])
         factor = TO_SI[m.get_signal_by_name(sig).unit or ""]
         for x in ends:
             np.testing.assert_array_equal(r[x][1:], values * factor, err_msg=f"{msg}.{sig} -> {x}")
@@ -190,6 +202,37 @@ def test_log_decodes_to_the_values_the_receivers_used(can_runs, suffix):
     rows = artcan.decode_log(log, DBC)
     assert all(e == "ok" for *_, e in rows)
     assert len(rows) == sum(len(db.get_message_by_frame_id(i).signals) * len(fs) for i, fs in frames.items())
+
+
+def test_tractor_ecu_sends_the_driving_direction_and_all_see_forwards_throughout(can_runs):
+    """The paper's topology forwards too: the tractor ECU is a SteeringECU
+    instance with module = 1, the sender of both of TractorECU's messages
+    (the DBC's node TractorECU sends TractorECU_State and TractorECU_Cmd):
+    DrivingDirection from its output drivingDirection to module 2's and 3's
+    ECUs, its set-points to module 1's actuators. It decides the direction
+    from the speed it reads (hysteresis vDir): the circle is driven at 3 m/s
+    and the bus never rolls back by vDir, so the three ECUs steer forwards (0)
+    throughout, and module 1, steering nothing forwards, commands exactly 0."""
+    db = cantools.database.load_file(str(DBC))
+    bench = ssp.read(ssp.ssp_path(CAN_BENCH))
+    ecu1 = bench.components["ECU1"]
+    assert ecu1.source.endswith("SteeringECU.fmu") and ecu1.parameters["module"] == 1
+    tractor = {m.name for m in db.messages if m.senders == ["TractorECU"]}
+    assert tractor == {"TractorECU_State", "TractorECU_Cmd"}
+    src, ends = ROUTES[("TractorECU_State", "DrivingDirection")]
+    assert src == "ECU1.drivingDirection" and sorted(ends) == ["ECU2.direction", "ECU3.direction"]
+    assert {ROUTES[("TractorECU_Cmd", s)][0] for s in ("SteerCmdA1", "SteerCmdA2")} == {"ECU1.gammaFront", "ECU1.gammaRear"}
+    # what the tractor ECU receives: the speed (vehicle network, no route) and its own axle's angle
+    assert sorted(e for _, es in ROUTES.values() for e in es if e.startswith("ECU1.")) == ["ECU1.aliveA1", "ECU1.gamma1"]
+    assert any(c.start == ("Bus", "vx[1]") and c.end == ("ECU1", "v") and not c.can for c in bench.connections)
+    r = can_runs["blf"][0]
+    v_dir = ecu1.parameters["vDir"]
+    assert r["Bus.vx[1]"][0] > v_dir and np.all(r["Bus.vx[1]"] > -v_dir)
+    for x in ["ECU1.drivingDirection", "ECU2.drivingDirection", "ECU3.drivingDirection",
+              "ECU2.direction", "ECU3.direction"]:
+        assert np.all(r[x] == 0), x
+    for x in ("ECU1.gammaFront", "ECU1.gammaRear", "Act1.delta[1]", "Act1.delta[2]", "Act1.cmd[1]", "Act1.cmd[2]"):
+        assert np.all(r[x] == 0), x
 
 
 def test_two_runs_give_identical_traffic(can_runs):
@@ -324,9 +367,11 @@ def test_lane_change_and_slalom_run_on_can_as_variants(variant, direct_bench, st
     road, speed and start as the direct benches (A2 within 5 cm of its path
     there, 1.4 % of the 3.5 m lane offset), A4 and A6 as close to A2's trace
     as there (within 5 cm), the hinge force below the paper's 4 kN, no
-    receiver in fallback."""
+    receiver in fallback, every ECU steering forwards."""
     rec = [f"Bus.{n}[{a}]" for n in ("xAxle", "yAxle") for a in (2, 4, 6)] + ["Bus.FjointY[1]"]
-    c = run(CAN_BENCH, overrides=ssp.variant_overrides(CAN_BENCH, [variant]), record=rec + FALLBACK, stop_time=stop)
+    dirs = [f"ECU{m}.drivingDirection" for m in (1, 2, 3)]
+    c = run(CAN_BENCH, overrides=ssp.variant_overrides(CAN_BENCH, [variant]), record=rec + FALLBACK + dirs,
+            stop_time=stop)
     d = run(direct_bench, record=rec)
     assert c.time[-1] == d.time[-1] == stop
     assert np.max(np.hypot(c["Bus.xAxle[2]"] - d["Bus.xAxle[2]"], c["Bus.yAxle[2]"] - d["Bus.yAxle[2]"])) < 0.05
@@ -335,7 +380,7 @@ def test_lane_change_and_slalom_run_on_can_as_variants(variant, direct_bench, st
                for r in (c, d)]
         assert abs(dev[0] - dev[1]) < 0.05, (a, dev)
     assert kpi.peak(c["Bus.FjointY[1]"]) < 4e3
-    for x in FALLBACK:
+    for x in FALLBACK + dirs:       # and forwards throughout, as the tractor ECU decided
         assert np.all(c[x] == 0), x
 
 

@@ -149,7 +149,7 @@ def test_kpis_with_faults_next_to_fault_free(tmp_path):
         table = list(csv.DictReader(f))
     worst = {row["kpi"].split(":")[0]: (float(row["fault_free"]), float(row["with_faults"]))
              for row in table if "worst fallback state" in row["kpi"]}
-    assert set(worst) == {"ECU2", "ECU3", "Act2", "Act3"}
+    assert set(worst) == {"ECU1", "ECU2", "ECU3", "Act1", "Act2", "Act3"}
     assert all(a == 0.0 for a, _ in worst.values())
     assert worst["ECU3"][1] >= 1.0 and worst["ECU2"][1] == 0.0
     assert (out / "fallback.png").is_file() and "fallback.png" in (out / "index.html").read_text()
