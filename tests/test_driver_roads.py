@@ -19,7 +19,7 @@ def run_alone(values, stop=6.0, h=0.02):
     with Fmu(fmu_path("RoadFollowDriver")) as d:
         d.slave.setupExperiment(startTime=0.0)
         d.slave.enterInitializationMode()
-        d.set_values(values)
+        d.set_values({"testVehicle": True, **values})   # the stimulus is off by default
         d.slave.exitInitializationMode()
         out, t = [], 0.0
         while t < stop - 1e-9:
@@ -171,7 +171,7 @@ def test_road_built_again_when_its_parameters_change_in_initialisation(tmp_path)
         with Fmu(fmu_path("RoadFollowDriver")) as d:
             d.slave.setupExperiment(startTime=0.0)
             d.slave.enterInitializationMode()
-            d.set_values(first)
+            d.set_values({"testVehicle": True, **first})   # the stimulus is off by default
             d.get("delta")                          # the model is initialised with `first`
             if road_file is not None:
                 roads.write_csv(road_file, *roads.generate(roads.LANE_CHANGE, laneLength=25.0))

@@ -573,9 +573,12 @@ def build_parser():
 def main(argv=None):
     args = build_parser().parse_args(argv)
     import threading
-    previous = None
+    previous = previous_int = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _on_sigterm)   # SIGTERM unwinds as Ctrl-C does
+        # Ctrl-C stops a run even where the shell started us with SIGINT ignored
+        # (a background job of a script: Python then installs no handler of its own)
+        previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         return args.func(args)
     except KeyboardInterrupt as e:     # Ctrl-C (SIGINT) or SIGTERM: one line, 130 or 143
@@ -608,3 +611,5 @@ def main(argv=None):
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+        if previous_int is not None:
+            signal.signal(signal.SIGINT, previous_int)
