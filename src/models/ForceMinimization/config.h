@@ -11,6 +11,10 @@ typedef struct {
     double t0;              /* start time: sample k is at t0 + k Ts */
     long long k;            /* index of the next sample */
     unsigned fault;         /* fault bits of the last sample */
+    double gamma4, gamma6;  /* the gamma4, gamma6 inputs held at the last sample (law = likeGuided) */
 } ModelState;
+
+/* the values of the parameter law (modelDescription/ForceMinimization.xml) */
+enum { LAW_STRAIGHT = 0, LAW_FORCE_MINIMIZATION = 1, LAW_LIKE_GUIDED = 2 };
 
 #endif

@@ -7,7 +7,12 @@
  * (module frames turned by 180 deg): the leading hinge is G2, seen from the
  * leading module as psi3 - psi2 = -dPsi[2], the second one -dPsi[1]; gamma1
  * is A6's angle, gamma4/gamma6 are A3's/A1's, and the outputs go to A4 and A2.
- * Steering angles keep their sign under the 180 deg turn. */
+ * Steering angles keep their sign under the 180 deg turn.
+ *
+ * law selects what goes out (the force minimisation runs whatever it is):
+ * 0 straight (gamma3 = gamma5 = 0), 1 the force minimisation (the default),
+ * 2 like guided (gamma3, gamma5 = the gamma4, gamma6 inputs held at the
+ * sample: the paper's counter-example with wrong A3/A5 angles). */
 #include <math.h>
 
 #include "fmu.h"
@@ -28,6 +33,8 @@ static void hinges(ModelInstance *comp, double *d1, double *d2) {
 static unsigned sample(ModelInstance *comp, double t) {
     double d1, d2;
     hinges(comp, &d1, &d2);
+    S->gamma4 = D->gamma4;                   /* held for law = likeGuided */
+    S->gamma6 = D->gamma6;
     return fm_sample(&S->f, gamma1_at(comp, t), d1, d2, D->gamma4, D->gamma6);
 }
 
@@ -46,8 +53,20 @@ fmi2Status model_init(ModelInstance *comp) {
 }
 
 void model_outputs(ModelInstance *comp) {
-    D->gamma3 = S->f.gamma3;
-    D->gamma5 = S->f.gamma5;
+    switch (D->law) {
+    case LAW_STRAIGHT:                       /* A3, A5 not steered */
+        D->gamma3 = 0.0;
+        D->gamma5 = 0.0;
+        break;
+    case LAW_LIKE_GUIDED:                    /* seed 000's wrong A3/A5 angles: A3 like A4, A5 like A6 */
+        D->gamma3 = S->gamma4;
+        D->gamma5 = S->gamma6;
+        break;
+    default:                                 /* LAW_FORCE_MINIMIZATION: seed 000, eqs. 43-48 */
+        D->gamma3 = S->f.gamma3;
+        D->gamma5 = S->f.gamma5;
+        break;
+    }
     D->fault = (double)S->fault;
 }
 
@@ -83,6 +102,8 @@ void model_free(ModelInstance *comp) { (void)comp; }
 bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
     if (!finite_all((const double *)&s->f, sizeof s->f / sizeof(double)))
         return STATE_INVALID("a parameter or output of the force minimisation is not finite");
+    if (!isfinite(s->gamma4) || !isfinite(s->gamma6))
+        return STATE_INVALID("held gamma4 = %g, gamma6 = %g rad not finite", s->gamma4, s->gamma6);
     if (!sample_index_ok(s->t0, s->k, d->Ts, time))
         return STATE_INVALID("sample k = %lld from t0 = %g (Ts = %g s) is not near t = %g s", s->k, s->t0, d->Ts, time);
     return true;

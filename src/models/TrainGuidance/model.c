@@ -16,7 +16,11 @@
  * and v). The arc lags run alongside (gamma4ss, gamma6ss stay the paper's
  * steady-state angles). Backwards the leading module sees G2 first, as
  * -dPsi[2], then G1 as -dPsi[1] (as in ForceMinimization); a change of
- * direction re-seeds the trace from the bus as it stands. */
+ * direction re-seeds the trace from the bus as it stands.
+ *
+ * guided = false holds gamma4 = gamma6 = 0 (A4, A6 not steered: the paper's
+ * unsteered case, a variant of one bench rather than a bench without this
+ * FMU); the guidance runs on unchanged behind it. */
 #include <math.h>
 
 #include "fmu.h"
@@ -55,7 +59,10 @@ fmi2Status model_init(ModelInstance *comp) {
 }
 
 void model_outputs(ModelInstance *comp) {
-    if (D->mode == 1) {
+    if (!D->guided) {                    /* A4, A6 not steered (seed 000's unsteered case) */
+        D->gamma4 = 0.0;
+        D->gamma6 = 0.0;
+    } else if (D->mode == 1) {
         D->gamma4 = S->pm.gamma4;
         D->gamma6 = S->pm.gamma6;
     } else {
