@@ -858,45 +858,48 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal
 
 #else   /* a co-simulation-only FMU */
 
-#define NOT_ME(fn, mask)                                                             \
-    ENTER(fn, mask);                                                                 \
-    return leave(comp, log_error(comp, "%s: this FMU has no Model Exchange interface "  \
-                                       "(a sampled controller: co-simulation only)", fn))
+/* every Model Exchange function of a co-simulation-only FMU: fmi2Error, and the
+ * log names the function fn */
+static fmi2Status not_me(fmi2Component c, const char *fn) {
+    ENTER(fn, ANY_BUT_FATAL);
+    return leave(comp, log_error(comp, "%s: this FMU has no Model Exchange interface "
+                                       "(a sampled controller: co-simulation only)", fn));
+}
 
-fmi2Status fmi2EnterEventMode(fmi2Component c) { NOT_ME("fmi2EnterEventMode", ANY_BUT_FATAL); }
+fmi2Status fmi2EnterEventMode(fmi2Component c) { return not_me(c, "fmi2EnterEventMode"); }
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     (void)info;
-    NOT_ME("fmi2NewDiscreteStates", ANY_BUT_FATAL);
+    return not_me(c, "fmi2NewDiscreteStates");
 }
-fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { NOT_ME("fmi2EnterContinuousTimeMode", ANY_BUT_FATAL); }
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { return not_me(c, "fmi2EnterContinuousTimeMode"); }
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
     (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
-    NOT_ME("fmi2CompletedIntegratorStep", ANY_BUT_FATAL);
+    return not_me(c, "fmi2CompletedIntegratorStep");
 }
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     (void)time;
-    NOT_ME("fmi2SetTime", ANY_BUT_FATAL);
+    return not_me(c, "fmi2SetTime");
 }
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
     (void)x; (void)nx;
-    NOT_ME("fmi2SetContinuousStates", ANY_BUT_FATAL);
+    return not_me(c, "fmi2SetContinuousStates");
 }
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
     (void)dx; (void)nx;
-    NOT_ME("fmi2GetDerivatives", ANY_BUT_FATAL);
+    return not_me(c, "fmi2GetDerivatives");
 }
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t ni) {
     (void)z; (void)ni;
-    NOT_ME("fmi2GetEventIndicators", ANY_BUT_FATAL);
+    return not_me(c, "fmi2GetEventIndicators");
 }
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
     (void)x; (void)nx;
-    NOT_ME("fmi2GetContinuousStates", ANY_BUT_FATAL);
+    return not_me(c, "fmi2GetContinuousStates");
 }
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
     (void)x_nominal; (void)nx;
-    NOT_ME("fmi2GetNominalsOfContinuousStates", ANY_BUT_FATAL);
+    return not_me(c, "fmi2GetNominalsOfContinuousStates");
 }
 
 #endif
