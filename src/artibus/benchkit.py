@@ -133,3 +133,37 @@ ROAD_TEST_TEXT = (
     "the default run is dry (mu = 1.0), the wet case sets Bus.mu[1..6] = 0.5. The damping ratio is that "
     "of the closed loop (driver, controllers and bus) from the articulation's successive extrema after the "
     "front axle has left the manoeuvre; n/a where it settles without oscillating.")
+
+
+# ---- the steering on CAN (Bus36m_Circle_CAN, Bus36m_Circle_CAN_Backwards) ----
+
+def can_receivers(r):
+    """The components that report a fallback state (a column <name>.fallback)."""
+    return [n[:-len(".fallback")] for n in r.names if n.endswith(".fallback")]
+
+
+def can_lost(r):
+    """Each message's cycles since its last good frame (the columns can.<message>.sinceGood)."""
+    return [n for n in r.names if n.startswith("can.") and n.endswith(".sinceGood")]
+
+
+def can_fallback_kpis(r, entered_at=True):
+    """What the receivers on CAN saw: each one's worst fallback state and its time in
+    fallback (with entered_at, also when it first fell back), and each message's
+    longest run of cycles without a good frame."""
+    k = []
+    t = r.time
+    for c in can_receivers(r):
+        fb = r[f"{c}.fallback"]
+        on = fb > 0
+        k.append(Kpi(f"{c}: worst fallback state (0 normal, 1 holding, 2 ramping, 3 straight; 0 expected "
+                     "without faults)", float(np.max(fb)), "-", "", "our fallback: seed 000 (sec. I) gives "
+                     "ECUs on CAN, no fallback"))
+        k.append(Kpi(f"{c}: time in fallback", float(np.sum(on)) * (t[1] - t[0]), "s"))
+        if entered_at:
+            k.append(Kpi(f"{c}: fallback entered at", float(t[np.argmax(on)]) if on.any() else math.nan, "s",
+                         why="" if on.any() else "never in fallback"))
+    for n in can_lost(r):
+        k.append(Kpi(f"{n[4:-len('.sinceGood')]}: longest run of cycles without a good frame",
+                     float(np.max(r[n])), "cycles"))
+    return k

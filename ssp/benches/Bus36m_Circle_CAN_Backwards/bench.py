@@ -3,11 +3,8 @@ end leads) with the steering on CAN: the KPIs of Bus36m_Circle_Backwards,
 what the receivers saw (each one's fallback state and each message's
 longest run without a good frame, as Bus36m_Circle_CAN) and the driving
 direction each ECU steered for (artibus.benches)."""
-import numpy as np
-
 from artibus import benches, report
-from artibus.benchkit import DEG, circle_road, outlines
-from artibus.report import Kpi
+from artibus.benchkit import DEG, can_fallback_kpis, can_lost, can_receivers, circle_road, outlines
 
 direct = benches.load("Bus36m_Circle_Backwards")
 
@@ -18,27 +15,8 @@ TEXT = direct.TEXT + (" The steering signals travel over CAN (ssp/can/Bus36m.dbc
                       "frames) is printed by the run and in can_bus.txt.")
 
 
-def _receivers(r):
-    return [n[:-len(".fallback")] for n in r.names if n.endswith(".fallback")]
-
-
-def _lost(r):
-    return [n for n in r.names if n.startswith("can.") and n.endswith(".sinceGood")]
-
-
 def kpis(r):
-    k = direct.kpis(r)
-    t = r.time
-    for c in _receivers(r):
-        fb = r[f"{c}.fallback"]
-        k.append(Kpi(f"{c}: worst fallback state (0 normal, 1 holding, 2 ramping, 3 straight; 0 expected "
-                     f"without faults)", float(np.max(fb)), "-", "", "our fallback: seed 000 (sec. I) gives "
-                     "ECUs on CAN, no fallback"))
-        k.append(Kpi(f"{c}: time in fallback", float(np.sum(fb > 0)) * (t[1] - t[0]), "s"))
-    for n in _lost(r):
-        k.append(Kpi(f"{n[4:-len('.sinceGood')]}: longest run of cycles without a good frame",
-                     float(np.max(r[n])), "cycles"))
-    return k
+    return direct.kpis(r) + can_fallback_kpis(r, entered_at=False)
 
 
 def figures(r, out):
@@ -55,7 +33,7 @@ def figures(r, out):
     ecus = [c for c in ("ECU1", "ECU2", "ECU3") if f"{c}.drivingDirection" in r.names]
     if ecus:
         panels.append(("driving direction (0 forwards, 1 backwards)", {c: r[f"{c}.drivingDirection"] for c in ecus}))
-    receivers, lost = _receivers(r), _lost(r)
+    receivers, lost = can_receivers(r), can_lost(r)
     if receivers:
         panels.append(("fallback state", {c: r[f"{c}.fallback"] for c in receivers}))
     if lost:
