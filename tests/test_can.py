@@ -14,14 +14,12 @@ import numpy as np
 import pytest
 from cantools.autosar.end_to_end import compute_profile2_crc
 
-from artibus import ROOT, ArtibusError, kpi, ssp
+from artibus import ArtibusError, kpi, ssp
 from artibus import can as artcan
 from artibus.runner import Simulation, run
+from can_bound import DBC, T, TO_SI, kpi_bound
 
-DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
 DIRECT, CAN_BENCH = "Bus36m_Circle_GuidedForceMin", "Bus36m_Circle_CAN"
-T = 0.01                                    # the network's tick (seed 000: 10 ms)
-TO_SI = {"deg": math.pi / 180, "km/h": 1 / 3.6, "": 1.0}   # the DBC's units to the FMUs' (rad, m/s)
 COUNTER = "AliveCounter"
 #: what stands for each routed output and input in the direct bench (one instance of
 #: TrainGuidance and of ForceMinimization for both modules, set-points straight into the plant)
@@ -134,28 +132,16 @@ def test_response_times_by_hand():
 
 
 def test_can_bench_reproduces_the_direct_kpis_within_a_derived_bound(direct, can_runs):
-    """The CAN path changes each routed input by at most half a step of its
-    signal's resolution (the DBC's scale) plus one cycle of delay, T times the
-    input's largest rate on the direct run. The KPIs' sensitivity to those
-    errors comes from direct runs with each signal's error added to its
-    receivers as a constant bias (runner stimuli; in the direct bench the
-    receivers' counterparts, DIRECT_OF: one controller instance for both module
-    ECUs, the set-points straight into the plant); bound: twice the sum over
-    the signals (a bias stands for an error that varies in time). The alive
-    counters carry no data. No receiver leaves normal operation (fallback 0)."""
-    db = cantools.database.load_file(str(DBC))
+    """The bound derived from the DBC (tests/can_bound.py): each routed
+    signal's error as a constant bias on its receivers' counterparts in the
+    direct bench (DIRECT_OF: one controller instance for both module ECUs, the
+    set-points straight into the plant). The alive counters carry no data.
+    No receiver leaves normal operation (fallback 0)."""
     k0 = kpis(direct)
-    bound = np.zeros(3)
-    h = direct.time[1] - direct.time[0]
-    for (msg, sig), (src, ends) in DATA_ROUTES.items():
-        if not direct_names(ends):      # the tractor ECU's: 0 and forwards, exact (test_tractor_ecu_...)
-            continue
-        s = db.get_message_by_name(msg).get_signal_by_name(sig)
-        u = direct[direct_names([src])[0]]
-        e = s.scale * TO_SI[s.unit] / 2 + T * np.max(np.abs(np.diff(u))) / h
-        r = run(DIRECT, record=KPI_RECORD, stimuli={x: (lambda t, e=e: e) for x in direct_names(ends)})
-        bound += np.abs(kpis(r) - k0)
-    bound *= 2
+    # the tractor ECU's signals have no counterpart: 0 and forwards, exact (test_tractor_ecu_...)
+    signals = [(msg, sig, direct_names([src])[0], direct_names(ends))
+               for (msg, sig), (src, ends) in DATA_ROUTES.items() if direct_names(ends)]
+    bound = kpi_bound(direct, kpis, lambda **kw: run(DIRECT, **kw), signals, KPI_RECORD)
     r = can_runs["blf"][0]
     k = kpis(r)
     assert np.all(np.abs(k - k0) <= bound), (k, k0, bound)

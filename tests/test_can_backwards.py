@@ -10,13 +10,11 @@ import cantools
 import numpy as np
 import pytest
 
-from artibus import ROOT, benches, kpi, ssp
+from artibus import kpi, ssp
 from artibus.runner import run
+from can_bound import DBC, kpi_bound
 
-DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
 DIRECT, CAN_BENCH = "Bus36m_Circle_Backwards", "Bus36m_Circle_CAN_Backwards"
-T = 0.01                                    # the network's tick (seed 000: 10 ms)
-TO_SI = {"deg": math.pi / 180, "km/h": 1 / 3.6, "": 1.0}
 COUNTER = "AliveCounter"
 ECUS = ["ECU1", "ECU2", "ECU3"]
 FALLBACK = [f"{c}.fallback" for c in ECUS + ["Act1", "Act2", "Act3"]]
@@ -94,33 +92,20 @@ def test_bench_routes_what_a_module_ecu_can_know():
 
 
 def test_backwards_on_can_reproduces_the_direct_kpis_within_a_derived_bound(direct, backwards):
-    """As tests/test_can.py derives it forwards: the CAN path changes each
-    routed input by at most half a step of its signal's resolution plus one
-    cycle of delay (T times the input's largest rate on the direct run); the
-    KPIs' sensitivity to that error comes from direct runs with it added to
-    the receivers' counterparts as a constant bias; bound: twice the sum.
-    Signals the backwards run does not depend on (A1's angle: no ECU uses it
-    backwards; module 3's set-points: exactly 0; the direction: a constant
-    integer) add nothing. No receiver leaves normal operation, every ECU
-    steers backwards throughout, and the paper's < 1.0 m and < 4 kN hold."""
-    db = cantools.database.load_file(str(DBC))
+    """The bound derived from the DBC as forwards (tests/can_bound.py): each
+    routed signal's error as a constant bias on its receivers' counterparts
+    in the direct bench. Signals the backwards run does not depend on (A1's
+    angle: no ECU uses it backwards; module 3's set-points: exactly 0; the
+    direction: a constant integer) add nothing. No receiver leaves normal
+    operation, every ECU steers backwards throughout, and the paper's < 1.0 m
+    and < 4 kN hold."""
     k0 = kpis(direct)
-    bound = np.zeros(3)
-    h = direct.time[1] - direct.time[0]
-    n = 0
-    for (msg, sig), (src, ends) in routes().items():
-        if sig == COUNTER or (msg, sig) in UNUSED:
-            continue
-        s = db.get_message_by_name(msg).get_signal_by_name(sig)
-        u = direct[SOURCE_OF.get(src, src)]
-        e = s.scale * TO_SI[s.unit] / 2 + T * np.max(np.abs(np.diff(u))) / h
-        targets = [d for x in ends for d in DIRECT_OF[x]]
+    signals = [(msg, sig, SOURCE_OF.get(src, src), [d for x in ends for d in DIRECT_OF[x]])
+               for (msg, sig), (src, ends) in routes().items() if sig != COUNTER and (msg, sig) not in UNUSED]
+    for msg, sig, _, targets in signals:
         assert targets, (msg, sig)
-        r = run(DIRECT, record=KPI_RECORD, stimuli={x: (lambda t, e=e: e) for x in targets})
-        bound += np.abs(kpis(r) - k0)
-        n += 1
-    assert n == 8                          # A6, G1, G2, speed, A1..A4's set-points
-    bound *= 2
+    assert len(signals) == 8               # A6, G1, G2, speed, A1..A4's set-points
+    bound = kpi_bound(direct, kpis, lambda **kw: run(DIRECT, **kw), signals, KPI_RECORD)
     r = backwards
     k = kpis(r)
     assert np.all(np.abs(k - k0) <= bound), (k, k0, bound)
