@@ -53,6 +53,16 @@ def experiment(f):
     return h
 
 
+def steps(f, t, h, n):
+    """n steps of h from t: the outputs after each"""
+    out = []
+    for _ in range(n):
+        f.slave.doStep(t, h)
+        t += h
+        out.append(read_outputs(f))
+    return out
+
+
 def serialized(f):
     st = f.slave.getFMUstate()
     data = f.slave.serializeFMUstate(st)
@@ -71,11 +81,7 @@ def test_restore_into_fresh_instance_continues_the_run(name):
             t += h
         data = serialized(a)
         t_saved = t
-        ref = []
-        for _ in range(n2):
-            a.slave.doStep(t, h)
-            t += h
-            ref.append(read_outputs(a))
+        ref = steps(a, t_saved, h, n2)
     finally:
         a.close()
     b = Fmu(fmu_file(name))           # fresh: instantiated, never initialised
@@ -83,12 +89,7 @@ def test_restore_into_fresh_instance_continues_the_run(name):
         st = b.slave.deSerializeFMUstate(data)
         b.slave.setFMUstate(st)
         b.slave.freeFMUstate(st)
-        t = t_saved
-        got = []
-        for _ in range(n2):
-            b.slave.doStep(t, h)
-            t += h
-            got.append(read_outputs(b))
+        got = steps(b, t_saved, h, n2)
     finally:
         b.close()
     ref, got = np.array(ref), np.array(got)
