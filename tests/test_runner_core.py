@@ -43,11 +43,7 @@ def assert_bit_for_bit(a, b):
 
 @pytest.mark.parametrize("bench", ssp.bench_names())
 def test_every_bench_bit_for_bit(bench):
-    with Simulation(bench) as sim:
-        if sim.can is not None:     # the CAN network ticks in Python: today's loop, and the core refuses
-            with pytest.raises(ArtibusError, match="does not apply: connections routed over CAN"):
-                sim.run(core=True)
-            return
+    """The CAN benches too: the core ticks their network (tests/test_can_core.py)."""
     core, python = both(bench)
     assert len(core.time) > 100 and np.all(np.isfinite(core.array()))
     assert_bit_for_bit(core, python)

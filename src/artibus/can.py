@@ -631,6 +631,50 @@ class Network:
                 for rc in r.receivers:
                     rc.buffer = rc.unit.raw.inp
 
+    def core_support(self):
+        """None when the runner's stepping core in C can tick this network
+        (src/runner_core/core.c: no faults, no tamper function, the virtual
+        bus, integer signals of at most 52 bits with a range; a log is written
+        from the frames the core records, ``log_frames``), else what it cannot
+        do: then the network ticks in Python (Network.tick)."""
+        if self.faults:
+            return "faults (--can-fault)"
+        if self.tamper is not None:
+            return "a tamper function"
+        if self.interface != "virtual":
+            return f"a real interface (--can {self.interface})"
+        if len(self.messages) > 64:
+            return "more than 64 messages"
+        for m in self.messages:
+            if m.msg.length > 8 or m.data_id > 255:
+                return f"message {m.msg.name}: DLC {m.msg.length}, data ID {m.data_id}"
+            for s in m.msg.signals:
+                if s.conversion.is_float or s.length > 52 or s.minimum is None or s.maximum is None:
+                    return f"signal {m.msg.name}.{s.name}: a float, longer than 52 bits or without a range"
+        return None
+
+    def fixed_frame(self, m):
+        """Message m's frame with the signals no connection feeds (their start
+        values, see _Message.fixed) and every other bit 0, as cantools encodes
+        it: the stepping core adds the routed signals, counter and CRC."""
+        values = dict(m.fixed)
+        for s in m.msg.signals:
+            if s.name not in values:            # raw 0
+                values[s.name] = s.conversion.raw_to_scaled(0, decode_choices=False)
+        return m.msg.encode(values, scaling=True, strict=False)
+
+    def log_frames(self, frames):
+        """Frames the stepping core sent, (stamp s, identifier, data), into the
+        log as Network._transmit logs them: the frame as the virtual bus gives
+        it back (its channel, not received from another node)."""
+        import can
+        if self.writer is None:
+            return
+        for stamp, can_id, data in frames:
+            self.writer.on_message_received(can.Message(
+                timestamp=stamp, arbitration_id=can_id, is_extended_id=False, dlc=len(data), data=data,
+                channel=self.bus.channel_id, is_rx=False))
+
     def settle(self):
         """Initialisation: the receivers get the senders' values through the
         codec (quantised as on the bus), nothing is sent. The value counts as

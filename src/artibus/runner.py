@@ -24,8 +24,8 @@ import math
 import os
 import shutil
 import sys
-from ctypes import (CDLL, Structure, addressof, byref, c_double, c_int, c_long, c_size_t, c_uint,
-                    c_void_p, cast, memmove, sizeof, string_at)
+from ctypes import (CDLL, Structure, addressof, byref, c_double, c_int, c_long, c_longlong, c_size_t,
+                    c_ubyte, c_uint, c_void_p, cast, memmove, sizeof, string_at)
 import tempfile
 import time as _time
 import zipfile
@@ -807,6 +807,9 @@ class Simulation:
             if stepper is not None:      # the C core does the loop below, the same, bit for bit
                 result = stepper.run(start, h, n, progress)
                 self.wall = _time.perf_counter() - wall0
+                if self.can is not None:
+                    self.can.finish()
+                    return self._with_can_columns(result)
                 return result
             rec.take(t)
             for k in range(n):
@@ -893,14 +896,20 @@ class Simulation:
 # (_RawCalls'), in the same order, with the same floating-point operations:
 # the results are the Python loop's, bit for bit (tests/test_runner_core.py).
 # Python keeps the set-up, the initialisation, the checks and the errors.
-# Today's Python loop runs instead when the core does not apply (the reason is
-# in Simulation.stepping): a bench with stimuli (Python functions of time),
-# with connections routed over CAN (the network ticks in Python), the library
-# not built, or the core switched off (run(core=False) or ARTIBUS_CORE=0).
+# A bench that routes connections over CAN has its network ticked by the core
+# too (_CanCore: artibus.can.Network.tick's frames, codec, E2E, counts, bits and
+# since series in C, tests/test_can_core.py), unless it has faults, a log, a
+# tamper function, a real interface or signals the core does not encode
+# (Network.core_support). Today's Python loop runs instead when the core does
+# not apply (the reason is in Simulation.stepping): such a CAN network, a bench
+# with stimuli (Python functions of time), Integer/Boolean/String/Enumeration
+# variables, the library not built, or the core switched off (run(core=False)
+# or ARTIBUS_CORE=0).
 
-CORE_ABI = 1                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 2                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
+_AC_CAN = 4                        # core.h: a frame could not be encoded
 
 
 class _AcSource(Structure):
@@ -918,8 +927,34 @@ class _AcUnit(Structure):
 class _AcSim(Structure):
     _fields_ = [("n_units", c_int), ("units", c_void_p), ("period", c_int), ("op_start", c_void_p),
                 ("op_kind", c_void_p), ("op_unit", c_void_p), ("start", c_double), ("h", c_double),
-                ("n_cols", c_int), ("rec", c_void_p), ("table", c_void_p), ("fail_unit", c_int),
-                ("fail_function", c_int), ("fail_status", c_int), ("fail_k", c_long)]
+                ("can", c_void_p), ("n_cols", c_int), ("rec", c_void_p), ("table", c_void_p),
+                ("fail_unit", c_int), ("fail_function", c_int), ("fail_status", c_int), ("fail_k", c_long)]
+
+
+class _AcCanReceiver(Structure):
+    _fields_ = [("dst", c_void_p), ("factor", c_double)]
+
+
+class _AcCanSignal(Structure):
+    _fields_ = [("src", c_void_p), ("factor", c_double), ("minimum", c_double), ("maximum", c_double),
+                ("scale", c_double), ("offset", c_double), ("integer", c_int), ("iscale", c_longlong),
+                ("ioffset", c_longlong), ("start", c_int), ("length", c_int), ("big_endian", c_int),
+                ("is_signed", c_int), ("n_receivers", c_int), ("receivers", c_void_p)]
+
+
+class _AcCanMessage(Structure):
+    _fields_ = [("id", c_uint), ("dlc", c_int), ("ratio", c_int), ("data_id", c_uint),
+                ("fixed", c_ubyte * 8), ("n_signals", c_int), ("signals", c_void_p),
+                ("counter", c_int), ("last_counter", c_int), ("good_tick", c_long),
+                ("produced", c_long), ("sent", c_long), ("rejected", c_long), ("rejected_crc", c_long),
+                ("rejected_repeated", c_long), ("rejected_sequence", c_long), ("bits", c_longlong),
+                ("end_bits", c_longlong), ("since", c_void_p)]
+
+
+class _AcCan(Structure):
+    _fields_ = [("n_messages", c_int), ("messages", c_void_p), ("ratio", c_int), ("tau", c_double),
+                ("ticks", c_long), ("frames", c_long), ("frame_cap", c_long), ("frame_tick", c_void_p),
+                ("frame_stamp", c_void_p), ("frame_data", c_void_p)]
 
 
 _core_libs = {}
@@ -976,8 +1011,8 @@ def _core_stepper(sim, plan, plan_gs=None, core=None):
         forced = bool(core)
     lib = None
     if why is None:
-        if sim.can is not None:
-            why = "connections routed over CAN (the network ticks in Python)"
+        if sim.can is not None and sim.can.core_support() is not None:
+            why = f"connections routed over CAN with {sim.can.core_support()} (the network ticks in Python)"
         elif any(u.stimuli for u in sim.units):
             why = "stimuli (Python functions of time)"
         elif any(u.tout or u.tin for u in sim.units):
@@ -1029,6 +1064,7 @@ class _CoreStepper:
         # recording: the Recorder's columns, each a place in an output buffer
         self.rec = (c_void_p * max(1, len(sim.record)))(
             *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record))
+        self.can = _CanCore(sim) if sim.can is not None else None
 
     def _ops(self, steps, period):
         """op_start/op_kind/op_unit for the core: entry p (0 <= p < period) does base
@@ -1075,6 +1111,8 @@ class _CoreStepper:
         windowed = self.plan.table is None
         s = _AcSim(n_units=len(sim.units), units=addressof(self.units), start=start, h=h,
                    n_cols=len(sim.names), rec=addressof(self.rec), table=table.ctypes.data)
+        if self.can is not None:
+            s.can = self.can.begin(n)
         if not windowed:
             s.period, s.op_start = self.period, addressof(self.op_start)
             s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
@@ -1113,6 +1151,10 @@ class _CoreStepper:
                 u.wall += a.wall
                 if a.has_written:
                     u.raw.written = string_at(written, u.raw.n_in * sizeof(c_double))
+            if self.can is not None:
+                self.can.end(start, h)
+        if failed == _AC_CAN:          # a frame the encoder refused: artibus.can says why, as in the Python loop
+            self.can.refused(s.fail_unit, start + s.fail_k * h)
         if failed:
             k = s.fail_k
             u = sim.units[s.fail_unit]
@@ -1124,6 +1166,114 @@ class _CoreStepper:
         if progress:
             sys.stderr.write("\n")
         return Result.from_array(sim.names, table)
+
+
+def can_signal(s, q=None):
+    """core.h's ac_can_signal of a cantools Signal (its range, conversion and
+    place; no source, no receivers): q filled, or a new one."""
+    q = _AcCanSignal() if q is None else q
+    conv = getattr(s.conversion, "_conversion", s.conversion)   # NamedSignalConversion's own
+    q.minimum, q.maximum = s.minimum, s.maximum
+    q.scale, q.offset = conv.scale, conv.offset
+    q.integer = type(conv).__name__ in ("IdentityConversion", "LinearIntegerConversion")
+    if q.integer:
+        q.iscale, q.ioffset = int(conv.scale), int(conv.offset)
+    q.start, q.length = s.start, s.length
+    q.big_endian, q.is_signed = s.byte_order == "big_endian", bool(s.is_signed)
+    return q
+
+
+class _CanCore:
+    """The CAN network (artibus.can.Network) as core.h's ac_can: its messages in
+    identifier order, each routed signal with cantools' conversion and place in
+    the frame, pointing into the senders' output and the receivers' input
+    buffers; the network's state goes in before the run and comes back after
+    (counters, the receivers' E2E state, counts, bits, the since series), so
+    Network.report, summary and since_series read as after the Python loop."""
+
+    def __init__(self, sim):
+        from artibus.can import COUNTER_SIGNAL
+        net = self.net = sim.can
+        double = sizeof(c_double)
+        self._keep = []
+        self.messages = (_AcCanMessage * len(net.messages))()
+        for a, m in zip(self.messages, net.messages):
+            sigs = (_AcCanSignal * max(1, len(m.routes)))()
+            for q, r in zip(sigs, m.routes):
+                s = r.signal
+                rcs = (_AcCanReceiver * max(1, len(r.receivers)))(
+                    *((addressof(rc.unit.raw.inp) + double * rc.index, rc.factor) for rc in r.receivers))
+                self._keep.append(rcs)
+                can_signal(s, q)
+                q.src = None if s.name == COUNTER_SIGNAL else addressof(r.unit.raw.out) + double * r.index
+                q.factor = r.factor
+                q.n_receivers, q.receivers = len(r.receivers), addressof(rcs)
+            self._keep.append(sigs)
+            a.id, a.dlc, a.ratio, a.data_id = m.msg.frame_id, m.msg.length, m.ratio, m.data_id
+            a.fixed[:m.msg.length] = net.fixed_frame(m)
+            a.n_signals, a.signals = len(m.routes), addressof(sigs)
+        self.c = _AcCan(n_messages=len(net.messages), messages=addressof(self.messages), ratio=sim.can_ratio,
+                        tau=1.0 / net.bitrate)
+        self.ratio = sim.can_ratio
+
+    def begin(self, n):
+        """Before the run of n base steps: the network's state in."""
+        ticks = -(-n // self.ratio)
+        self.since = np.zeros((len(self.net.messages), max(1, ticks)))
+        for i, (a, m) in enumerate(zip(self.messages, self.net.messages)):
+            a.counter = m.counter
+            a.last_counter = -1 if m.last_counter is None else m.last_counter
+            a.good_tick = m.good_tick
+            a.produced = a.sent = a.rejected = a.rejected_crc = a.rejected_repeated = a.rejected_sequence = 0
+            a.bits, a.end_bits = 0, -1
+            a.since = self.since[i].ctypes.data
+        self.c.ticks = self.c.frames = 0
+        if self.net.writer is not None:     # every frame recorded, for the log (Network.log_frames)
+            cap = sum(-(-ticks // m.ratio) for m in self.net.messages)
+            self.frame_tick = np.zeros(cap, dtype=np.int64)      # (c_long: LP64)
+            self.frame_stamp = np.zeros(cap)
+            self.frame_data = np.zeros((cap, 16), dtype=np.uint8)
+            self.c.frame_cap, self.c.frame_tick = cap, self.frame_tick.ctypes.data
+            self.c.frame_stamp, self.c.frame_data = self.frame_stamp.ctypes.data, self.frame_data.ctypes.data
+        return addressof(self.c)
+
+    def end(self, start, h):
+        """After the run (or its failure, or an interrupt): the state back into the network."""
+        net, ticks = self.net, self.c.ticks
+        for i, (a, m) in enumerate(zip(self.messages, net.messages)):
+            m.counter = a.counter
+            m.last_counter = None if a.last_counter < 0 else a.last_counter
+            m.good_tick = a.good_tick
+            m.produced += a.produced
+            m.sent += a.sent
+            m.rejected += a.rejected
+            for why, count in (("crc", a.rejected_crc), ("repeated", a.rejected_repeated),
+                               ("sequence", a.rejected_sequence)):
+                m.why[why] += count
+            m.bits += a.bits
+            if a.end_bits >= 0:
+                fid = m.msg.frame_id
+                net.observed[fid] = max(net.observed.get(fid, 0.0), a.end_bits * (1.0 / net.bitrate))
+            since = self.since[i, :ticks].astype(np.int64)
+            first = net.ticks
+            m.since.extend(since.tolist())
+            if ticks and since.max() > m.longest:      # Network.tick: the first tick reaching the longest run
+                j = int(np.argmax(since))
+                m.longest, m.longest_at = int(since[j]), start + ((first + j) * self.ratio) * h
+        net.frames += self.c.frames
+        net.ticks += ticks
+        if self.c.frame_cap:
+            n = min(self.c.frames, self.c.frame_cap)
+            ids = self.frame_data[:n, 0].astype(int) | (self.frame_data[:n, 1].astype(int) << 8)
+            net.log_frames((float(t), int(i), bytearray(f[8:8 + f[4]]))
+                           for t, i, f in zip(self.frame_stamp[:n], ids, self.frame_data[:n]))
+
+    def refused(self, index, t):
+        """The core could not encode message index's frame at t: Network._encode's error."""
+        m = self.net.messages[index]
+        self.net._encode(m, t)
+        raise ArtibusError(f"{self.net.dbc_label}: message {m.msg.name}: the stepping core refused its frame "
+                           f"at t = {t:g} s, artibus.can's encoder did not (a defect: run with ARTIBUS_CORE=0)")
 
 
 def run(ssp, stop_time=None, step=None, overrides=None, record=None,

@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "core.h"
 
+#include <math.h>
 #include <string.h>
 #include <time.h>
 
@@ -58,6 +59,225 @@ static int fail(ac_sim *sim, int unit, int function, fmi2Status st, long k) {
     return function;
 }
 
+/* --- the CAN network's tick (artibus.can.Network.tick, see core.h) ----------------- */
+
+static unsigned char crc8h2f[256];           /* can._CRC8H2F */
+static int crc8h2f_made;
+
+static void make_crc8h2f(void) {
+    for (int i = 0; i < 256; i++) {
+        unsigned c = (unsigned)i;
+        for (int b = 0; b < 8; b++)
+            c = (c & 0x80) ? ((c << 1) ^ 0x2F) & 0xFF : (c << 1) & 0xFF;
+        crc8h2f[i] = (unsigned char)c;
+    }
+    crc8h2f_made = 1;
+}
+
+AC_EXPORT unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsigned data_id) {
+    if (!crc8h2f_made)                       /* can.e2e_crc */
+        make_crc8h2f();
+    unsigned crc = 0xFF;
+    for (int i = 1; i < dlc; i++)
+        crc = crc8h2f[crc ^ data[i]];
+    return crc8h2f[(crc ^ data_id) & 0xFF] ^ 0xFF;
+}
+
+AC_EXPORT int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc) {
+    unsigned char bits[19 + 64 + 15];        /* can.frame_bits: SOF .. data, then the CRC-15 */
+    int n = 0;
+    bits[n++] = 0;                           /* SOF */
+    for (int i = 10; i >= 0; i--)
+        bits[n++] = (unsigned char)((id >> i) & 1);
+    bits[n++] = 0;                           /* RTR */
+    bits[n++] = 0;                           /* IDE */
+    bits[n++] = 0;                           /* r0 */
+    for (int i = 3; i >= 0; i--)
+        bits[n++] = (unsigned char)(((unsigned)dlc >> i) & 1);
+    for (int b = 0; b < dlc; b++)
+        for (int i = 7; i >= 0; i--)
+            bits[n++] = (unsigned char)((data[b] >> i) & 1);
+    unsigned crc = 0;                        /* polynomial 0x4599 (ISO 11898-1) */
+    for (int i = 0; i < n; i++) {
+        if (bits[i] ^ (crc >> 14))
+            crc = ((crc << 1) & 0x7FFF) ^ 0x4599;
+        else
+            crc = (crc << 1) & 0x7FFF;
+    }
+    for (int i = 14; i >= 0; i--)
+        bits[n + 14 - i] = (unsigned char)((crc >> i) & 1);
+    const int total = n + 15;
+    int stuff = 0, run = 0, prev = -1;
+    for (int i = 0; i < total; i++) {
+        if (bits[i] == prev) {
+            if (++run == 5) {                /* a complement bit; it starts the next run */
+                stuff++;
+                prev = !prev;
+                run = 1;
+            }
+        } else {
+            prev = bits[i];
+            run = 1;
+        }
+    }
+    return total + stuff + 10 + 3;
+}
+
+/* the raw bits' place in the frame: bit i of the raw value (0 = least significant) */
+static int bit_place(const ac_can_signal *s, int i) {
+    if (!s->big_endian)
+        return s->start + i;                 /* little-endian: byte p / 8, bit p % 8 */
+    /* big-endian (cantools.utils.start_bit): the most significant bit at network bit
+     * q0 = 8 (start / 8) + 7 - start % 8, then on in network order (bit 7 of byte 0 first) */
+    const int q = 8 * (s->start / 8) + (7 - s->start % 8) + (s->length - 1 - i);
+    return 8 * (q / 8) + (7 - q % 8);
+}
+
+static double round_half_even(double x) {   /* Python's round(x): rint without libm */
+    const double two52 = 4503599627370496.0; /* 2^52: from here on every double is an integer */
+    if (!(fabs(x) < two52))
+        return x;
+    return x < 0 ? -((-x + two52) - two52) : (x + two52) - two52;
+}
+
+AC_EXPORT int artibus_can_encode(const ac_can_signal *s, double v, unsigned char *data, int dlc) {
+    /* cantools: raw = round((v - offset) / scale), half to even (Python's round);
+     * bitstruct refuses a raw value its bits cannot hold (OverflowError) */
+    const double r = round_half_even((v - s->offset) / s->scale);
+    if (!isfinite(r) || fabs(r) > 9.0e15)
+        return 1;
+    const long long raw = (long long)r;
+    const long long span = 1LL << s->length;
+    if (s->is_signed ? (raw < -span / 2 || raw > span / 2 - 1) : (raw < 0 || raw > span - 1))
+        return 1;
+    const unsigned long long u = (unsigned long long)raw;
+    for (int i = 0; i < s->length; i++) {
+        const int p = bit_place(s, i);
+        if (p < 0 || p >= 8 * dlc)
+            return 1;
+        if ((u >> i) & 1)
+            data[p / 8] |= (unsigned char)(1u << (p % 8));
+    }
+    return 0;
+}
+
+AC_EXPORT double artibus_can_decode(const ac_can_signal *s, const unsigned char *data) {
+    unsigned long long u = 0;
+    for (int i = 0; i < s->length; i++) {
+        const int p = bit_place(s, i);
+        u |= (unsigned long long)((data[p / 8] >> (p % 8)) & 1) << i;
+    }
+    long long raw = (long long)u;
+    if (s->is_signed && (u >> (s->length - 1)) & 1)
+        raw -= 1LL << s->length;
+    if (s->integer)                          /* cantools: raw * scale + offset, in integers */
+        return (double)(raw * s->iscale + s->ioffset);
+    return (double)raw * s->scale + s->offset;
+}
+
+static long floordiv(long a, long b) {       /* Python's a // b */
+    long q = a / b;
+    if ((a % b != 0) && ((a < 0) != (b < 0)))
+        q--;
+    return q;
+}
+
+/* Network._deliver: the receivers' E2E check, then the signals decoded into their inputs */
+static void deliver(ac_can_message *m, const unsigned char *d, long tick) {
+    const int counter = d[1] & 0x0F;
+    if (artibus_can_e2e_crc(d, m->dlc, m->data_id) != d[0]) {
+        m->rejected++;
+        m->rejected_crc++;
+        return;
+    }
+    if (m->last_counter >= 0) {
+        const int delta = ((counter - m->last_counter) % 16 + 16) % 16;
+        long allowed = floordiv(tick - m->good_tick, m->ratio);
+        allowed = allowed < 1 ? 1 : allowed > 15 ? 15 : allowed;
+        if (delta == 0) {
+            m->rejected++;
+            m->rejected_repeated++;
+            return;
+        }
+        if (delta > allowed) {
+            m->rejected++;
+            m->rejected_sequence++;
+            m->last_counter = counter;
+            return;
+        }
+    }
+    m->last_counter = counter;
+    m->good_tick = tick;
+    for (int j = 0; j < m->n_signals; j++) {
+        const ac_can_signal *s = &m->signals[j];
+        const double v = artibus_can_decode(s, d);
+        for (int r = 0; r < s->n_receivers; r++)
+            *s->receivers[r].dst = s->receivers[r].factor * v;
+    }
+}
+
+/* Network.tick(tick, t) without faults: returns -1, or the index of the message
+ * whose frame could not be encoded */
+static int can_tick(ac_can *c, long tick, double t) {
+    unsigned char frames[64][8];
+    int due[64];
+    long busy = 0;
+    for (int i = 0; i < c->n_messages; i++) {
+        ac_can_message *m = &c->messages[i];
+        due[i] = tick % m->ratio == 0;
+        if (!due[i])
+            continue;
+        unsigned char *d = frames[i];       /* Network._produce, ._encode */
+        m->produced++;
+        const int counter = m->counter;
+        m->counter = (m->counter + 1) % 16;
+        memcpy(d, m->fixed, 8);
+        for (int j = 0; j < m->n_signals; j++) {
+            const ac_can_signal *s = &m->signals[j];
+            if (!s->src)                     /* the AliveCounter: the network fills it */
+                continue;
+            const double v = s->factor * *s->src;
+            if (!(isfinite(v) && s->minimum <= v && v <= s->maximum))
+                return i;
+            if (artibus_can_encode(s, v, d, m->dlc))
+                return i;
+        }
+        d[1] |= (unsigned char)counter;      /* AliveCounter: bits 8-11 */
+        d[0] = (unsigned char)artibus_can_e2e_crc(d, m->dlc, m->data_id);
+    }
+    for (int i = 0; i < c->n_messages; i++) {   /* on the wire in identifier order */
+        if (!due[i])
+            continue;
+        ac_can_message *m = &c->messages[i];
+        const int bits = artibus_can_frame_bits(m->id, frames[i], m->dlc);
+        busy += bits;
+        const long end = busy - 3;           /* end of its EOF */
+        if (end > m->end_bits)
+            m->end_bits = end;
+        m->sent++;
+        m->bits += bits;
+        if (c->frames < c->frame_cap) {
+            c->frame_tick[c->frames] = tick;
+            c->frame_stamp[c->frames] = t + (double)end * c->tau;
+            unsigned char *f = c->frame_data + 16 * (size_t)c->frames;
+            memset(f, 0, 16);
+            f[0] = (unsigned char)(m->id & 0xFF);
+            f[1] = (unsigned char)(m->id >> 8);
+            f[4] = (unsigned char)m->dlc;
+            memcpy(f + 8, frames[i], (size_t)m->dlc);
+        }
+        c->frames++;
+    }
+    for (int i = 0; i < c->n_messages; i++) {   /* the receivers read their buffers */
+        ac_can_message *m = &c->messages[i];
+        if (due[i])
+            deliver(m, frames[i], tick);
+        m->since[c->ticks] = (double)floordiv(tick - m->good_tick, m->ratio);
+    }
+    c->ticks++;
+    return -1;
+}
+
 AC_EXPORT int artibus_core_abi(void) { return ARTIBUS_CORE_ABI; }
 
 AC_EXPORT void artibus_core_record_start(ac_sim *sim) { record(sim, 0, sim->start); }
@@ -71,6 +291,11 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
     for (long k = k0; k < k1; k++) {
         const double t = sim->start + (double)k * h;         /* t = start + k * h */
         const int p = (int)(k % sim->period);
+        if (sim->can && k % sim->can->ratio == 0) {              /* self.can.tick(k // can_ratio, t) */
+            const int bad = can_tick(sim->can, k / sim->can->ratio, t);
+            if (bad >= 0)
+                return fail(sim, bad, AC_CAN, fmi2OK, k);
+        }
         for (int i = sim->op_start[p]; i < sim->op_start[p + 1]; i++) {
             const int j = sim->op_unit[i];
             ac_unit *u = &sim->units[j];

@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 1          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 2          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -46,8 +46,65 @@ typedef struct {
 /* what the plan does with a unit */
 enum { AC_PROPAGATE = 0, AC_WRITE = 1, AC_STEP = 2 };
 
-/* which functions failed (ac_sim.fail_function) */
-enum { AC_OK = 0, AC_DO_STEP = 1, AC_GET_REAL = 2, AC_SET_REAL = 3 };
+/* which functions failed (ac_sim.fail_function); AC_CAN: a frame could not be
+ * encoded (a value outside its signal's range or its raw bits): fail_unit is
+ * then the message's index, Python's encoder says why (artibus.can) */
+enum { AC_OK = 0, AC_DO_STEP = 1, AC_GET_REAL = 2, AC_SET_REAL = 3, AC_CAN = 4 };
+
+/* --- the CAN network's tick (artibus.can.Network.tick without faults, log,
+ * tamper or a real interface): the frames due at a tick in identifier order,
+ * each signal encoded as cantools encodes it (strict), the alive counter and
+ * the AUTOSAR E2E profile-2 CRC, the receivers' E2E check and cantools'
+ * decode into their inputs; counts, bits (stuffing counted) and the cycles
+ * since the last accepted frame per tick. */
+
+typedef struct {
+    double *dst;                    /* the receiver's input */
+    double factor;                  /* DBC unit -> the input's unit */
+} ac_can_receiver;
+
+typedef struct {
+    const double *src;              /* the sender's output (NULL: the AliveCounter, filled by the network) */
+    double factor;                  /* the output's unit -> the DBC unit */
+    double minimum, maximum;        /* the signal's range */
+    double scale, offset;           /* cantools' conversion: raw = round((v - offset) / scale) */
+    int integer;                    /* 1: an integer conversion (decoded raw * iscale + ioffset exactly) */
+    long long iscale, ioffset;
+    int start, length, big_endian, is_signed;
+    int n_receivers;
+    const ac_can_receiver *receivers;
+} ac_can_signal;
+
+typedef struct {
+    unsigned id;                    /* 11-bit identifier */
+    int dlc;                        /* data bytes, 2..8 */
+    int ratio;                      /* cycle time / tick */
+    unsigned data_id;               /* E2E data ID */
+    unsigned char fixed[8];         /* the signals no connection feeds, packed (cantools) */
+    int n_signals;
+    const ac_can_signal *signals;
+    /* state, as artibus.can._Message's */
+    int counter;                    /* next counter to send */
+    int last_counter;               /* the receivers' reference counter, -1: none */
+    long good_tick;                 /* tick of the last accepted frame */
+    long produced, sent, rejected, rejected_crc, rejected_repeated, rejected_sequence;
+    long long bits;
+    long long end_bits;             /* the longest (busy - 3) bits at the end of one of its frames, -1: none */
+    double *since;                  /* per tick: cycles since the last accepted frame */
+} ac_can_message;
+
+typedef struct {
+    int n_messages;
+    ac_can_message *messages;       /* in identifier order */
+    int ratio;                      /* base steps per tick */
+    double tau;                     /* 1 / bit rate (s) */
+    long ticks, frames;
+    /* every frame, if frame_cap > 0: its tick, stamp (s) and 16 bytes: id (4, little-endian), dlc (4), data (8) */
+    long frame_cap;
+    long *frame_tick;
+    double *frame_stamp;
+    unsigned char *frame_data;
+} ac_can;
 
 typedef struct {
     int n_units;
@@ -59,6 +116,7 @@ typedef struct {
     const int *op_kind;
     const int *op_unit;
     double start, h;                /* t = start + k * h */
+    ac_can *can;                    /* NULL: no CAN network */
     /* recording: row r of table (n_cols doubles, row-major) is time then *rec[c] */
     int n_cols;                     /* 1 + recorded columns */
     const double *const *rec;       /* n_cols - 1 */
@@ -69,6 +127,13 @@ typedef struct {
 } ac_sim;
 
 int artibus_core_abi(void);
+
+/* The codec alone (tests against cantools): a frame's data from raw signal
+ * values; a signal's value from a frame; the bits of a frame on the wire. */
+int artibus_can_encode(const ac_can_signal *s, double v, unsigned char *data, int dlc);
+double artibus_can_decode(const ac_can_signal *s, const unsigned char *data);
+int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc);
+unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsigned data_id);
 
 /* Record row 0 at t = start (after the initialisation). */
 void artibus_core_record_start(ac_sim *sim);
