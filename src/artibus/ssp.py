@@ -75,7 +75,13 @@ def ssp_path(bench):
     if not q.is_file():
         import difflib
         close = difflib.get_close_matches(str(bench), bench_names(), n=3, cutoff=0.6)
-        hint = f"; did you mean {' or '.join(close)}?" if close else ""
+        # a variant typed as a bench of its own (Bus36m_Circle_GuidedForceMin: the variant
+        # guidedForceMin of Bus36m_Circle), the case aside: the bench and the variant first
+        as_variant = {f"{b}_{v}".lower(): f"{b} --variant {v}" for b in bench_names()
+                      for v in sorted(f.stem for f in (BENCH_DIR / b / VARIANT_DIR).glob("*.ssv"))}
+        near = difflib.get_close_matches(str(bench).lower(), as_variant, n=3, cutoff=0.8)
+        close = [as_variant[k] for k in near] + close
+        hint = f"; did you mean {' or '.join(close[:3])}?" if close else ""
         raise ArtibusError(f"{bench}: no such bench{hint} (known: {', '.join(bench_names()) or 'none'})")
     return q
 
