@@ -2,7 +2,7 @@
 
 1. Real-time factor of Bus36m_Circle_CAN (70 s, six frames every 10 ms on
    python-can's virtual bus) against the same bench with direct connections,
-   Bus36m_Circle_GuidedForceMin, and the wall time spent in the network's
+   Bus36m_Circle's variant guidedForceMin, and the wall time spent in the network's
    ticks; without a log and with a .blf log. Runs alternate; best and median
    of REPEAT runs are printed (this machine is shared).
 2. The CAN path's cost per frame, its parts timed alone on the bench's
@@ -20,13 +20,14 @@ from pathlib import Path
 import can as pycan
 
 from artibus import can as artcan
-from artibus import runner
+from artibus import runner, ssp
 
 REPEAT = 3
 
 
-def timed_run(bench, log=None):
-    with runner.Simulation(bench, can_log=log) as sim:
+def timed_run(bench, log=None, variant=None):
+    overrides = ssp.variant_overrides(bench, [variant]) if variant else None
+    with runner.Simulation(bench, can_log=log, overrides=overrides) as sim:
         in_ticks = [0.0]
         if sim.can is not None:
             tick = sim.can.tick
@@ -45,7 +46,7 @@ def main():
     rows = {"direct": [], "CAN": [], "CAN + .blf": []}
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(REPEAT):
-            rows["direct"].append(timed_run("Bus36m_Circle_GuidedForceMin"))
+            rows["direct"].append(timed_run("Bus36m_Circle", variant="guidedForceMin"))
             rows["CAN"].append(timed_run("Bus36m_Circle_CAN"))
             rows["CAN + .blf"].append(timed_run("Bus36m_Circle_CAN", Path(tmp) / f"r{i}.blf"))
     print(f"1. real-time factor, best / median of {REPEAT} runs (70 s simulated)")

@@ -108,8 +108,9 @@ def test_bus36m_unsteered_circle_offtracking():
     assert kpi.peak(r["Bus.FjointY[1]"]) > 20e3
 
 
-def _bus36m(bench):
-    r = runner.run(bench)
+def _bus36m(variant):
+    """Bus36m_Circle with one of its variants (its parameter sets variants/*.ssv)."""
+    r = runner.run("Bus36m_Circle", overrides=ssp.variant_overrides("Bus36m_Circle", [variant]))
     ax = {a: (r[f"Bus.xAxle[{a}]"], r[f"Bus.yAxle[{a}]"]) for a in (2, 4, 6)}
     return (kpi.trace_deviation(*ax[2], *ax[4]), kpi.trace_deviation(*ax[2], *ax[6]),
             kpi.peak(r["Bus.FjointY[1]"]), r)
@@ -119,16 +120,16 @@ def test_bus36m_steered_circle_meets_the_paper():
     """seed 000, Figs. 9 and 10, with guidance and force minimisation: A4 and
     A6 stay within 1.0 m of the A2 trace over the whole manoeuvre (entry and
     exit included), the first hinge's lateral force stays below 4 kN."""
-    d4, d6, F1, r = _bus36m("Bus36m_Circle_GuidedForceMin")
+    d4, d6, F1, r = _bus36m("guidedForceMin")
     assert d4 < 1.0 and d6 < 1.0, (d4, d6)
     assert F1 < 4e3, F1
     assert r["Driver.s"][-1] > 25 + 2 * math.pi * 17.5      # it went all the way round
 
 
-@pytest.mark.parametrize("bench", ["Bus36m_Circle_Guided", "Bus36m_Circle_GuidedAll"],
+@pytest.mark.parametrize("variant", ["guided", "guidedAll"],
                          ids=["A3, A5 straight", "A3, A5 steered like A4, A6"])
-def test_bus36m_wrong_a3_a5_angles_load_the_hinge(bench):
+def test_bus36m_wrong_a3_a5_angles_load_the_hinge(variant):
     """seed 000: with A3 and A5 held straight, or steered like A4 and A6
     (A4, A6 guided), the first hinge's lateral force exceeds 20 kN."""
-    d4, d6, F1, _ = _bus36m(bench)
+    d4, d6, F1, _ = _bus36m(variant)
     assert F1 > 20e3, F1

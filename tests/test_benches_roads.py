@@ -8,7 +8,7 @@ on Bus36m), as SSP benches:
   kpi.oscillation is positive, nothing is left at the end), and the driver
   keeps the bus on the road (|eLat| within the clearance the road leaves);
 - Bus36m_Circle_Backwards: the 17.5 m circle with the A6 end leading gives
-  the deviation figures of the forwards bench Bus36m_Circle_GuidedForceMin
+  the deviation figures of the forwards bench Bus36m_Circle (variant guidedForceMin)
   (the trailing axles from the trace of the leading module's rigid axle)
   within 10 %.
 
@@ -21,7 +21,7 @@ import math
 import numpy as np
 import pytest
 
-from artibus import ROOT, kpi, roads, runner
+from artibus import ROOT, kpi, roads, runner, ssp
 
 WET = {f"Bus.mu[{a}]": 0.5 for a in range(1, 7)}
 DRY = {f"Bus.mu[{a}]": 1.0 for a in range(1, 7)}
@@ -176,7 +176,8 @@ def traces(r, axles):
 
 @pytest.fixture(scope="module")
 def circles():
-    return {"forwards": runner.run("Bus36m_Circle_GuidedForceMin"),
+    return {"forwards": runner.run("Bus36m_Circle",
+                                   overrides=ssp.variant_overrides("Bus36m_Circle", ["guidedForceMin"])),
             "backwards": runner.run("Bus36m_Circle_Backwards")}
 
 

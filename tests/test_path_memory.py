@@ -1,7 +1,7 @@
 """TrainGuidance, mode = pathMemory (issue 6, beyond the paper): A4 and A6
 follow the dead-reckoned, stored trace of A2 at their own arc-length position.
 
-- with BusDynamics on the bench Bus36m_Circle_GuidedForceMin (guidance +
+- with BusDynamics on the bench Bus36m_Circle, variant guidedForceMin (guidance +
   force minimisation, 17.5 m circle at 3 m/s, entry and exit): the max
   deviation of A4 and A6 from the A2 trace (kpi.trace_deviation on the
   simulated traces) below 1.0 m over the whole manoeuvre and below the arc-lag
@@ -19,11 +19,11 @@ import math
 import numpy as np
 import pytest
 
-from artibus import kpi, runner
+from artibus import kpi, runner, ssp
 from conftest import init
 from test_steering_controllers_benches import H, KIN_36M, L1, fit_circle, opened
 
-BENCH = "Bus36m_Circle_GuidedForceMin"
+BENCH, VARIANT = "Bus36m_Circle", "guidedForceMin"
 AXLES = ["Bus.xAxle[2]", "Bus.yAxle[2]", "Bus.xAxle[4]", "Bus.yAxle[4]", "Bus.xAxle[6]", "Bus.yAxle[6]"]
 #: the circle of the bench (front corner on 17.5 m, A2 on about 15 m) runs for
 #: A2's arc length s from 25 m to 25 + 2 pi 17.5 m = 135 m; A6 (24.4 m behind
@@ -32,7 +32,7 @@ STEADY = (75.0, 130.0)
 
 
 def bench_figures(mode):
-    r = runner.run(BENCH, overrides={"Guidance.mode": mode},
+    r = runner.run(BENCH, overrides={**ssp.variant_overrides(BENCH, [VARIANT]), "Guidance.mode": mode},
                    record=AXLES + ["Bus.FjointY[1]", "Bus.FjointY[2]", "Driver.s", "Guidance.fault"])
     # every 5th sample: 15 cm apart at 3 m/s (chord error on the circle < 0.3 mm)
     ax = {a: (r[f"Bus.xAxle[{a}]"][::5], r[f"Bus.yAxle[{a}]"][::5]) for a in (2, 4, 6)}

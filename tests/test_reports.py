@@ -4,8 +4,9 @@ from it, pages that render with no missing image (parsed, and screenshot with
 headless Chromium), units in the report's CSVs, the swept-path envelope, long
 bird's-eye drawings split into readable panels, the Bode plot's phase.
 
-A few benches run shortly (the three circle benches of the comparison for 30 s,
-Scania18m_LaneChange's 14 s), as `artibus run --all --report` puts them together."""
+A few benches run shortly (the circle bench of the comparison, its variants
+for 30 s, Scania18m_LaneChange's 14 s), as `artibus run --all --report` puts
+them together."""
 import csv
 import math
 import shutil
@@ -17,18 +18,17 @@ import pytest
 from lxml import html as lhtml
 from PIL import Image
 
-from artibus import benches, comparison, kpi, report, runner
+from artibus import benches, comparison, kpi, report, runner, ssp
 from artibus.report import FAIL, PASS, Kpi
 
-BENCHES = {"Bus36m_Circle": 30.0, "Bus36m_Circle_Guided": 30.0, "Bus36m_Circle_GuidedForceMin": 30.0,
-           "Scania18m_LaneChange": None}
+BENCHES = {"Bus36m_Circle": 30.0, "Scania18m_LaneChange": None}
 
 
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):
     """A report directory as `artibus run --all --report` writes it, for a few short runs."""
     root = tmp_path_factory.mktemp("report")
-    summary, kept = [], {}
+    summary, kept, extra = [], {}, {}
     for b, stop in BENCHES.items():
         with runner.Simulation(b) as sim:
             r = sim.run(stop_time=stop)
@@ -36,11 +36,12 @@ def site(tmp_path_factory):
         summary.append((b, root / b, kpis))
         if comparison.wanted(b):
             kept[b] = r
-    page = comparison.write(root / "comparison", kept,
-                            run_extra=lambda bench, o: runner.run(bench, overrides=o, stop_time=30.0))
+    # the comparison's variants, kept by their overrides (the page's rows are checked against them)
+    page = comparison.write(root / "comparison", kept, run_extra=lambda bench, o: extra.setdefault(
+        (bench, tuple(sorted(o.items()))), runner.run(bench, overrides=o, stop_time=30.0)))
     assert page is not None
     report.write_index(root, summary, [("comparison/index.html", comparison.TITLE, "side by side")])
-    return root, summary, kept
+    return root, summary, {**kept, **extra}
 
 
 def _doc(path):
@@ -95,10 +96,10 @@ def test_comparison_page_linked_and_as_the_results(site):
     labels = [r.xpath("string(td[1])") for r in rows]
     assert labels == ["paper"] + list(comparison.CASES)
     for r, label in zip(rows[1:], comparison.CASES):
-        bench, overrides = comparison.CASES[label]
-        if overrides:
-            continue
-        res = kept[bench]
+        variants, overrides = comparison.CASES[label]
+        b = comparison.BENCH
+        o = {**ssp.variant_overrides(b, list(variants)), **(overrides or {})}
+        res = kept[(b, tuple(sorted(o.items())))] if o else kept[b]
         ax = {a: (res[f"Bus.xAxle[{a}]"][::5], res[f"Bus.yAxle[{a}]"][::5]) for a in (2, 4)}
         d4 = kpi.trace_deviation(*ax[2], *ax[4])
         F1 = np.max(np.abs(res["Bus.FjointY[1]"])) / 1e3
@@ -130,14 +131,29 @@ def test_every_image_exists_and_reads(site):
         for href in doc.xpath("//a/@href"):
             if "://" not in href:
                 assert (p.parent / href).exists(), f"{p}: link {href} leads nowhere"
-    assert seen >= 4 * 3 + 2 + len(BENCHES)
+    # the circle's 3 figures, its variants' and its animation; the comparison's 2; a thumbnail a bench
+    assert seen >= 5 + 2 + len(BENCHES)
+
+
+def test_the_circle_page_shows_every_variant(site):
+    """Bus36m_Circle's report is a study: the KPIs of the default (unsteered) and of
+    each variant, with the paper's bounds (guidedForceMin's hinge force < 4 kN)."""
+    root, summary, _ = site
+    kpis = {k.name: k for name, _, ks in summary if name == "Bus36m_Circle" for k in ks}
+    text = _doc(root / "Bus36m_Circle" / "index.html").text_content()
+    for v in ("unsteered", "guided", "guidedAll", "guidedForceMin"):
+        assert f"{v}: max deviation of A4 from the A2 trace" in kpis
+        assert f"{v}: max |lateral force| hinge 1" in text
+    assert kpis["guidedForceMin: max |lateral force| hinge 1"].paper == "< 4 (steered)"
+    assert kpis["guided: max |lateral force| hinge 1"].paper == "> 20 with wrong A3/A5 angles"
+    assert kpis["unsteered: max deviation of A4 from the A2 trace"].passed is None
 
 
 def _chromium():
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
-@pytest.mark.parametrize("page", ["index.html", "comparison/index.html", "Bus36m_Circle_Guided/index.html"])
+@pytest.mark.parametrize("page", ["index.html", "comparison/index.html", "Bus36m_Circle/index.html"])
 def test_screenshot_with_headless_chromium(site, page, tmp_path):
     exe = _chromium()
     if exe is None:

@@ -5,9 +5,11 @@ and with the guidance's pathMemory mode, side by side as the paper's Figs.
 and A6 from the trace of A2 (Fig. 9) and the lateral force in the first
 hinge (Fig. 10), over the same axis.
 
-The three benches' results come from the same `artibus run --all --report`
-(cli keeps them, nothing runs twice); pathMemory is not a bench of its own:
-it is Bus36m_Circle_GuidedForceMin with Guidance.mode = 1, run here once."""
+The cases are variants of the one bench Bus36m_Circle (its default is
+unsteered; guided and guidedForceMin are its parameter sets variants/*.ssv):
+the default run's result comes from the same `artibus run --all --report`
+(cli keeps it), the variants are run here once; pathMemory is the variant
+guidedForceMin with Guidance.mode = 1."""
 import html
 from pathlib import Path
 
@@ -16,14 +18,16 @@ import numpy as np
 from artibus import files, kpi, report
 from artibus.report import FAIL, PASS
 
-#: the page's cases: label -> (bench, overrides); the first three are benches of the run
+BENCH = "Bus36m_Circle"
+#: the page's cases: label -> (variants of BENCH, further overrides); the first, the bench's
+#: default, is the run's own result
 CASES = {
-    "unsteered": ("Bus36m_Circle", None),
-    "guided (Task 1)": ("Bus36m_Circle_Guided", None),
-    "guided + force minimisation (Tasks 1, 2)": ("Bus36m_Circle_GuidedForceMin", None),
-    "pathMemory + force minimisation": ("Bus36m_Circle_GuidedForceMin", {"Guidance.mode": 1}),
+    "unsteered": ((), None),
+    "guided (Task 1)": (("guided",), None),
+    "guided + force minimisation (Tasks 1, 2)": (("guidedForceMin",), None),
+    "pathMemory + force minimisation": (("guidedForceMin",), {"Guidance.mode": 1}),
 }
-BENCHES = {b for b, o in CASES.values() if o is None}
+BENCHES = {BENCH}
 TITLE = "Seed 000, Figs. 8-10: the 36 m bus on the 17.5 m circle, unsteered and steered"
 PAPER = {"dev": ("about 6 unsteered, < 1.0 steered", "seed 000, Fig. 9 and sec. III"),
          "F1": ("< 4 with force minimisation; > 20 with wrong A3/A5 angles", "seed 000, Fig. 10")}
@@ -60,15 +64,19 @@ def _run_extra(bench, overrides):
 
 def write(out_dir, results, run_extra=_run_extra):
     """out_dir/index.html with the figures and a table; results: {bench: Result}
-    of the run (the cases with overrides are run here). Returns the page's path,
-    or None when a bench of the comparison is missing from results."""
+    of the run, BENCH's its default (the variants are run here, run_extra(bench,
+    overrides)). Returns the page's path, or None when BENCH is missing from results."""
+    from artibus import ssp
     out = Path(out_dir)
     if not BENCHES <= set(results):
         return None
     out.mkdir(parents=True, exist_ok=True)
     data = {}
-    for label, (bench, overrides) in CASES.items():
-        r = results[bench] if overrides is None else run_extra(bench, overrides)
+    for label, (variants, overrides) in CASES.items():
+        if not variants and overrides is None:
+            r = results[BENCH]
+        else:
+            r = run_extra(BENCH, {**ssp.variant_overrides(BENCH, list(variants)), **(overrides or {})})
         data[label] = _figures(r)
     import matplotlib.pyplot as plt
     from artibus.benchkit import circle_road
@@ -145,9 +153,9 @@ geometry or masses, so the figures differ from its plots; the bounds are its.</p
 {''.join(rows)}
 </table>
 <p class=meta>{PASS}/{FAIL}: against the paper's bound for that case (deviations &lt; 1.0 m when steered; the
-force &lt; 4 kN with force minimisation, &gt; 20 kN guided without it). The benches' own pages:
-<a href="../Bus36m_Circle/index.html">Bus36m_Circle</a>, <a href="../Bus36m_Circle_Guided/index.html">Bus36m_Circle_Guided</a>,
-<a href="../Bus36m_Circle_GuidedForceMin/index.html">Bus36m_Circle_GuidedForceMin</a>.</p>
+force &lt; 4 kN with force minimisation, &gt; 20 kN guided without it). The cases are variants of one bench
+(<code>artibus run Bus36m_Circle --variant guided</code>); its page shows every variant's KPIs:
+<a href="../Bus36m_Circle/index.html">Bus36m_Circle</a>.</p>
 <figure><img src="traces.png" alt="traces of A2, A4, A6"><figcaption>Traces of A2, A4 and A6 for each case, on the
 same axes (Fig. 8).</figcaption></figure>
 <figure><img src="deviation_force.png" alt="deviations and hinge force"><figcaption>Deviations of A4 and A6 from

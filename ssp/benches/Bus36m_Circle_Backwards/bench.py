@@ -9,7 +9,7 @@ from artibus.report import Kpi
 
 TEXT = ("Seed 000: 'due to the symmetric vehicle structure the vehicle handling and the tracking "
         "performance is independent of the driving direction'. The forwards figures are those of "
-        "Bus36m_Circle_GuidedForceMin (A4, A6 from the A2 trace; hinge 1 in module 1's frame); "
+        "Bus36m_Circle's variant guidedForceMin (A4, A6 from the A2 trace; hinge 1 in module 1's frame); "
         "tests/test_benches_roads.py compares the two within 10 %. A5 is driven (the mirror of A2). "
         "Why the KPIs match the forwards bench's: the bus is symmetric (Bus36m.ssv: three equal modules, "
         "the centre of mass mid-wheelbase, equal axles and hinges), so driven backwards it is the same "

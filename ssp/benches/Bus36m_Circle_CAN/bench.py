@@ -1,22 +1,24 @@
 """Bus36m_Circle_CAN: seed 000's circle with the steering on CAN: the circle's
-KPIs (those of Bus36m_Circle_GuidedForceMin), and what the receivers saw: each
+KPIs (those of Bus36m_Circle's variant guidedForceMin), and what the receivers saw: each
 one's fallback state (0 normal, 1 holding, 2 ramping, 3 straight) and each
 message's longest run without a good frame (artibus.benches)."""
 from artibus import benches, report
 from artibus.benchkit import can_fallback_kpis, can_lost, can_receivers
 
-direct = benches.load("Bus36m_Circle_GuidedForceMin")
+direct = benches.load("Bus36m_Circle")
+#: the direct run's counterpart: the variant of Bus36m_Circle with the same controllers
+VARIANT = "guidedForceMin"
 
-TEXT = direct.TEXT + (" The steering signals travel over CAN (ssp/can/Bus36m.dbc); the bus summary "
+TEXT = direct.CIRCLE_TEXT + (" The steering signals travel over CAN (ssp/can/Bus36m.dbc); the bus summary "
                       "(load, response times, frames) is printed by the run and in can_bus.txt.")
 
 
 def kpis(r):
-    return direct.kpis(r) + can_fallback_kpis(r)
+    return direct.variant_kpis(r, VARIANT) + can_fallback_kpis(r)
 
 
 def figures(r, out):
-    images = direct.figures(r, out)
+    images = direct.circle_figures(r, out, direct.VARIANTS[VARIANT][0])
     receivers, lost = can_receivers(r), can_lost(r)
     if receivers:
         report.signals(out / "fallback.png", r.time, [
