@@ -40,3 +40,21 @@ def kpi_bound(direct, kpis, run_direct, signals, record):
         r = run_direct(record=record, stimuli={x: (lambda t, e=e: e) for x in targets})
         bound += np.abs(kpis(r) - k0)
     return 2 * bound
+
+
+def assert_within_bound(r, direct, kpis, bound, axles, fallback):
+    """The CAN run r against the direct run: its KPIs within bound of the
+    direct run's; the paths themselves, of the two axles whose deviations the
+    first two KPIs measure, within the bound of their KPI; the paper's figures
+    still hold (seed 000, Figs. 9, 10: deviations < 1.0 m, hinge force < 4 kN)
+    with the whole circle driven (25 m straight, then R = 17.5 m); no receiver
+    leaves normal operation (each of fallback 0 throughout)."""
+    k0, k = kpis(direct), kpis(r)
+    assert np.all(np.abs(k - k0) <= bound), (k, k0, bound)
+    for a, b in zip(axles, bound[:2]):
+        dist = np.hypot(r[f"Bus.xAxle[{a}]"] - direct[f"Bus.xAxle[{a}]"], r[f"Bus.yAxle[{a}]"] - direct[f"Bus.yAxle[{a}]"])
+        assert np.max(dist) <= b, (a, np.max(dist), b)
+    assert k[0] < 1.0 and k[1] < 1.0 and k[2] < 4e3
+    assert r["Driver.s"][-1] > 25 + 2 * math.pi * 17.5
+    for x in fallback:
+        assert np.all(r[x] == 0), x
