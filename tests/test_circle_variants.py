@@ -92,6 +92,25 @@ def test_unsteered_default_is_the_bus_without_controllers(runs, tmp_path):
     assert benches.load(BENCH).variant_of(r) == "unsteered"
 
 
+def test_the_switched_off_controllers_do_not_warn():
+    """Unsteered, the bus rolls back at its stop (v < 0 at the guidance's input: its
+    fault flag 2, which warns when it steers): the idle controllers stay silent."""
+    with runner.Simulation(BENCH, record=["Guidance.v", "Guidance.fault"]) as sim:
+        r = sim.run()
+        logs = {u.path: u.fmu.log for u in sim.units}
+    assert np.min(r["Guidance.v"]) < 0 and np.any(r["Guidance.fault"] == 2)
+    for c in ("Guidance", "ForceMin"):
+        assert not [m for m in logs[c] if m.startswith("[Warning]")], logs[c]
+
+
+@pytest.mark.parametrize("guided", [True, False])
+def test_train_guidance_warns_only_where_it_steers(guided):
+    msgs = []
+    simulate_fmu(str(fmu_path("TrainGuidance")), stop_time=0.1, start_values={"v": -1.0, "guided": guided},
+                 logger=lambda env, name, status, cat, msg: msgs.append(msg.decode()))
+    assert any("v = -1 m/s < 0" in m for m in msgs) == guided
+
+
 def test_guided_steers_a4_a6_only(runs):
     r = runs["guided"]
     assert not np.any(r["Bus.delta[3]"]) and not np.any(r["Bus.delta[5]"])
@@ -152,3 +171,14 @@ def test_force_minimization_law(law):
     assert np.all(r["gamma3"] == want[0]) and np.all(r["gamma5"] == want[1])
     assert np.array_equal(r["fault"], default["fault"])
     assert abs(default["gamma3"][-1]) > 0.01 and default["gamma3"][-1] != g4
+
+
+@pytest.mark.parametrize("law", [0, 1, 2])
+def test_force_minimization_warns_only_where_its_angles_go_out(law):
+    """A jack-knifed hinge (dPsi[1] beyond 90 deg: no instantaneous centre ahead) is flagged
+    with any law, warned about with law 1 only."""
+    msgs = []
+    r = simulate_fmu(str(fmu_path("ForceMinimization")), stop_time=0.1, start_values={"dPsi[1]": 1.7, "law": law},
+                     logger=lambda env, name, status, cat, msg: msgs.append(msg.decode()))
+    assert np.all(r["fault"][1:].astype(int) & 4)
+    assert any("dPsi[1] = 1.7" in m for m in msgs) == (law == 1)

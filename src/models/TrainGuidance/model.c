@@ -20,7 +20,8 @@
  *
  * guided = false holds gamma4 = gamma6 = 0 (A4, A6 not steered: the paper's
  * unsteered case, a variant of one bench rather than a bench without this
- * FMU); the guidance runs on unchanged behind it. */
+ * FMU); the guidance runs on unchanged behind it, silently (no warnings;
+ * the fault output still flags). */
 #include <math.h>
 
 #include "fmu.h"
@@ -78,7 +79,7 @@ void model_outputs(ModelInstance *comp) {
 
 /* a warning when a fault appears; once per episode (until it clears) */
 static void report(ModelInstance *comp, unsigned fault, double t, double gamma1, double v) {
-    const unsigned now = fault & ~S->fault;
+    const unsigned now = D->guided ? fault & ~S->fault : 0;   /* not guided: nothing it sends is at stake */
     if (now & TG_FAULT_SPEED)
         log_warning(comp, "t = %.6g s: v = %g m/s < 0 is not a driving speed (use backwards for the "
                           "direction): treated as v = 0, the arc lags hold; warned once until v >= 0",
