@@ -8,17 +8,22 @@ from Python::
     import artibus
     table = artibus.sweep("Bus36m_Circle", grid={"Driver.vSet": [2, 3, 4]}, out="sweep-out")
 
-Each case is a task on dask.distributed: a local cluster with one worker
-process per core (one thread each), or an existing scheduler (``scheduler=``,
-``--scheduler ADDRESS``), so the same command runs on a cluster. A worker
-unpacks the bench once and reuses its FMU instances across cases (fmi2Reset,
-then the case's parameters and a new initialisation; the same results as a
-fresh instance, tests/test_sweep.py); a case that fails drops them.
+The cases run as tasks on dask.distributed: a local cluster with one worker
+process per core (one thread each, Dask's periodic work made rare: QUIET), or
+an existing scheduler (``scheduler=``, ``--scheduler ADDRESS``), so the same
+command runs on a cluster. A task holds one case or several (_Chunks: about
+0.25 to 2 s of work, fewer towards the end), so Dask's cost per task (~10 ms of
+CPU in the client and scheduler, on the cores the workers need) is spread over
+its cases. A worker unpacks the bench once and reuses its FMU instances across
+cases (fmi2Reset, then the case's parameters and a new initialisation; the same
+results as a fresh instance, tests/test_sweep.py); a case that fails drops
+them. The worker also makes each case's row and Parquet files; the client only
+writes them, and makes the table once, at the end.
 
 Results, in the output folder:
   cases/<key>.parquet    one row per case (its parameters, every KPI of the
                          bench, status, error, wall time), written atomically
-                         as the case comes back;
+                         as its task comes back;
   series/<key>.parquet   the case's time series (keep_series);
   results.parquet        the table of every case of this sweep, in case order,
                          assembled at the end (and on resume);
@@ -68,6 +73,7 @@ class BenchInfo:
     common_hash: str         # .ssd, FMUs, parameter sets (not the variants), bench.py
     variant_hash: dict       # variant name -> hash of its .ssv
     ssp_bytes: bytes = field(repr=False, default=b"")
+    ssp_hash: str = ""       # hash of the whole .ssp (a worker's copy is known by it)
 
 
 def bench_info(bench):
@@ -98,7 +104,7 @@ def bench_info(bench):
     if bf.is_file():
         common.update(b"bench.py\0" + bf.read_bytes())
     return BenchInfo(b.name, path, variables, sorted(var_hash), list(b.components), common.hexdigest(),
-                     var_hash, data)
+                     var_hash, data, hashlib.sha256(data).hexdigest())
 
 
 def typed_value(info, name, value, where):
@@ -359,10 +365,11 @@ _SSPS = {}          # (bench, content) -> the .ssp's path on this worker
 _DIRS = []          # folders this worker made for .ssp files
 
 
-def _worker_ssp(bench_name, common_hash, ssp_path, ssp_bytes):
+def _worker_ssp(bench_name, content_hash, ssp_path, ssp_bytes):
     """The bench's .ssp on this worker: the path where it exists with the same
-    content, else the bytes written once to a local file."""
-    key = (bench_name, common_hash, hashlib.sha256(ssp_bytes).hexdigest() if ssp_bytes else ssp_path)
+    content, else the bytes written once to a local file. content_hash: the
+    hash of the bytes (BenchInfo.ssp_hash, computed once by the client)."""
+    key = (bench_name, content_hash if ssp_bytes else ssp_path)
     with _LOCK:
         if key not in _SSPS:
             p = Path(ssp_path)
@@ -457,14 +464,14 @@ def _simulate(ssp, overrides, stop_time, step):
             sim.close()
 
 
-def run_case(bench_name, common_hash, ssp_path, ssp_bytes, case, fixed, stop_time, step, keep_series):
+def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_time, step, keep_series):
     """One case on a worker: (row, series or None). A failure is a row with its error."""
     from artibus import benches, ssp as ssp_mod
     t0 = time.perf_counter()
     row = {"status": STATUS_OK, "error": ""}
     series = None
     try:
-        ssp = _worker_ssp(bench_name, common_hash, ssp_path, ssp_bytes)
+        ssp = _worker_ssp(bench_name, content_hash, ssp_path, ssp_bytes)
         variants = _variant_list(case.get("variant"))
         overrides = {**(ssp_mod.variant_overrides(ssp, variants) if variants else {}), **fixed,
                      **{k: v for k, v in case.items() if k != "variant"}}
@@ -488,6 +495,23 @@ def run_case(bench_name, common_hash, ssp_path, ssp_bytes, case, fixed, stop_tim
     return row, series
 
 
+def run_cases(bench_name, content_hash, ssp_path, ssp_bytes, cases, fixed, stop_time, step, keep_series):
+    """A task: several cases [(key, index, case)] in turn on one worker (run_case
+    each). For each its table row (_case_row), its case file's bytes and its time
+    series' (or None), both Parquet made here (the client only writes them), and
+    the CPU time it took (s)."""
+    out = []
+    for key, index, case in cases:
+        cpu = time.thread_time()
+        row, series = run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_time, step,
+                               keep_series)
+        row = _case_row(key, index, case, row)
+        out.append((row, _parquet_bytes(_table([row])),
+                    _parquet_bytes(_series_table(series)) if series is not None else None,
+                    time.thread_time() - cpu))
+    return out
+
+
 # --- the sweep ---------------------------------------------------------------------
 
 def _write_parquet(table, path):
@@ -498,17 +522,46 @@ def _write_parquet(table, path):
     os.replace(tmp, path)
 
 
-def _case_table(key, index, case, row):
+def _parquet_bytes(table):
     import pyarrow as pa
-    cols = {"key": [key], "case": [index]}
-    for k, v in case.items():
-        cols[k] = [v]
+    import pyarrow.parquet as pq
+    sink = pa.BufferOutputStream()
+    pq.write_table(table, sink)
+    return sink.getvalue().to_pybytes()
+
+
+def _write_bytes(data, path):
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
+    tmp.write_bytes(data)
+    os.replace(tmp, path)
+
+
+def _case_row(key, index, case, row):
+    """A case's row of the table: key, case (its index), its values, status, error, wall_s, the KPIs."""
+    cols = {"key": key, "case": index}
+    cols.update(case)
     for k in ("status", "error", "wall_s"):
-        cols[k] = [row[k]]
+        cols[k] = row[k]
     for k, v in row.items():
         if k not in cols:
-            cols[k] = [v]
-    return pa.table(cols)
+            cols[k] = v
+    return cols
+
+
+def _table(rows):
+    """The rows as one table: the columns in the order they first appear (a
+    failed case has no KPIs: null there), each column's type from its values."""
+    import pyarrow as pa
+    names = {}
+    for r in rows:
+        names.update(dict.fromkeys(r))
+    return pa.table({n: [r.get(n) for r in rows] for n in names}) if rows else pa.table({})
+
+
+def _series_table(series):
+    import pyarrow as pa
+    return pa.table({k: np.asarray(v) for k, v in series.items()})
 
 
 def _client(scheduler, workers):
@@ -520,10 +573,69 @@ def _client(scheduler, workers):
             raise ArtibusError(f"--scheduler {scheduler}: cannot reach the Dask scheduler ({e})") from None
         except ValueError as e:
             raise ArtibusError(f"--scheduler {scheduler}: not a scheduler address ({e})") from None
+    import dask
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.CRITICAL)
+    with dask.config.set(QUIET):
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.CRITICAL)
     return Client(cluster), cluster
+
+
+#: a local cluster's settings: Dask's periodic work off or rare (the workers' stack
+#: sampling every 10 ms, the event loops' 20 ms health tick, the 100 ms memory and
+#: 500 ms system monitors): idle, a cluster of two workers took ~15 % of a core with
+#: the defaults (on the cores its workers run on), ~2 % with these
+QUIET = {"distributed.worker.profile.enabled": False, "distributed.admin.tick.interval": "1s",
+         "distributed.worker.memory.monitor-interval": "1s", "distributed.admin.system-monitor.interval": "5s",
+         "distributed.admin.system-monitor.gil.enabled": False}
+
+
+class _Chunks:
+    """The cases to run, handed out as tasks of several cases: a task's fixed
+    cost (Dask's scheduler and client, ~10 ms of CPU a task on this 2-core
+    machine, taken from the cores the workers run on) is then spread over its
+    cases. The first tasks hold one case each (a case's time is not known yet);
+    later ones a 1 / (2 workers) share of the cases left (so the workers finish
+    together), but at least as many cases as run in MIN_S seconds and at most as
+    many as in MAX_S seconds (by the median CPU time of the cases so far: an
+    interrupted sweep loses about that much a worker). IN_FLIGHT tasks a worker
+    are submitted at once (one runs, the next waits on the worker)."""
+    MIN_S, MAX_S = 0.25, 2.0
+    IN_FLIGHT = 2
+
+    def __init__(self, items, client):
+        from collections import deque
+        self.pending = deque(items)
+        self.client = client
+        self.cpu = []
+        self.workers = 1
+        self.asked = -math.inf
+
+    def _workers(self):
+        now = time.monotonic()
+        if now - self.asked > 5.0:               # workers may join or leave an external cluster
+            self.asked = now
+            try:
+                self.workers = max(1, sum(self.client.nthreads().values()))
+            except Exception:
+                pass
+        return self.workers
+
+    def in_flight(self):
+        return self.IN_FLIGHT * self._workers()
+
+    def took(self, cpu):
+        if math.isfinite(cpu):
+            self.cpu.append(cpu)
+            del self.cpu[:-64]
+
+    def next(self):
+        n = 1
+        if len(self.cpu) >= 2 * self._workers():
+            per_case = max(float(np.median(self.cpu)), 1e-6)
+            share = math.ceil(len(self.pending) / (2 * self._workers()))
+            n = max(1, int(self.MIN_S / per_case), min(share, int(self.MAX_S / per_case)))
+        return [self.pending.popleft() for _ in range(min(n, len(self.pending)))]
 
 
 class _Progress:
@@ -641,6 +753,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
     skipped = len(keys) - len(unique)
     t0 = time.perf_counter()
     failed = 0
+    rows = {}                                         # key -> its row, of the cases run now
     if unique:
         cluster = None
         own = client is None
@@ -648,30 +761,42 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
             client, cluster = _client(scheduler, workers)
         try:
             data = client.scatter(info.ssp_bytes, broadcast=True, hash=False)
-            futures = {}
-            for i in unique:
-                f = client.submit(run_case, info.name, info.common_hash, str(info.ssp), data, all_cases[i],
-                                  fixed, stop_time, step, keep_series, key=f"artibus-case-{keys[i]}", pure=False,
-                                  retries=0)
-                futures[f] = i
-            from dask.distributed import as_completed
             bar = _Progress(len(unique), skipped, progress) if progress else None
-            for f in as_completed(futures):
-                i = futures[f]
+            chunks = _Chunks(unique, client)
+            running = {}
+
+            def submit():
+                items = chunks.next()
+                f = client.submit(run_cases, info.name, info.ssp_hash, str(info.ssp), data,
+                                  [(keys[i], i, all_cases[i]) for i in items], fixed, stop_time, step, keep_series,
+                                  key=f"artibus-cases-{keys[items[0]]}-{len(items)}", pure=False, retries=0)
+                running[f] = items
+                return f
+
+            from dask.distributed import as_completed
+            done = as_completed([submit() for _ in range(min(chunks.in_flight(), len(unique)))])
+            for f in done:
+                items = running.pop(f)
                 try:
-                    row, series = f.result()
-                except Exception as e:       # the worker died (not an error of the case)
-                    row, series = {"status": STATUS_FAILED, "error": f"worker: {type(e).__name__}: {e}",
-                                   "wall_s": math.nan}, None
-                bad = row["status"] != STATUS_OK
-                failed += bad
-                if series is not None:
-                    import pyarrow as pa
-                    _write_parquet(pa.table({k: np.asarray(v) for k, v in series.items()}),
-                                   out / SERIES_DIR / f"{keys[i]}.parquet")
-                _write_parquet(_case_table(keys[i], i, all_cases[i], row), out / CASES_DIR / f"{keys[i]}.parquet")
-                if bar:
-                    bar.update(bad)
+                    results = f.result()
+                except Exception as e:       # the worker died (not an error of a case)
+                    results = [(_case_row(keys[i], i, all_cases[i],
+                                          {"status": STATUS_FAILED, "error": f"worker: {type(e).__name__}: {e}",
+                                           "wall_s": math.nan}), None, None, math.nan) for i in items]
+                for *_, cpu in results:
+                    chunks.took(cpu)
+                while chunks.pending and len(running) < chunks.in_flight():
+                    done.add(submit())       # the next task before this one's files: no worker waits
+                for i, (row, case_file, series_file, _) in zip(items, results):
+                    bad = row["status"] != STATUS_OK
+                    failed += bad
+                    if series_file is not None:
+                        _write_bytes(series_file, out / SERIES_DIR / f"{keys[i]}.parquet")
+                    _write_bytes(case_file if case_file is not None else _parquet_bytes(_table([row])),
+                                 out / CASES_DIR / f"{keys[i]}.parquet")
+                    rows[keys[i]] = row
+                    if bar:
+                        bar.update(bad)
         finally:
             try:
                 client.run(release)              # the workers' instances and .ssp copies
@@ -682,7 +807,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                 if cluster is not None:
                     cluster.close()
     wall = time.perf_counter() - t0
-    table = assemble(out, keys)
+    table = assemble(out, keys, rows)
     res = SweepResult(table, out, len(unique), skipped, failed, wall)
     if plot:
         study(out, kpi=kpi)
@@ -703,23 +828,28 @@ def _write_text(path, text):
     os.replace(tmp, path)
 
 
-def assemble(out, keys=None):
-    """results.parquet from the case files of this sweep (its manifest's keys), in case order."""
-    import pyarrow as pa
+def assemble(out, keys=None, rows=None):
+    """results.parquet from the cases of this sweep (its manifest's keys), in case
+    order: each case's row from rows (key -> row, the cases just run) or else read
+    from its case file; the table made once, at the end."""
     import pyarrow.parquet as pq
     out = Path(out)
     if keys is None:
         keys = json.loads((out / MANIFEST).read_text())["keys"]
-    tables, done = [], set()
+    rows = rows or {}
+    table, done = [], set()
     for i, k in enumerate(keys):
-        f = out / CASES_DIR / f"{k}.parquet"
-        if k in done or not f.is_file():
+        if k in done:
             continue
+        row = rows.get(k)
+        if row is None:
+            f = out / CASES_DIR / f"{k}.parquet"
+            if not f.is_file():
+                continue
+            row = pq.read_table(f).to_pylist()[0]
         done.add(k)
-        t = pq.read_table(f)
-        t = t.set_column(t.schema.get_field_index("case"), "case", pa.array([i], type=pa.int64()))
-        tables.append(t)
-    table = pa.concat_tables(tables, promote_options="default") if tables else pa.table({})
+        table.append({**row, "case": i})
+    table = _table(table)
     _write_parquet(table, out / TABLE)
     return table
 
@@ -888,17 +1018,8 @@ def add_parser(sub):
     return s
 
 
-def _parse_set(items):
-    values = {}
-    for item in items or []:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise ArtibusError(f"--set {item}: expected NAME=VALUE")
-        values[name.strip()] = value.strip()
-    return values
-
-
 def main(args):
+    from artibus.cli import _parse_set          # --set as artibus run reads it
     variants = [v.split(",") for v in args.variant] if args.variant else None
     if variants and any(not x.strip() for vs in variants for x in vs):
         raise ArtibusError(f"--variant {','.join(args.variant)}: an empty variant name")
