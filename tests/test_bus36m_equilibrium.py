@@ -120,8 +120,11 @@ def circle(tmp_path_factory):
         assert int(_value(sim, "Driver", "road")) == 2       # the built-in circle
         assert float(_value(sim, "Bus", "testSteerAmp")) == 0.0
         connected = {l.name for l in sim.links if l.dst.path == "Bus"}
+        # the default (unsteered): the controllers built in hold A3..A6 at exactly 0
+        # (tests/test_circle_variants.py)
+        assert _value(sim, "Guidance", "guided") is False and int(_value(sim, "ForceMin", "law")) == 0
     # the equilibrium drives A2 only, steers A1 only, has no hinge torques
-    assert connected == {"Bus.delta[1]", "Bus.Fx[2]"}
+    assert connected - {f"Bus.delta[{a}]" for a in (3, 4, 5, 6)} == {"Bus.delta[1]", "Bus.Fx[2]"}
     assert P["tyreModel"] == 1
     # a longer straight after the laps: the run ends on it, before the road's
     # end (where the driver brakes to a stop)
