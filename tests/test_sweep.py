@@ -339,3 +339,30 @@ def test_latin_hypercube_and_monte_carlo_designs(tmp_path, client):
     speeds = [r["Driver.vSet"] for r in res.table.to_pylist()]
     assert speeds == [c["Driver.vSet"] for c in sw.read_design(mc).cases] and len(set(speeds)) == 8
     assert (tmp_path / "mc" / "study.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cases_are_handed_out_once_in_tasks_sized_by_their_time():
+    """_Chunks: every case once, in order; single cases until 2 per worker have
+    come back; then tasks of a 1 / (2 workers) share of what is left, at least
+    MIN_S and at most MAX_S seconds of work (by the cases' CPU time so far)."""
+    class Client:
+        def nthreads(self):
+            return {"a": 1, "b": 1}
+    chunks = sw._Chunks(range(1000), Client())
+    assert chunks.in_flight() == 2 * sw._Chunks.IN_FLIGHT           # two workers
+    tasks = [chunks.next() for _ in range(4)]
+    assert tasks == [[0], [1], [2], [3]]
+    for _ in range(4):
+        chunks.took(0.01)                     # 10 ms a case: MAX_S 2 s -> 200 cases, MIN_S 0.25 s -> 25
+    while chunks.pending:
+        tasks.append(chunks.next())
+    flat = [i for t in tasks for i in t]
+    assert flat == list(range(1000))
+    sizes = [len(t) for t in tasks[4:]]
+    assert sizes[0] == 200                    # 996 left: a quarter is 249, MAX_S caps it
+    assert all(25 <= n <= 200 for n in sizes[:-1]) and sizes[-1] <= 25
+    assert sizes == sorted(sizes, reverse=True)     # shorter towards the end
+    long = sw._Chunks(range(10), Client())
+    for _ in range(4):
+        long.took(3.0)                        # a case longer than MAX_S: one a task
+    assert [len(long.next()) for _ in range(10)] == [1] * 10
