@@ -149,6 +149,20 @@ def test_the_kpis_tell_the_variant_that_ran(runs):
         assert k["max |lateral force| hinge 1"].paper == mod.VARIANTS[v][2]
 
 
+def test_a_run_that_is_none_of_the_variants_has_kpis_without_bounds(tmp_path):
+    """A3/A5 force-minimising with A4/A6 straight is no variant: its KPIs carry no
+    paper value or verdict, and its report sets the four variants beside it."""
+    r = runner.run(BENCH, stop_time=30.0, overrides={"ForceMin.law": 1})
+    mod = benches.load(BENCH)
+    assert mod.variant_of(r) is None and np.any(r["ForceMin.gamma3"])
+    k = mod.kpis(r)
+    assert len(k) == 9 and all(x.passed is None and x.paper == "" for x in k)
+    kpis = benches.write_report(BENCH, r, tmp_path)
+    names = [x.name for x in kpis]
+    assert names[:9] == [f"this run: {x.name}" for x in k]
+    assert [n.split(":")[0] for n in names[9::9]] == ["unsteered", *VARIANTS]
+
+
 # --- the switches on the FMUs alone ---------------------------------------------------
 
 def test_train_guidance_not_guided_sends_zero_and_runs_on():
