@@ -113,11 +113,6 @@ static void cv_error(int code, const char *module, const char *func, char *msg, 
 
 Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
              void *user, OdeMethod method, double rtol, double atol) {
-    if (method == ODE_ERK && nroots > 0) {   /* no model needs it yet: say so rather than run it untested */
-        log_error(comp, "root finding (%d functions) is not offered with the explicit "
-                        "Runge-Kutta integrator: use BDF or Adams", nroots);
-        return NULL;
-    }
     Ode *o = calloc(1, sizeof *o);
     if (!o) return NULL;
     if (comp->tolerance > 0) rtol = comp->tolerance;   /* fmi2SetupExperiment's tolerance wins */
@@ -139,6 +134,10 @@ Ode *ode_new(ModelInstance *comp, int n, OdeRhs rhs, int nroots, OdeRoots roots,
         if (ERKStepSetUserData(o->erk, o) != ARK_SUCCESS) goto fail;
         if (ERKStepSStolerances(o->erk, rtol, atol) != ARK_SUCCESS) goto fail;
         ERKStepSetMaxNumSteps(o->erk, 100000);
+        if (nroots > 0) {
+            if (ERKStepRootInit(o->erk, nroots, cv_roots) != ARK_SUCCESS) goto fail;
+            ERKStepSetNoInactiveRootWarn(o->erk);
+        }
         return o;
     }
     o->mem = CVodeCreate(method == ODE_ADAMS ? CV_ADAMS : CV_BDF, o->ctx);
@@ -185,7 +184,8 @@ static OdeResult failed(Ode *o, const char *solver, int flag, char *name, double
    so the first step after a change is at most ERK_RESTART_STEPS communication
    steps long; the error control takes it from there. Where the FMI layer asks
    to forget, it starts afresh (ARKODE's own first-step estimate). */
-static OdeResult erk_advance(Ode *o, bool restart, double t0, double *y, double t1, double *t) {
+static OdeResult erk_advance(Ode *o, bool restart, double t0, double *y, double t1, double *t,
+                             int *rootsfound) {
     double *yv = N_VGetArrayPointer(o->y);
     if (restart || !o->started) {
         const bool keep = o->started && !o->comp->forget;
@@ -205,13 +205,17 @@ static OdeResult erk_advance(Ode *o, bool restart, double t0, double *y, double 
     const int flag = ERKStepEvolve(o->erk, t1, o->y, &tret, ARK_NORMAL);
     *t = tret;
     memcpy(y, yv, sizeof(double) * (size_t)o->n);
+    if (flag == ARK_ROOT_RETURN) {
+        ERKStepGetRootInfo(o->erk, rootsfound);
+        return ODE_ROOT;
+    }
     if (flag < 0) return failed(o, "ARKODE ERKStep", flag, ERKStepGetReturnFlagName(flag), tret, t1);
     return ODE_REACHED;
 }
 
 OdeResult ode_advance(Ode *o, bool restart, double t0, double *y, double t1,
                       double *t, int *rootsfound) {
-    if (o->erk) return erk_advance(o, restart, t0, y, t1, t);
+    if (o->erk) return erk_advance(o, restart, t0, y, t1, t, rootsfound);
     double *yv = N_VGetArrayPointer(o->y);
     if (restart || !o->started) {
         /* An input changed (restart): y is continuous, only f jumped. The

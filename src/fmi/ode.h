@@ -14,7 +14,7 @@ extern "C" {
 struct ModelInstance;
 
 /* return 0 on success, > 0 for a recoverable failure (CVODE retries with a
-   smaller step), < 0 for an unrecoverable one */
+   smaller step; ODE_ERK cannot and fails), < 0 for an unrecoverable one */
 typedef int (*OdeRhs)(double t, const double *y, double *ydot, void *user);
 typedef int (*OdeRoots)(double t, const double *y, double *g, void *user);
 
@@ -22,7 +22,8 @@ typedef int (*OdeRoots)(double t, const double *y, double *g, void *user);
    input changes; ODE_ERK: ARKODE's explicit Runge-Kutta (ERKStep, 4th order),
    a one-step method that goes on with its step size when an input changes
    (cheap in co-simulation, where the inputs change every few steps), for
-   non-stiff problems only: its step is bounded by stability where BDF's is not */
+   non-stiff problems only: its step is bounded by stability where BDF's is not;
+   root functions are located as CVODE locates them */
 typedef enum { ODE_BDF, ODE_ADAMS, ODE_ERK } OdeMethod;
 
 typedef struct Ode Ode;

@@ -1,6 +1,10 @@
 /* BusKinematics: seed 003, steps S1-S6 as an algorithm (kinematics.c),
- * integrated with CVODE inside doStep. The steering angles are inputs (the
- * paper's eq. 13 integrates their rates; an FMU takes the angles). */
+ * integrated with ARKODE's explicit Runge-Kutta inside doStep (one-step: an
+ * input that changes every communication step costs one restart of the
+ * right-hand side, where CVODE's multistep methods start again at order 1
+ * with tiny steps; the kinematics are not stiff: every rate scales with the
+ * speed). The steering angles are inputs (the paper's eq. 13 integrates their
+ * rates; an FMU takes the angles). */
 #include <math.h>
 #include <stdlib.h>
 
@@ -108,7 +112,7 @@ void model_outputs(ModelInstance *comp) {
 }
 
 /* The right-hand side of the ODE y = [theta_j, x_j, y_j, beta_1 .. beta_N],
- * for CVODE in doStep and for Model Exchange (whose states are the same, with
+ * for the integrator in doStep and for Model Exchange (whose states are the same, with
  * beta padded to KIN_MAX_WAGONS). Returns the jack-knifed joint (kin_rates),
  * 0 if none; ydot is filled either way. */
 static int derivs(ModelInstance *comp, const KinChain *c, double t, const double *y, double *ydot) {
@@ -128,8 +132,10 @@ static int derivs(ModelInstance *comp, const KinChain *c, double t, const double
 
 static int rhs(double t, const double *y, double *ydot, void *user) {
     Solver *s = user;
-    /* beyond the jack-knife bound: retry a smaller step */
-    return derivs(s->comp, &s->chain, t, y, ydot) ? 1 : 0;
+    /* a stage beyond the jack-knife bound still has finite rates; the root
+       function (cos(delta_i) - margin) ends the step before the bound */
+    derivs(s->comp, &s->chain, t, y, ydot);
+    return finite_all(ydot, 3 + s->chain.N) ? 0 : -1;
 }
 
 /* g_i = cos(delta_i) - margin: crosses zero where joint i jack-knifes;
@@ -147,7 +153,7 @@ static int roots(double t, const double *y, double *g, void *user) {
     Solver *s = user;
     double all[KIN_MAX_WAGONS];
     indicators(s->comp, &s->chain, t, y, all);
-    for (int i = 0; i < s->chain.N; i++) g[i] = all[i];     /* CVODE has N root functions */
+    for (int i = 0; i < s->chain.N; i++) g[i] = all[i];     /* the integrator has N root functions */
     return 0;
 }
 
@@ -171,7 +177,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         s = comp->solver = calloc(1, sizeof(Solver));
         if (!s) return log_error(comp, "out of memory");
         s->comp = comp;
-        s->ode = ode_new(comp, 3 + D->N, rhs, D->N, roots, s, ODE_ADAMS, D->rtol, D->atol);
+        s->ode = ode_new(comp, 3 + D->N, rhs, D->N, roots, s, ODE_ERK, D->rtol, D->atol);
         if (!s->ode) return fmi2Error;
     }
     make_chain(comp, &s->chain);
@@ -199,7 +205,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
             return fmi2Error;
         }
     }
-    return fmi2Error;   /* CVODE failure, already logged with its flag and time */
+    return fmi2Error;   /* integrator failure, already logged with its flag and time */
 }
 
 void model_free(ModelInstance *comp) {
@@ -210,7 +216,7 @@ void model_free(ModelInstance *comp) {
     comp->solver = NULL;
 }
 
-/* ---- Model Exchange: x = [theta_j, x_j, y_j, beta_1 .. beta_4], the CVODE
+/* ---- Model Exchange: x = [theta_j, x_j, y_j, beta_1 .. beta_4], the integrator's
  * state of doStep with beta padded to KIN_MAX_WAGONS (beyond N: 0, constant) */
 
 void model_get_x(ModelInstance *comp, double x[]) {
