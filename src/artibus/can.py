@@ -36,6 +36,15 @@ clock: ``virtual`` is python-can's VirtualBus on a channel of its own per
 run with ``preserve_timestamps``, ``INTERFACE:CHANNEL`` a real interface
 (frames echoed with ``receive_own_messages``, restamped in simulated time).
 
+The runner's stepping core in C (src/runner_core/core.c) does the same tick,
+bit for bit (tests/test_can_core.py), where it can (``Network.core_support``:
+no faults, no tamper function, the virtual bus, integer signals): its own codec
+(cantools' scaling and rounding, checked against cantools on every signal),
+CRC, counter, the receivers' check and the counts; the frames go to the log
+after the run (``log_frames``), the bus carries none. Faults, a tamper function
+or a real interface tick here (``Network.tick``), as the run's
+``Simulation.stepping`` says.
+
 The traffic can be logged as .blf or .asc with python-can's writers; the log's
 times are simulated seconds from the run's start time (a marker at the start
 fixes the writers' origin). ``decode_log`` reads a log back through the DBC.
@@ -404,6 +413,7 @@ class _Message:
     why: dict = field(default_factory=lambda: {"crc": 0, "repeated": 0, "sequence": 0})
     bits: int = 0
     since: list = field(default_factory=list)   # per tick: cycles since the last accepted frame
+    since_before: list = field(default_factory=list)   # earlier ticks' since, as arrays (the stepping core's)
     longest: int = 0     # the longest such run, and the time it reached it
     longest_at: float = float("nan")
     faults: list = field(default_factory=list)  # the _FaultStates acting on it
@@ -840,7 +850,16 @@ class Network:
         """{message: array over the ticks of the cycles since its last accepted
         frame, after that tick's delivery}."""
         import numpy as np
-        return {m.msg.name: np.array(m.since, dtype=float) for m in self.messages}
+        return {m.msg.name: np.concatenate(m.since_before + [np.array(m.since, dtype=float)])
+                for m in self.messages}
+
+    def add_since(self, m, series):
+        """The since series (floats) of ticks the stepping core did, after those before."""
+        import numpy as np
+        if m.since:
+            m.since_before.append(np.array(m.since, dtype=float))
+            m.since.clear()
+        m.since_before.append(series)
 
     # --- figures ---------------------------------------------------------------------
 

@@ -906,7 +906,7 @@ class Simulation:
 # variables, the library not built, or the core switched off (run(core=False)
 # or ARTIBUS_CORE=0).
 
-CORE_ABI = 2                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 3                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_CAN = 4                        # core.h: a frame could not be encoded
@@ -948,7 +948,8 @@ class _AcCanMessage(Structure):
                 ("counter", c_int), ("last_counter", c_int), ("good_tick", c_long),
                 ("produced", c_long), ("sent", c_long), ("rejected", c_long), ("rejected_crc", c_long),
                 ("rejected_repeated", c_long), ("rejected_sequence", c_long), ("bits", c_longlong),
-                ("end_bits", c_longlong), ("since", c_void_p)]
+                ("end_bits", c_longlong), ("since", c_void_p), ("bits_data", c_ubyte * 128),
+                ("bits_of", c_int * 16)]
 
 
 class _AcCan(Structure):
@@ -1254,12 +1255,11 @@ class _CanCore:
             if a.end_bits >= 0:
                 fid = m.msg.frame_id
                 net.observed[fid] = max(net.observed.get(fid, 0.0), a.end_bits * (1.0 / net.bitrate))
-            since = self.since[i, :ticks].astype(np.int64)
-            first = net.ticks
-            m.since.extend(since.tolist())
+            since = self.since[i, :ticks]
+            net.add_since(m, since)
             if ticks and since.max() > m.longest:      # Network.tick: the first tick reaching the longest run
                 j = int(np.argmax(since))
-                m.longest, m.longest_at = int(since[j]), start + ((first + j) * self.ratio) * h
+                m.longest, m.longest_at = int(since[j]), start + ((net.ticks + j) * self.ratio) * h
         net.frames += self.c.frames
         net.ticks += ticks
         if self.c.frame_cap:

@@ -83,44 +83,77 @@ AC_EXPORT unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsig
     return crc8h2f[(crc ^ data_id) & 0xFF] ^ 0xFF;
 }
 
-AC_EXPORT int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc) {
-    unsigned char bits[19 + 64 + 15];        /* can.frame_bits: SOF .. data, then the CRC-15 */
-    int n = 0;
-    bits[n++] = 0;                           /* SOF */
-    for (int i = 10; i >= 0; i--)
-        bits[n++] = (unsigned char)((id >> i) & 1);
-    bits[n++] = 0;                           /* RTR */
-    bits[n++] = 0;                           /* IDE */
-    bits[n++] = 0;                           /* r0 */
-    for (int i = 3; i >= 0; i--)
-        bits[n++] = (unsigned char)(((unsigned)dlc >> i) & 1);
-    for (int b = 0; b < dlc; b++)
-        for (int i = 7; i >= 0; i--)
-            bits[n++] = (unsigned char)((data[b] >> i) & 1);
-    unsigned crc = 0;                        /* polynomial 0x4599 (ISO 11898-1) */
-    for (int i = 0; i < n; i++) {
-        if (bits[i] ^ (crc >> 14))
-            crc = ((crc << 1) & 0x7FFF) ^ 0x4599;
-        else
-            crc = (crc << 1) & 0x7FFF;
+/* frame_bits' two loops over the frame's bits a byte at a time: the CRC-15
+ * register (polynomial 0x4599, most significant bit first) after 8 more bits,
+ * and the stuffing run's state after 8 more bits. A run's state: 0..7 =
+ * 4 * (the last bit) + (equal bits in a row - 1), 8 = none yet (the start). */
+static unsigned short crc15_byte[256];
+static unsigned char stuff_next[9][256], stuff_count[9][256];
+static int can_tables_made;
+
+static int stuff_step(int state, int b, int *stuffed) {      /* can.frame_bits' loop, one bit */
+    if (state < 8 && (state >> 2) == b) {
+        const int run = (state & 3) + 2;
+        if (run == 5) {                      /* a complement bit; it starts the next run */
+            ++*stuffed;
+            return 4 * !b;
+        }
+        return 4 * b + run - 1;
     }
-    for (int i = 14; i >= 0; i--)
-        bits[n + 14 - i] = (unsigned char)((crc >> i) & 1);
-    const int total = n + 15;
-    int stuff = 0, run = 0, prev = -1;
-    for (int i = 0; i < total; i++) {
-        if (bits[i] == prev) {
-            if (++run == 5) {                /* a complement bit; it starts the next run */
-                stuff++;
-                prev = !prev;
-                run = 1;
-            }
-        } else {
-            prev = bits[i];
-            run = 1;
+    return 4 * b;
+}
+
+static void make_can_tables(void) {
+    for (int i = 0; i < 256; i++) {
+        unsigned crc = (unsigned)i << 7;
+        for (int k = 0; k < 8; k++)
+            crc = (crc & 0x4000) ? ((crc << 1) & 0x7FFF) ^ 0x4599 : (crc << 1) & 0x7FFF;
+        crc15_byte[i] = (unsigned short)crc;
+        for (int st = 0; st < 9; st++) {
+            int state = st, stuffed = 0;
+            for (int k = 7; k >= 0; k--)
+                state = stuff_step(state, (i >> k) & 1, &stuffed);
+            stuff_next[st][i] = (unsigned char)state;
+            stuff_count[st][i] = (unsigned char)stuffed;
         }
     }
-    return total + stuff + 10 + 3;
+    can_tables_made = 1;
+}
+
+__extension__ typedef unsigned __int128 ac_bits;   /* a frame's bits, SOF first (at most 98) */
+
+AC_EXPORT int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc) {
+    if (!can_tables_made)                    /* can.frame_bits, the same count */
+        make_can_tables();
+    /* SOF 0, ID, RTR 0, IDE 0, r0 0, DLC, data: n bits */
+    const int n = 19 + 8 * dlc;
+    ac_bits v = ((ac_bits)(id & 0x7FF) << 7) | (unsigned)(dlc & 0xF);
+    for (int b = 0; b < dlc; b++)
+        v = (v << 8) | data[b];
+    /* CRC-15 over the n bits: n % 8 (= 3) of them one by one, then bytes */
+    unsigned crc = 0;
+    int left = n;
+    for (; left % 8; left--) {
+        const unsigned bit = (unsigned)(v >> (left - 1)) & 1;
+        crc = (bit ^ (crc >> 14)) ? ((crc << 1) & 0x7FFF) ^ 0x4599 : (crc << 1) & 0x7FFF;
+    }
+    for (; left; left -= 8) {
+        const unsigned byte = (unsigned)(v >> (left - 8)) & 0xFF;
+        crc = ((crc << 8) & 0x7FFF) ^ crc15_byte[((crc >> 7) ^ byte) & 0xFF];
+    }
+    /* stuff bits over the n + 15 bits: (n + 15) % 8 (= 2) one by one, then bytes */
+    const int total = n + 15;
+    v = (v << 15) | crc;
+    int state = 8, stuffed = 0;
+    left = total;
+    for (; left % 8; left--)
+        state = stuff_step(state, (int)(v >> (left - 1)) & 1, &stuffed);
+    for (; left; left -= 8) {
+        const unsigned byte = (unsigned)(v >> (left - 8)) & 0xFF;
+        stuffed += stuff_count[state][byte];
+        state = stuff_next[state][byte];
+    }
+    return total + stuffed + 10 + 3;
 }
 
 /* the raw bits' place in the frame: bit i of the raw value (0 = least significant) */
@@ -151,6 +184,14 @@ AC_EXPORT int artibus_can_encode(const ac_can_signal *s, double v, unsigned char
     if (s->is_signed ? (raw < -span / 2 || raw > span / 2 - 1) : (raw < 0 || raw > span - 1))
         return 1;
     const unsigned long long u = (unsigned long long)raw;
+    if (!s->big_endian) {                    /* bits start .. start + length - 1 of the frame read little-endian */
+        if (s->start < 0 || s->start + s->length > 8 * dlc)
+            return 1;
+        const unsigned long long w = (u & ((1ULL << s->length) - 1)) << s->start;
+        for (int b = s->start / 8; b <= (s->start + s->length - 1) / 8; b++)
+            data[b] |= (unsigned char)(w >> (8 * b));
+        return 0;
+    }
     for (int i = 0; i < s->length; i++) {
         const int p = bit_place(s, i);
         if (p < 0 || p >= 8 * dlc)
@@ -163,9 +204,15 @@ AC_EXPORT int artibus_can_encode(const ac_can_signal *s, double v, unsigned char
 
 AC_EXPORT double artibus_can_decode(const ac_can_signal *s, const unsigned char *data) {
     unsigned long long u = 0;
-    for (int i = 0; i < s->length; i++) {
-        const int p = bit_place(s, i);
-        u |= (unsigned long long)((data[p / 8] >> (p % 8)) & 1) << i;
+    if (!s->big_endian) {
+        for (int b = s->start / 8; b <= (s->start + s->length - 1) / 8; b++)
+            u |= (unsigned long long)data[b] << (8 * b);
+        u = (u >> s->start) & ((1ULL << s->length) - 1);
+    } else {
+        for (int i = 0; i < s->length; i++) {
+            const int p = bit_place(s, i);
+            u |= (unsigned long long)((data[p / 8] >> (p % 8)) & 1) << i;
+        }
     }
     long long raw = (long long)u;
     if (s->is_signed && (u >> (s->length - 1)) & 1)
@@ -249,7 +296,12 @@ static int can_tick(ac_can *c, long tick, double t) {
         if (!due[i])
             continue;
         ac_can_message *m = &c->messages[i];
-        const int bits = artibus_can_frame_bits(m->id, frames[i], m->dlc);
+        const int slot = frames[i][1] & 0x0F;  /* its counter */
+        if (!m->bits_of[slot] || memcmp(m->bits_data[slot], frames[i], (size_t)m->dlc) != 0) {
+            memcpy(m->bits_data[slot], frames[i], (size_t)m->dlc);
+            m->bits_of[slot] = artibus_can_frame_bits(m->id, frames[i], m->dlc);
+        }
+        const int bits = m->bits_of[slot];
         busy += bits;
         const long end = busy - 3;           /* end of its EOF */
         if (end > m->end_bits)

@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 2          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 3          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -91,6 +91,10 @@ typedef struct {
     long long bits;
     long long end_bits;             /* the longest (busy - 3) bits at the end of one of its frames, -1: none */
     double *since;                  /* per tick: cycles since the last accepted frame */
+    /* its frames' bits on the wire, the last frame of each counter value (0: none yet):
+     * a frame repeats every 16 cycles while its signals hold (can.frame_bits' lru_cache) */
+    unsigned char bits_data[16][8];
+    int bits_of[16];
 } ac_can_message;
 
 typedef struct {
