@@ -99,6 +99,13 @@ extern "C" double dyn_slip(double u, double w, double vSlip) {
     return std::atan2(-w, std::sqrt(u * u + vSlip * vSlip));
 }
 
+extern "C" void dyn_steer(DynInputs *u, int nAxle) {
+    for (int a = 1; a <= nAxle; a++) {
+        u->cosDelta[a] = std::cos(u->delta[a]);
+        u->sinDelta[a] = std::sin(u->delta[a]);
+    }
+}
+
 extern "C" double dyn_tyre(const DynParams *p, int a, double alpha) {
     const double C = p->C[a], mu = p->mu[a], Fz = p->Fz[a];
     switch (p->tyreModel) {
@@ -175,7 +182,7 @@ int Chain<N>::eval(const DynParams *p, const DynInputs *u, const double *z, cons
         const int m = p->axleModule[a];
         const double xi = p->xA[a];
         const Vec2 vK(vCgK[m].x(), vCgK[m].y() + xi * zd[1 + m]);   /* eq. 27 */
-        const double d = u->delta[a], cd = std::cos(d), sd = std::sin(d);
+        const double cd = u->cosDelta[a], sd = u->sinDelta[a];
         const double uw = cd * vK.x() + sd * vK.y();           /* eq. 23 applied to the velocity */
         const double ww = -sd * vK.x() + cd * vK.y();
         const double alpha = dyn_slip(uw, ww, p->vSlip);

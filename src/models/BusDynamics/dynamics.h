@@ -51,7 +51,13 @@ typedef struct {
     double delta[DYN_MAX_AXLES + 1];  /* steering angle, rad */
     double Fx[DYN_MAX_AXLES + 1];     /* longitudinal tyre force in the wheel frame, N */
     double Mjoint[DYN_MAX_HINGES + 1];/* hinge torque on the rear module (reaction on the front), N m */
+    double cosDelta[DYN_MAX_AXLES + 1], sinDelta[DYN_MAX_AXLES + 1];   /* of delta: dyn_steer() */
 } DynInputs;
+
+/* cos and sin of the steering angles of axles 1..nAxle into u (once per set
+   of inputs: they hold while the integrator evaluates the right-hand side
+   many times) */
+void dyn_steer(DynInputs *u, int nAxle);
 
 /* everything that follows from (z, z', inputs) at one instant; world frame
    unless said otherwise */

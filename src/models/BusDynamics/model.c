@@ -15,6 +15,8 @@ typedef struct {
     ModelInstance *comp;
     Ode *ode;
     DynParams p;
+    DynInputs u;        /* the inputs of the current step */
+    bool uHeld;         /* they hold over the step (no test steering): rhs() reuses them */
 } Solver;
 
 static void make_params(ModelInstance *comp, DynParams *p) {
@@ -49,6 +51,7 @@ static void make_inputs(ModelInstance *comp, double t, DynInputs *u) {
     }
     for (int k = 1; k <= DYN_MAX_HINGES; k++) u->Mjoint[k] = D->Mjoint[k];
     u->delta[1] += test_sine(D->testSteerAmp, D->testSteerPeriod, t);
+    dyn_steer(u, D->nAxles);
 }
 
 static fmi2Status check_inputs(ModelInstance *comp, double t) {
@@ -191,10 +194,9 @@ void model_outputs(ModelInstance *comp) {
 static int rhs(double t, const double *y, double *ydot, void *user) {
     Solver *sv = user;
     const int nq = dyn_nq(&sv->p);
-    DynInputs u;
-    make_inputs(sv->comp, t, &u);
+    if (!sv->uHeld) make_inputs(sv->comp, t, &sv->u);
     memcpy(ydot, y + nq, sizeof(double) * (size_t)nq);
-    return dyn_eval(&sv->p, &u, y, y + nq, ydot + nq, NULL) ? -1 : 0;
+    return dyn_eval(&sv->p, &sv->u, y, y + nq, ydot + nq, NULL) ? -1 : 0;
 }
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
@@ -211,6 +213,9 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     }
     make_params(comp, &sv->p);
     for (int a = 1; a <= DYN_MAX_AXLES; a++) sv->p.Fz[a] = D->Fz[a];
+    /* the inputs hold over the step unless the built-in test steering runs */
+    make_inputs(comp, t, &sv->u);
+    sv->uHeld = D->testSteerAmp == 0.0 || t >= D->testSteerPeriod;
 
     ModelState *s = &comp->v.s;
     const int nq = dyn_nq(&sv->p);
@@ -262,7 +267,7 @@ void model_set_x(ModelInstance *comp, const double x[]) {
 
 fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
     if (check_inputs(comp, comp->v.time)) return fmi2Error;
-    Solver sv = { comp, NULL, { 0 } };
+    Solver sv = { .comp = comp, .uHeld = false };
     make_params(comp, &sv.p);
     for (int a = 1; a <= DYN_MAX_AXLES; a++) sv.p.Fz[a] = D->Fz[a];
     const ModelState *s = &comp->v.s;
