@@ -25,7 +25,7 @@ import os
 import shutil
 import sys
 from ctypes import (CDLL, Structure, addressof, byref, c_double, c_int, c_long, c_longlong, c_size_t,
-                    c_ubyte, c_uint, c_void_p, cast, memmove, sizeof, string_at)
+                    c_ubyte, c_uint, c_ulonglong, c_void_p, cast, memmove, sizeof, string_at)
 import tempfile
 import time as _time
 import zipfile
@@ -906,7 +906,7 @@ class Simulation:
 # variables, the library not built, or the core switched off (run(core=False)
 # or ARTIBUS_CORE=0).
 
-CORE_ABI = 3                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 4                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_CAN = 4                        # core.h: a frame could not be encoded
@@ -921,7 +921,7 @@ class _AcUnit(Structure):
                 ("setReal", c_void_p), ("step", c_double), ("n_out", c_size_t), ("n_in", c_size_t),
                 ("out_vrs", c_void_p), ("out", c_void_p), ("in_vrs", c_void_p), ("inp", c_void_p),
                 ("written", c_void_p), ("has_written", c_int), ("n_sources", c_int),
-                ("sources", c_void_p), ("wall", c_double)]
+                ("sources", c_void_p), ("wall", c_double), ("ticks", c_ulonglong)]
 
 
 class _AcSim(Structure):

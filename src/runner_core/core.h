@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 3          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 4          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -41,6 +41,7 @@ typedef struct {
     int n_sources;
     const ac_source *sources;
     double wall;                    /* seconds inside fmi2DoStep, fmi2GetReal, fmi2SetReal, accumulated */
+    unsigned long long ticks;       /* the same in the processor's time-stamp counter, within one call */
 } ac_unit;
 
 /* what the plan does with a unit */
