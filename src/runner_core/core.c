@@ -132,40 +132,39 @@ static void make_can_tables(void) {
     can_tables_made = 1;
 }
 
-__extension__ typedef unsigned __int128 ac_bits;   /* a frame's bits, SOF first (at most 98) */
+static unsigned crc15_bit(unsigned crc, unsigned bit) {
+    return (bit ^ (crc >> 14)) ? ((crc << 1) & 0x7FFF) ^ 0x4599 : (crc << 1) & 0x7FFF;
+}
 
 AC_EXPORT int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc) {
     if (!can_tables_made)                    /* can.frame_bits, the same count */
         make_can_tables();
-    /* SOF 0, ID, RTR 0, IDE 0, r0 0, DLC, data: n bits */
-    const int n = 19 + 8 * dlc;
-    ac_bits v = ((ac_bits)(id & 0x7FF) << 7) | (unsigned)(dlc & 0xF);
-    for (int b = 0; b < dlc; b++)
-        v = (v << 8) | data[b];
-    /* CRC-15 over the n bits: n % 8 (= 3) of them one by one, then bytes */
-    unsigned crc = 0;
-    int left = n;
-    for (; left % 8; left--) {
-        const unsigned bit = (unsigned)(v >> (left - 1)) & 1;
-        crc = (bit ^ (crc >> 14)) ? ((crc << 1) & 0x7FFF) ^ 0x4599 : (crc << 1) & 0x7FFF;
-    }
-    for (; left; left -= 8) {
-        const unsigned byte = (unsigned)(v >> (left - 8)) & 0xFF;
-        crc = ((crc << 8) & 0x7FFF) ^ crc15_byte[((crc >> 7) ^ byte) & 0xFF];
-    }
-    /* stuff bits over the n + 15 bits: (n + 15) % 8 (= 2) one by one, then bytes */
-    const int total = n + 15;
-    v = (v << 15) | crc;
+    /* SOF 0, ID, RTR 0, IDE 0, r0 0, DLC, data: 3 bits (SOF, ID10, ID9), then
+     * whole bytes (ID8..ID1; ID0, RTR, IDE, r0, DLC; the data), then the CRC-15 */
+    unsigned char bytes[10];
+    const int head[3] = {0, (int)(id >> 10) & 1, (int)(id >> 9) & 1};
+    bytes[0] = (unsigned char)((id >> 1) & 0xFF);
+    bytes[1] = (unsigned char)(((id & 1) << 7) | ((unsigned)dlc & 0xF));
+    memcpy(bytes + 2, data, (size_t)dlc);
+    const int nb = 2 + dlc;
+    unsigned crc = 0;                        /* polynomial 0x4599 (ISO 11898-1) */
+    for (int i = 0; i < 3; i++)
+        crc = crc15_bit(crc, (unsigned)head[i]);
+    for (int b = 0; b < nb; b++)
+        crc = ((crc << 8) & 0x7FFF) ^ crc15_byte[((crc >> 7) ^ bytes[b]) & 0xFF];
+    /* stuff bits over all of them, the CRC's 15 bits last: its first 8 as a byte, 7 one by one */
     int state = 8, stuffed = 0;
-    left = total;
-    for (; left % 8; left--)
-        state = stuff_step(state, (int)(v >> (left - 1)) & 1, &stuffed);
-    for (; left; left -= 8) {
-        const unsigned byte = (unsigned)(v >> (left - 8)) & 0xFF;
-        stuffed += stuff_count[state][byte];
-        state = stuff_next[state][byte];
+    for (int i = 0; i < 3; i++)
+        state = stuff_step(state, head[i], &stuffed);
+    for (int b = 0; b < nb; b++) {
+        stuffed += stuff_count[state][bytes[b]];
+        state = stuff_next[state][bytes[b]];
     }
-    return total + stuffed + 10 + 3;
+    stuffed += stuff_count[state][crc >> 7];
+    state = stuff_next[state][crc >> 7];
+    for (int i = 6; i >= 0; i--)
+        state = stuff_step(state, (int)(crc >> i) & 1, &stuffed);
+    return 19 + 8 * dlc + 15 + stuffed + 10 + 3;
 }
 
 /* the raw bits' place in the frame: bit i of the raw value (0 = least significant) */
@@ -235,6 +234,8 @@ AC_EXPORT double artibus_can_decode(const ac_can_signal *s, const unsigned char 
 }
 
 static long floordiv(long a, long b) {       /* Python's a // b */
+    if (b == 1)
+        return a;
     long q = a / b;
     if ((a % b != 0) && ((a < 0) != (b < 0)))
         q--;
@@ -283,7 +284,7 @@ static int can_tick(ac_can *c, long tick, double t) {
     long busy = 0;
     for (int i = 0; i < c->n_messages; i++) {
         ac_can_message *m = &c->messages[i];
-        due[i] = tick % m->ratio == 0;
+        due[i] = m->ratio == 1 || tick % m->ratio == 0;
         if (!due[i])
             continue;
         unsigned char *d = frames[i];       /* Network._produce, ._encode */
@@ -373,7 +374,7 @@ static int run_steps(ac_sim *sim, long k0, long k1) {
     for (long k = k0; k < k1; k++) {
         const double t = sim->start + (double)k * h;         /* t = start + k * h */
         const int p = (int)(k % sim->period);
-        if (sim->can && k % sim->can->ratio == 0) {              /* self.can.tick(k // can_ratio, t) */
+        if (sim->can && (sim->can->ratio == 1 || k % sim->can->ratio == 0)) {              /* self.can.tick(k // can_ratio, t) */
             const int bad = can_tick(sim->can, k / sim->can->ratio, t);
             if (bad >= 0)
                 return fail(sim, bad, AC_CAN, fmi2OK, k);
