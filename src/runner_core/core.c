@@ -132,6 +132,15 @@ static void make_can_tables(void) {
     can_tables_made = 1;
 }
 
+#if defined(__GNUC__)
+/* the tables made when the library is loaded, before any thread can use them
+ * (a sweep's threads run cores at once); elsewhere at the first use */
+__attribute__((constructor)) static void make_tables(void) {
+    make_crc8h2f();
+    make_can_tables();
+}
+#endif
+
 static unsigned crc15_bit(unsigned crc, unsigned bit) {
     return (bit ^ (crc >> 14)) ? ((crc << 1) & 0x7FFF) ^ 0x4599 : (crc << 1) & 0x7FFF;
 }
