@@ -646,11 +646,12 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 
 /* ---- stepping ---------------------------------------------------------------- */
 
-/* every Real output finite, after model_outputs; else fmi2Error naming it */
+/* every Real output finite, after model_outputs; else fmi2Error naming the
+   first one (in the order of VARS) that is not. REAL_OUTPUTS is generated with
+   the table: the loop runs over the outputs only, not over every variable. */
 static fmi2Status check_outputs(ModelInstance *comp, const char *fn) {
-    for (size_t i = 0; i < MODEL_NVARS; i++) {
-        const VarInfo *v = &VARS[i];
-        if (v->type != T_REAL || v->causality != C_OUTPUT) continue;
+    for (const VarInfo *const *out = REAL_OUTPUTS; *out; out++) {
+        const VarInfo *v = *out;
         const double x = *(const double *)field(comp, v);
         if (!isfinite(x))
             return log_error(comp, "%s: output %s = %g at t = %.17g is not finite (a parameter or "

@@ -9,8 +9,8 @@ turns it into
                       structured names such as ``L[1]``), VR_* constants,
                       MODEL_IDENTIFIER and MODEL_GUID;
   <out>/model_vars.c  the table VARS[] (value reference -> field offset, type,
-                      causality, variability, range), per-type look-up arrays
-                      and vars_set_start_values().
+                      causality, variability, range), the list REAL_OUTPUTS[],
+                      per-type look-up arrays and vars_set_start_values().
 
 A model description with <ModelExchange> (a plant) also gets MODEL_NX (its
 continuous states, in the order of <ModelStructure><Derivatives>), MODEL_NZ
@@ -199,6 +199,12 @@ def write_source(model, path):
             f'C_{v["causality"].upper()}, V_{v["variability"].upper()}, '
             f'offsetof(ModelData, {field_expr(v)}), {lo}, {hi} }},')
     lines.append("};")
+    lines.append("")
+    # the Real outputs in the order of VARS, for the layer's finite-output check
+    # after every step (check_outputs in fmi2Functions.c); NULL ends the list
+    outputs = [f"&VARS[{i}]" for i, v in enumerate(model["vars"])
+               if v["type"] == "Real" and v["causality"] == "output"]
+    lines.append("const VarInfo *const REAL_OUTPUTS[] = { " + ", ".join(outputs + ["NULL"]) + " };")
     lines.append("")
     # per-type dense look-up: value reference -> index into VARS, -1 if none
     for tname in ("T_REAL", "T_INTEGER", "T_BOOLEAN", "T_STRING"):

@@ -34,6 +34,9 @@ typedef struct {
 
 extern const VarInfo VARS[MODEL_NVARS];
 
+/* the Real outputs (causality output), in the order of VARS, ended by NULL */
+extern const VarInfo *const REAL_OUTPUTS[];
+
 /* the variable with this type and value reference, or NULL */
 const VarInfo *vars_find(VarType type, unsigned vr);
 
