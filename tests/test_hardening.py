@@ -103,3 +103,22 @@ def test_fmus_allocate_through_a_preloaded_sanitizer():
         assert addr(memory.calloc) != addr(fmpy.calloc)      # the blind spot this closes
     else:
         assert addr(memory.calloc) == addr(fmpy.calloc)
+
+
+def test_non_finite_output_in_a_step_is_an_error_naming_it():
+    """The shared layer's check after fmi2DoStep (REAL_OUTPUTS): TypesTest's
+    real_out = factor real_in; a finite input 1e308 times factor 10 overflows
+    to inf in the step, which must be fmi2Error naming real_out, not fmi2OK."""
+    f = Fmu(fmu_file("TypesTest"))
+    try:
+        f.slave.setupExperiment(startTime=0.0)
+        f.slave.enterInitializationMode()
+        f.set_values({"factor": 10.0})
+        f.slave.exitInitializationMode()
+        f.slave.doStep(0.0, 0.01)                     # finite: fine
+        f.set_values({"real_in": 1e308})
+        with pytest.raises(FMICallException):
+            f.slave.doStep(0.01, 0.01)
+        assert any("real_out" in m and "inf" in m for m in f.log), f.log
+    finally:
+        f.close()
