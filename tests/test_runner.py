@@ -341,3 +341,21 @@ def test_a_bench_by_name_is_packed_again_when_a_file_it_packs_is_newer(tmp_path,
     with pytest.raises(ArtibusError, match=r"SystemStructure.ssd:1: <Component source=\"resources/"
                                            r"BusKinematics.fmu\">: no such file .*set-up command"):
         ssp_mod.ssp_path("Tiny")
+
+
+def test_a_pack_left_in_fmus_of_no_bench_is_refused_by_name(tmp_path, monkeypatch):
+    """A bench removed from ssp/benches (Bus36m_Circle_GuidedForceMin became a
+    variant) leaves its old pack in an existing checkout's fmus/: its name must
+    not run that stale pack silently but name it, and the bench and variant meant."""
+    import shutil
+    from artibus import ArtibusError
+    from artibus import ssp as ssp_mod
+    real = ssp_mod.ssp_path("Bus36m_Circle")
+    monkeypatch.setenv("ARTIBUS_FMU_DIR", str(tmp_path))
+    shutil.copy(real, tmp_path / "Bus36m_Circle_GuidedForceMin.ssp")
+    with pytest.raises(ArtibusError) as e:
+        ssp_mod.ssp_path("Bus36m_Circle_GuidedForceMin")
+    msg = str(e.value)
+    assert "Bus36m_Circle --variant guidedForceMin" in msg
+    assert str(tmp_path / "Bus36m_Circle_GuidedForceMin.ssp") in msg and "earlier build" in msg
+    assert ssp_mod.ssp_path(str(tmp_path / "Bus36m_Circle_GuidedForceMin.ssp")).is_file()   # by path: runs

@@ -72,18 +72,19 @@ def ssp_path(bench):
         if packed is None or any(f.stat().st_mtime_ns > packed for f in (ssd_file, *files.values())):
             _write_pack(q, ssd_file, files)
         return q
-    if not q.is_file():
-        import difflib
-        close = difflib.get_close_matches(str(bench), bench_names(), n=3, cutoff=0.6)
-        # a variant typed as a bench of its own (Bus36m_Circle_GuidedForceMin: the variant
-        # guidedForceMin of Bus36m_Circle), the case aside: the bench and the variant first
-        as_variant = {f"{b}_{v}".lower(): f"{b} --variant {v}" for b in bench_names()
-                      for v in sorted(f.stem for f in (BENCH_DIR / b / VARIANT_DIR).glob("*.ssv"))}
-        near = difflib.get_close_matches(str(bench).lower(), as_variant, n=3, cutoff=0.8)
-        close = [as_variant[k] for k in near] + close
-        hint = f"; did you mean {' or '.join(close[:3])}?" if close else ""
-        raise ArtibusError(f"{bench}: no such bench{hint} (known: {', '.join(bench_names()) or 'none'})")
-    return q
+    # not a bench of ssp/benches: an error, also where a pack of that name is left in fmus/
+    import difflib
+    close = difflib.get_close_matches(str(bench), bench_names(), n=3, cutoff=0.6)
+    # a variant typed as a bench of its own (Bus36m_Circle_GuidedForceMin: the variant
+    # guidedForceMin of Bus36m_Circle), the case aside: the bench and the variant first
+    as_variant = {f"{b}_{v}".lower(): f"{b} --variant {v}" for b in bench_names()
+                  for v in sorted(f.stem for f in (BENCH_DIR / b / VARIANT_DIR).glob("*.ssv"))}
+    near = difflib.get_close_matches(str(bench).lower(), as_variant, n=3, cutoff=0.8)
+    close = [as_variant[k] for k in near] + close
+    hint = f"; did you mean {' or '.join(close[:3])}?" if close else ""
+    stale = (f"; {q} is a pack left from an earlier build (give its path to run it anyway)"
+             if q.is_file() else "")
+    raise ArtibusError(f"{bench}: no such bench{hint}{stale} (known: {', '.join(bench_names()) or 'none'})")
 
 
 def _sources(bench):
