@@ -9,7 +9,8 @@ echo "== C checks of every FMU (release build)"
 ctest --test-dir build --output-on-failure
 
 echo "== C checks of every FMU under AddressSanitizer + UBSan"
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DARTIBUS_SANITIZE=ON >/dev/null
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DARTIBUS_SANITIZE=ON \
+  -DSUNDIALS_DIR="$PWD/build-sundials/sundials-install/lib/cmake/sundials" >/dev/null   # setup.sh built it
 cmake --build build-asan -j"$(nproc)" >/dev/null
 ARTIBUS_FMU_DIR="$PWD/build-asan/fmus" .venv/bin/artibus pack >/dev/null   # benches with these FMUs
 ctest --test-dir build-asan --output-on-failure
