@@ -177,6 +177,79 @@ def test_a_value_the_frame_cannot_carry_is_the_same_error(tmp_path, change, word
     assert 0.0 < t < 60.0
 
 
+def _network_state(net, sim):
+    return ([bytes(u.raw.inp) for u in sim.units],
+            [(m.counter, m.last_counter, m.good_tick, m.produced, m.sent, m.rejected, dict(m.why), m.bits,
+              list(m.since)) for m in net.messages], (net.frames, net.ticks, dict(net.observed)))
+
+
+def test_settle_through_the_core_is_network_settle():
+    """The initialisation's settle through the core's codec (_CanCore.settle,
+    artibus_core_can_settle) against artibus.can's Network.settle (cantools):
+    from the same senders' outputs (random values in their signals' ranges,
+    the range edges, now and then one outside), counters, E2E states and
+    receivers' inputs, the same receivers' inputs bit for bit and the same
+    network state (last_counter None, good_tick -ratio, nothing sent or
+    counted), or the same error."""
+    from artibus.can import COUNTER_SIGNAL
+    from artibus.runner import _core_stepper, _Plan
+    rng = np.random.default_rng(16)
+    with Simulation("Bus36m_Circle_CAN") as sim:
+        net, core = sim.can, _core_stepper(sim, _Plan(sim.order, 10), None, True).can
+        routes = [r for m in net.messages for r in m.routes if r.signal.name != COUNTER_SIGNAL]
+        assert len(routes) >= 8
+        moved = errors = 0
+        for trial in range(300):
+            outs = {}
+            for r in routes:
+                s = r.signal
+                pick = rng.random()
+                v = (s.minimum if pick < 0.1 else s.maximum if pick < 0.2 else
+                     s.maximum + (s.maximum - s.minimum) if pick < 0.21 else
+                     s.conversion.offset + s.conversion.scale * (int(rng.integers(-100, 100)) + 0.5) if pick < 0.4
+                     else rng.uniform(s.minimum, s.maximum))
+                outs[id(r)] = v / r.factor
+            garbage = [rng.uniform(-1e3, 1e3, u.raw.n_in) for u in sim.units]
+            state = [(int(rng.integers(16)), None if rng.random() < 0.3 else int(rng.integers(16)),
+                      int(rng.integers(-5, 100))) for _ in net.messages]
+            got = []
+            for settle in (net.settle, core.settle):
+                for r in routes:
+                    r.unit.raw.out[r.index] = outs[id(r)]
+                for u, g in zip(sim.units, garbage):
+                    u.raw.inp[:u.raw.n_in] = g
+                for m, (c, last, good) in zip(net.messages, state):
+                    m.counter, m.last_counter, m.good_tick = c, last, good
+                try:
+                    settle()
+                    error = None
+                except ArtibusError as e:
+                    error = str(e)
+                got.append((error, _network_state(net, sim)))
+            assert got[0] == got[1], trial
+            if got[0][0] is None:
+                assert all(m.last_counter is None and m.good_tick == -m.ratio for m in net.messages)
+                moved += got[0][1][0] != [bytes(np.asarray(g).tobytes()) for g in garbage]
+            else:
+                assert "outside the signal's range" in got[0][0] and "t = nan s" in got[0][0]
+                errors += 1
+        assert moved > 100 and errors > 10
+
+
+def test_a_value_the_frame_cannot_carry_in_the_initialisation_is_the_same_error(tmp_path):
+    """The settle's error (t = nan: the initialisation) through the core as through Python."""
+    path = _packed(tmp_path, lambda t: t.replace("ArtAngleG1 : 16|16@1- (0.1,0) [-90|90]",
+                                                 "ArtAngleG1 : 16|16@1- (0.1,0) [80|90]"))
+    errors = []
+    for core in (True, False):
+        with Simulation(path) as sim:
+            with pytest.raises(ArtibusError) as e:
+                sim.run(stop_time=1.0, core=core)
+            assert sim.stepping.startswith("C core" if core else "Python loop")
+        errors.append(str(e.value))
+    assert errors[0] == errors[1] and "t = nan s" in errors[0] and "ArtAngleG1" in errors[0], errors
+
+
 @pytest.mark.parametrize("suffix", [".blf", ".asc"])
 def test_log_written_from_the_cores_frames_is_the_python_loops(tmp_path, suffix):
     """--can-log: the core records every frame, python-can's writer writes them

@@ -40,7 +40,8 @@ The runner's stepping core in C (src/runner_core/core.c) does the same tick,
 bit for bit (tests/test_can_core.py), where it can (``Network.core_support``:
 no faults, no tamper function, the virtual bus, integer signals): its own codec
 (cantools' scaling and rounding, checked against cantools on every signal),
-CRC, counter, the receivers' check and the counts; the frames go to the log
+CRC, counter, the receivers' check and the counts, and the initialisation's
+``settle`` too (runner._CanCore.settle); the frames go to the log
 after the run (``log_frames``), the bus carries none. Faults, a tamper function
 or a real interface tick here (``Network.tick``), as the run's
 ``Simulation.stepping`` says.

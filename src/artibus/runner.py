@@ -718,8 +718,8 @@ class Simulation:
                 self._busy = u
                 u.raw.read()
                 self._propagate(u if self.algorithm == "gauss-seidel" else None, start)
-            if self.can is not None:
-                self.can.settle()
+            if self.can is not None:     # the core's codec when the core ticks the network (_CanCore.settle)
+                (getattr(self, "_core_can", None) or self.can).settle()
             for u in self.order:
                 self._busy = u
                 self._propagate(u, start)
@@ -799,6 +799,7 @@ class Simulation:
         current = None
         plan = _Plan(self.order, n)
         stepper = _core_stepper(self, plan, None, core)
+        self._core_can = stepper.can if stepper is not None else None
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
@@ -809,7 +810,7 @@ class Simulation:
                 self.wall = _time.perf_counter() - wall0
                 if self.can is not None:
                     self.can.finish()
-                    return self._with_can_columns(result)
+                    return self._with_can_columns(result, stepper.table)
                 return result
             rec.take(t)
             for k in range(n):
@@ -860,9 +861,11 @@ class Simulation:
             return self._with_can_columns(rec.result())
         return rec.result()
 
-    def _with_can_columns(self, result):
+    def _with_can_columns(self, result, wide=None):
         """can.<message>.sinceGood: row i > 0 holds the value after the last tick
-        before it (the one whose frames the inputs recorded in row i got)."""
+        before it (the one whose frames the inputs recorded in row i got).
+        wide: the stepping core's table, the result's columns and then one
+        per message, filled here in place (no copy of the table)."""
         table = result.array()
         n = len(table)
         tick = np.maximum(np.arange(n) - 1, 0) // self.can_ratio
@@ -872,6 +875,11 @@ class Simulation:
             col[0] = 0.0
             cols.append(col)
             names.append(f"can.{name}.sinceGood")
+        m = table.shape[1]
+        if wide is not None and wide.shape == (n, m + len(cols)):
+            for j, col in enumerate(cols):
+                wide[:, m + j] = col
+            return Result.from_array(result.names + names, wide)
         return Result.from_array(result.names + names, np.column_stack([table] + cols))
 
     def close(self):
@@ -898,7 +906,8 @@ class Simulation:
 # Python keeps the set-up, the initialisation, the checks and the errors.
 # A bench that routes connections over CAN has its network ticked by the core
 # too (_CanCore: artibus.can.Network.tick's frames, codec, E2E, counts, bits and
-# since series in C, tests/test_can_core.py), unless it has faults, a log, a
+# since series in C, and the initialisation's settle: _CanCore.settle;
+# tests/test_can_core.py), unless it has faults, a
 # tamper function, a real interface or signals the core does not encode
 # (Network.core_support). Today's Python loop runs instead when the core does
 # not apply (the reason is in Simulation.stepping): such a CAN network, a bench
@@ -906,7 +915,7 @@ class Simulation:
 # variables, the library not built, or the core switched off (run(core=False)
 # or ARTIBUS_CORE=0).
 
-CORE_ABI = 4                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 5                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_CAN = 4                        # core.h: a frame could not be encoded
@@ -993,6 +1002,8 @@ def _core_library():
         lib.artibus_core_record_start.restype = None
         lib.artibus_core_run.argtypes = [c_void_p, c_long, c_long]
         lib.artibus_core_run.restype = c_int
+        lib.artibus_core_can_settle.argtypes = [c_void_p]
+        lib.artibus_core_can_settle.restype = c_int
         got = lib, None
     _core_libs[path] = got
     return got
@@ -1063,9 +1074,15 @@ class _CoreStepper:
         if plan.table is not None:
             self._ops(range(plan.period), plan.period)
         # recording: the Recorder's columns, each a place in an output buffer
-        self.rec = (c_void_p * max(1, len(sim.record)))(
-            *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record))
-        self.can = _CanCore(sim) if sim.can is not None else None
+        # and, with a CAN network, a column per message for its sinceGood
+        # (Simulation._with_can_columns fills them after the run; the core
+        # records a scratch value there): no copy of the table to add them
+        self.can = _CanCore(sim, lib) if sim.can is not None else None
+        self.extra = len(sim.can.messages) if sim.can is not None else 0
+        self._scratch = c_double(0.0)
+        self.rec = (c_void_p * max(1, len(sim.record) + self.extra))(
+            *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record),
+            *([addressof(self._scratch)] * self.extra))
 
     def _ops(self, steps, period):
         """op_start/op_kind/op_unit for the core: entry p (0 <= p < period) does base
@@ -1108,10 +1125,11 @@ class _CoreStepper:
         """Base steps 0 .. n - 1 from the initialised state: the Result, or
         SimulationError with the results up to the failure, as the Python loop."""
         sim = self.sim
-        table = np.empty((n + 1, len(sim.names)))
+        m = len(sim.names)
+        table = self.table = np.empty((n + 1, m + self.extra))     # (see __init__: the CAN columns)
         windowed = self.plan.table is None
         s = _AcSim(n_units=len(sim.units), units=addressof(self.units), start=start, h=h,
-                   n_cols=len(sim.names), rec=addressof(self.rec), table=table.ctypes.data)
+                   n_cols=m + self.extra, rec=addressof(self.rec), table=table.ctypes.data)
         if self.can is not None:
             s.can = self.can.begin(n)
         if not windowed:
@@ -1145,7 +1163,7 @@ class _CoreStepper:
                     t = start + k1 * h
                     sys.stderr.write(f"\r{sim.bench.name}: t = {t:8.2f} s  [{'#' * (50 * k1 // n):50s}]")
         except KeyboardInterrupt as e:     # Ctrl-C or SIGTERM (artibus.cli): the rows done go with it
-            e.result = Result.from_array(sim.names, table[:k0 + 1].copy())
+            e.result = Result.from_array(sim.names, table[:k0 + 1, :m].copy())
             raise
         finally:
             for a, u, written in zip(self.units, sim.units, self.written):
@@ -1163,10 +1181,10 @@ class _CoreStepper:
             log = u.fmu.log
             raise SimulationError(f"{sim.ssp}: component '{u.path}' failed at t = {t:g} s: "
                                   f"{_last_message(log)}",
-                                  Result.from_array(sim.names, table[:k + 1].copy()), list(log))
+                                  Result.from_array(sim.names, table[:k + 1, :m].copy()), list(log))
         if progress:
             sys.stderr.write("\n")
-        return Result.from_array(sim.names, table)
+        return Result.from_array(sim.names, table[:, :m] if self.extra else table)
 
 
 def can_signal(s, q=None):
@@ -1192,7 +1210,7 @@ class _CanCore:
     (counters, the receivers' E2E state, counts, bits, the since series), so
     Network.report, summary and since_series read as after the Python loop."""
 
-    def __init__(self, sim):
+    def __init__(self, sim, lib):
         from artibus.can import COUNTER_SIGNAL
         net = self.net = sim.can
         double = sizeof(c_double)
@@ -1216,6 +1234,20 @@ class _CanCore:
         self.c = _AcCan(n_messages=len(net.messages), messages=addressof(self.messages), ratio=sim.can_ratio,
                         tau=1.0 / net.bitrate)
         self.ratio = sim.can_ratio
+        self.lib = lib
+
+    def settle(self):
+        """Network.settle through the core's codec (artibus_core_can_settle), the
+        same frames, receivers' inputs and E2E state."""
+        net = self.net
+        for a, m in zip(self.messages, net.messages):
+            a.counter = m.counter
+        bad = self.lib.artibus_core_can_settle(addressof(self.c))
+        for m in net.messages[:bad] if bad >= 0 else net.messages:    # the messages it settled
+            m.last_counter = None
+            m.good_tick = -m.ratio
+        if bad >= 0:                   # Network._encode raises its error (t = nan in the initialisation)
+            self.refused(bad, float("nan"))
 
     def begin(self, n):
         """Before the run of n base steps: the network's state in."""

@@ -251,6 +251,36 @@ static long floordiv(long a, long b) {       /* Python's a // b */
     return q;
 }
 
+/* Network._deliver's end: the signals decoded into the receivers' inputs */
+static void decode_into(const ac_can_message *m, const unsigned char *d) {
+    for (int j = 0; j < m->n_signals; j++) {
+        const ac_can_signal *s = &m->signals[j];
+        const double v = artibus_can_decode(s, d);
+        for (int r = 0; r < s->n_receivers; r++)
+            *s->receivers[r].dst = s->receivers[r].factor * v;
+    }
+}
+
+/* Network._encode: message m's frame from its senders' outputs with the alive
+ * counter and the E2E CRC into d (8 bytes); 1 when a value is outside its
+ * signal's range or its raw bits */
+static int encode_frame(const ac_can_message *m, int counter, unsigned char *d) {
+    memcpy(d, m->fixed, 8);
+    for (int j = 0; j < m->n_signals; j++) {
+        const ac_can_signal *s = &m->signals[j];
+        if (!s->src)                         /* the AliveCounter: the network fills it */
+            continue;
+        const double v = s->factor * *s->src;
+        if (!(isfinite(v) && s->minimum <= v && v <= s->maximum))
+            return 1;
+        if (artibus_can_encode(s, v, d, m->dlc))
+            return 1;
+    }
+    d[1] |= (unsigned char)counter;          /* AliveCounter: bits 8-11 */
+    d[0] = (unsigned char)artibus_can_e2e_crc(d, m->dlc, m->data_id);
+    return 0;
+}
+
 /* Network._deliver: the receivers' E2E check, then the signals decoded into their inputs */
 static void deliver(ac_can_message *m, const unsigned char *d, long tick) {
     const int counter = d[1] & 0x0F;
@@ -277,12 +307,7 @@ static void deliver(ac_can_message *m, const unsigned char *d, long tick) {
     }
     m->last_counter = counter;
     m->good_tick = tick;
-    for (int j = 0; j < m->n_signals; j++) {
-        const ac_can_signal *s = &m->signals[j];
-        const double v = artibus_can_decode(s, d);
-        for (int r = 0; r < s->n_receivers; r++)
-            *s->receivers[r].dst = s->receivers[r].factor * v;
-    }
+    decode_into(m, d);
 }
 
 /* Network.tick(tick, t) without faults: returns -1, or the index of the message
@@ -300,19 +325,8 @@ static int can_tick(ac_can *c, long tick, double t) {
         m->produced++;
         const int counter = m->counter;
         m->counter = (m->counter + 1) % 16;
-        memcpy(d, m->fixed, 8);
-        for (int j = 0; j < m->n_signals; j++) {
-            const ac_can_signal *s = &m->signals[j];
-            if (!s->src)                     /* the AliveCounter: the network fills it */
-                continue;
-            const double v = s->factor * *s->src;
-            if (!(isfinite(v) && s->minimum <= v && v <= s->maximum))
-                return i;
-            if (artibus_can_encode(s, v, d, m->dlc))
-                return i;
-        }
-        d[1] |= (unsigned char)counter;      /* AliveCounter: bits 8-11 */
-        d[0] = (unsigned char)artibus_can_e2e_crc(d, m->dlc, m->data_id);
+        if (encode_frame(m, counter, d))
+            return i;
     }
     for (int i = 0; i < c->n_messages; i++) {   /* on the wire in identifier order */
         if (!due[i])
@@ -349,6 +363,24 @@ static int can_tick(ac_can *c, long tick, double t) {
         m->since[c->ticks] = (double)floordiv(tick - m->good_tick, m->ratio);
     }
     c->ticks++;
+    return -1;
+}
+
+/* Network.settle: each message's frame from its senders' outputs with its
+ * next counter (not advanced), delivered to its receivers as the first frame
+ * they see (no reference counter: the CRC always fits, so it is accepted);
+ * then the receivers' E2E state reset (no reference counter, the frame
+ * counting as the cycle before tick 0). Nothing is sent or counted. */
+AC_EXPORT int artibus_core_can_settle(ac_can *c) {
+    for (int i = 0; i < c->n_messages; i++) {
+        ac_can_message *m = &c->messages[i];
+        unsigned char d[8];
+        if (encode_frame(m, m->counter, d))
+            return i;
+        decode_into(m, d);
+        m->last_counter = -1;
+        m->good_tick = -(long)m->ratio;
+    }
     return -1;
 }
 

@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 4          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 5          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -139,6 +139,13 @@ int artibus_can_encode(const ac_can_signal *s, double v, unsigned char *data, in
 double artibus_can_decode(const ac_can_signal *s, const unsigned char *data);
 int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc);
 unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsigned data_id);
+
+/* artibus.can.Network.settle on the network's messages (their counter in):
+ * each frame encoded from its senders' outputs and decoded into its
+ * receivers' inputs, their E2E state reset (last_counter -1, good_tick
+ * -ratio). Returns -1, or the index of the message whose frame could not be
+ * encoded (Python's encoder says why); the messages before it are done. */
+int artibus_core_can_settle(ac_can *c);
 
 /* Record row 0 at t = start (after the initialisation). */
 void artibus_core_record_start(ac_sim *sim);
