@@ -366,3 +366,46 @@ def test_cases_are_handed_out_once_in_tasks_sized_by_their_time():
     for _ in range(4):
         long.took(3.0)                        # a case longer than MAX_S: one a task
     assert [len(long.next()) for _ in range(10)] == [1] * 10
+
+
+def test_a_case_that_kills_its_worker_fails_alone(tmp_path):
+    """Another's FMU may crash the process it runs in. The case that kills its
+    worker (here Driver.vSet = 4, R = 20: os._exit in the worker, a WorkerPlugin)
+    is recorded failed; the cases that shared its task (or waited on the worker
+    it killed) run again one a task and complete: every other case is ok."""
+    import logging
+
+    import dask
+    from dask.distributed import Client, LocalCluster, WorkerPlugin
+
+    class Killer(WorkerPlugin):
+        def setup(self, worker):
+            from artibus import sweep as s
+            run_case = s.run_case
+
+            def killing(*a, **k):
+                if a[4].get("Driver.vSet") == 4.0 and a[4].get("Driver.R") == 20.0:
+                    os._exit(3)
+                return run_case(*a, **k)
+            s.run_case = killing
+
+    # Dask gives up on a task at the first worker death (allowed-failures 0: the sweep's own
+    # retries are what is tested) and hands a worker one task at a time (worker-saturation 1:
+    # no case waits on the worker the killer takes down with it, so only the killer fails)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0,
+                          "distributed.scheduler.worker-saturation": 1.0}):
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.CRITICAL)
+        c = Client(cluster)
+        try:
+            c.register_plugin(Killer())
+            res = _run(tmp_path / "s", c, grid={"Driver.vSet": "2:5.5:0.5", "Driver.R": "15,20,25"})
+        finally:
+            c.close()
+            cluster.close()
+    rows = res.table.to_pylist()
+    assert len(rows) == 24
+    dead = sorted(r["Driver.R"] for r in rows if r["status"] != "ok")
+    assert dead == [20.0]
+    assert all(r["Driver.vSet"] == 4.0 and "worker" in r["error"] for r in rows if r["status"] != "ok")
+    assert all(r[KPI] > 0 for r in rows if r["status"] == "ok")

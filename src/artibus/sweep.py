@@ -35,6 +35,7 @@ case's values: a rerun skips finished cases, a changed FMU or .ssv reruns the
 cases it touches, an interrupted sweep resumes.
 """
 import atexit
+import collections
 import csv
 import hashlib
 import json
@@ -599,13 +600,16 @@ class _Chunks:
     together), but at least as many cases as run in MIN_S seconds and at most as
     many as in MAX_S seconds (by the median CPU time of the cases so far: an
     interrupted sweep loses about that much a worker). IN_FLIGHT tasks a worker
-    are submitted at once (one runs, the next waits on the worker)."""
+    are submitted at once (one runs, the next waits on the worker). The cases
+    of a task whose worker died go out again one a task (`alone`): only the
+    case that kills its worker fails, not the others it shared a task with."""
     MIN_S, MAX_S = 0.25, 2.0
     IN_FLIGHT = 2
 
     def __init__(self, items, client):
         from collections import deque
         self.pending = deque(items)
+        self.alone = deque()
         self.client = client
         self.cpu = []
         self.workers = 1
@@ -629,7 +633,12 @@ class _Chunks:
             self.cpu.append(cpu)
             del self.cpu[:-64]
 
+    def left(self):
+        return bool(self.pending or self.alone)
+
     def next(self):
+        if self.alone:
+            return [self.alone.popleft()]
         n = 1
         if len(self.cpu) >= 2 * self._workers():
             per_case = max(float(np.median(self.cpu)), 1e-6)
@@ -764,12 +773,14 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
             bar = _Progress(len(unique), skipped, progress) if progress else None
             chunks = _Chunks(unique, client)
             running = {}
+            tries = collections.Counter()             # a case's tasks lost with a dead worker
+            lost = collections.Counter()              # of them, cancelled: the bench's copy lost
 
             def submit():
                 items = chunks.next()
                 f = client.submit(run_cases, info.name, info.ssp_hash, str(info.ssp), data,
                                   [(keys[i], i, all_cases[i]) for i in items], fixed, stop_time, step, keep_series,
-                                  key=f"artibus-cases-{keys[items[0]]}-{len(items)}", pure=False, retries=0)
+                                  key=f"artibus-cases-{keys[items[0]]}-{len(items)}-{tries[items[0]]}", pure=False, retries=0)
                 running[f] = items
                 return f
 
@@ -780,12 +791,25 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                 try:
                     results = f.result()
                 except Exception as e:       # the worker died (not an error of a case)
-                    results = [(_case_row(keys[i], i, all_cases[i],
-                                          {"status": STATUS_FAILED, "error": f"worker: {type(e).__name__}: {e}",
-                                           "wall_s": math.nan}), None, None, math.nan) for i in items]
+                    if data.status != "finished":        # the bench's copies died with the workers
+                        data = client.scatter(info.ssp_bytes, broadcast=True, hash=False)
+                    # a task of several: which case killed it? each again alone. A case alone:
+                    # again up to 3 times after its worker died (it may have waited on a worker
+                    # another case killed), up to 10 after its bench copy was lost with one
+                    killed = type(e).__name__ == "KilledWorker"
+                    if len(items) > 1 or (tries[items[0]] < 3 if killed else lost[items[0]] < 10):
+                        for i in items:
+                            tries[i] += 1
+                            lost[i] += not killed
+                        chunks.alone.extend(items)
+                        items, results = [], []
+                    else:
+                        results = [(_case_row(keys[i], i, all_cases[i],
+                                              {"status": STATUS_FAILED, "error": f"worker: {type(e).__name__}: {e}",
+                                               "wall_s": math.nan}), None, None, math.nan) for i in items]
                 for *_, cpu in results:
                     chunks.took(cpu)
-                while chunks.pending and len(running) < chunks.in_flight():
+                while chunks.left() and len(running) < chunks.in_flight():
                     done.add(submit())       # the next task before this one's files: no worker waits
                 for i, (row, case_file, series_file, _) in zip(items, results):
                     bad = row["status"] != STATUS_OK
