@@ -155,6 +155,19 @@ def _packed(tmp_path, dbc):
     return out
 
 
+def _errors_core_and_python(path, stop_time):
+    """The error text of a run that must fail, through the C core and through the
+    Python loop (each checked to have run where it should)."""
+    errors = []
+    for core in (True, False):
+        with Simulation(path) as sim:
+            with pytest.raises(ArtibusError) as e:
+                sim.run(stop_time=stop_time, core=core)
+            assert sim.stepping.startswith("C core" if core else "Python loop")
+        errors.append(str(e.value))
+    return errors
+
+
 @pytest.mark.parametrize("change, words", [
     # the hinge G1 swings beyond 2 deg on the circle: the runner's range check
     (("ArtAngleG1 : 16|16@1- (0.1,0) [-90|90]", "ArtAngleG1 : 16|16@1- (0.1,0) [-2|2]"),
@@ -164,14 +177,7 @@ def _packed(tmp_path, dbc):
      ["message SensorG1_Angle:", "out of range"]),
 ])
 def test_a_value_the_frame_cannot_carry_is_the_same_error(tmp_path, change, words):
-    path = _packed(tmp_path, lambda t: t.replace(*change))
-    errors = []
-    for core in (True, False):
-        with Simulation(path) as sim:
-            with pytest.raises(ArtibusError) as e:
-                sim.run(stop_time=60.0, core=core)
-            assert sim.stepping.startswith("C core" if core else "Python loop")
-        errors.append(str(e.value))
+    errors = _errors_core_and_python(_packed(tmp_path, lambda t: t.replace(*change)), 60.0)
     assert errors[0] == errors[1] and all(w in errors[0] for w in words), errors
     t = float(errors[0].rpartition("t = ")[2].split(" ")[0].rstrip(")"))
     assert 0.0 < t < 60.0
@@ -240,13 +246,7 @@ def test_a_value_the_frame_cannot_carry_in_the_initialisation_is_the_same_error(
     """The settle's error (t = nan: the initialisation) through the core as through Python."""
     path = _packed(tmp_path, lambda t: t.replace("ArtAngleG1 : 16|16@1- (0.1,0) [-90|90]",
                                                  "ArtAngleG1 : 16|16@1- (0.1,0) [80|90]"))
-    errors = []
-    for core in (True, False):
-        with Simulation(path) as sim:
-            with pytest.raises(ArtibusError) as e:
-                sim.run(stop_time=1.0, core=core)
-            assert sim.stepping.startswith("C core" if core else "Python loop")
-        errors.append(str(e.value))
+    errors = _errors_core_and_python(path, 1.0)
     assert errors[0] == errors[1] and "t = nan s" in errors[0] and "ArtAngleG1" in errors[0], errors
 
 
