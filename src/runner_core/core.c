@@ -47,20 +47,40 @@ static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t) */
     }
 }
 
-static fmi2Status write_inputs(ac_unit *u) {  /* _RawCalls.write */
-    if (!u->n_in)
-        return fmi2OK;
-    size_t bytes = u->n_in * sizeof(double);
-    if (u->has_written && memcmp(u->in, u->written, bytes) == 0)
-        return fmi2OK;                       /* the FMU holds them already */
+static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the FMU holds them already */
+    return u->n_in && !(u->has_written && memcmp(u->in, u->written, u->n_in * sizeof(double)) == 0);
+}
+
+/* _RawCalls.write (write: its inputs changed), then Simulation._step(u, t)
+ * (step: the plan steps it right after, as Gauss-Seidel's propagate, write,
+ * step of one unit does): the FMU's calls within one pair of stamps, its
+ * time. Returns AC_OK or the function that failed, its status in *st. */
+static int call_unit(ac_unit *u, int write, int step, double t, fmi2Status *st) {
     const unsigned long long w = stamp();
-    fmi2Status st = u->setReal(u->component, u->in_vrs, u->n_in, u->in);
-    u->ticks += stamp() - w;                 /* the FMU's time, as its doStep's */
-    if (st > fmi2Warning)
-        return st;
-    memcpy(u->written, u->in, bytes);
-    u->has_written = 1;
-    return st;
+    if (write) {
+        *st = u->setReal(u->component, u->in_vrs, u->n_in, u->in);
+        if (*st > fmi2Warning) {
+            u->ticks += stamp() - w;
+            return AC_SET_REAL;
+        }
+    }
+    int failed = AC_OK;
+    if (step) {
+        *st = u->doStep(u->component, t, u->step, fmi2True);
+        if (*st > fmi2Warning)
+            failed = AC_DO_STEP;
+        else if (u->n_out) {
+            *st = u->getReal(u->component, u->out_vrs, u->n_out, u->out);
+            if (*st > fmi2Warning)
+                failed = AC_GET_REAL;
+        }
+    }
+    u->ticks += stamp() - w;
+    if (write) {                             /* the FMU holds them now */
+        memcpy(u->written, u->in, u->n_in * sizeof(double));
+        u->has_written = 1;
+    }
+    return failed;
 }
 
 static int fail(ac_sim *sim, int unit, int function, fmi2Status st, long k) {
@@ -101,6 +121,7 @@ AC_EXPORT unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsig
  * 4 * (the last bit) + (equal bits in a row - 1), 8 = none yet (the start). */
 static unsigned short crc15_byte[256];
 static unsigned char stuff_next[9][256], stuff_count[9][256];
+static unsigned char stuff_count7[9][128];   /* the stuff bits among 7 bits (the CRC's last) */
 static int can_tables_made;
 
 static int stuff_step(int state, int b, int *stuffed) {      /* can.frame_bits' loop, one bit */
@@ -127,6 +148,12 @@ static void make_can_tables(void) {
                 state = stuff_step(state, (i >> k) & 1, &stuffed);
             stuff_next[st][i] = (unsigned char)state;
             stuff_count[st][i] = (unsigned char)stuffed;
+            if (i < 128) {
+                state = st, stuffed = 0;
+                for (int k = 6; k >= 0; k--)
+                    state = stuff_step(state, (i >> k) & 1, &stuffed);
+                stuff_count7[st][i] = (unsigned char)stuffed;
+            }
         }
     }
     can_tables_made = 1;
@@ -145,35 +172,50 @@ static unsigned crc15_bit(unsigned crc, unsigned bit) {
     return (bit ^ (crc >> 14)) ? ((crc << 1) & 0x7FFF) ^ 0x4599 : (crc << 1) & 0x7FFF;
 }
 
-AC_EXPORT int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc) {
-    if (!can_tables_made)                    /* can.frame_bits, the same count */
+/* can.frame_bits in two parts. The frame's head, the same in every frame of a
+ * message: SOF 0, ID, RTR 0, IDE 0, r0 0, DLC: 3 bits (SOF, ID10, ID9), then two
+ * whole bytes (ID8..ID1; ID0, RTR, IDE, r0, DLC): the CRC-15 register
+ * (polynomial 0x4599, ISO 11898-1), the stuffing run's state and the stuff
+ * bits after it. */
+static void frame_head(unsigned id, int dlc, unsigned *crc, int *state, int *stuffed) {
+    if (!can_tables_made)
         make_can_tables();
-    /* SOF 0, ID, RTR 0, IDE 0, r0 0, DLC, data: 3 bits (SOF, ID10, ID9), then
-     * whole bytes (ID8..ID1; ID0, RTR, IDE, r0, DLC; the data), then the CRC-15 */
-    unsigned char bytes[10];
     const int head[3] = {0, (int)(id >> 10) & 1, (int)(id >> 9) & 1};
-    bytes[0] = (unsigned char)((id >> 1) & 0xFF);
-    bytes[1] = (unsigned char)(((id & 1) << 7) | ((unsigned)dlc & 0xF));
-    memcpy(bytes + 2, data, (size_t)dlc);
-    const int nb = 2 + dlc;
-    unsigned crc = 0;                        /* polynomial 0x4599 (ISO 11898-1) */
-    for (int i = 0; i < 3; i++)
-        crc = crc15_bit(crc, (unsigned)head[i]);
-    for (int b = 0; b < nb; b++)
-        crc = ((crc << 8) & 0x7FFF) ^ crc15_byte[((crc >> 7) ^ bytes[b]) & 0xFF];
-    /* stuff bits over all of them, the CRC's 15 bits last: its first 8 as a byte, 7 one by one */
-    int state = 8, stuffed = 0;
-    for (int i = 0; i < 3; i++)
-        state = stuff_step(state, head[i], &stuffed);
-    for (int b = 0; b < nb; b++) {
-        stuffed += stuff_count[state][bytes[b]];
-        state = stuff_next[state][bytes[b]];
+    const unsigned char bytes[2] = {(unsigned char)((id >> 1) & 0xFF),
+                                    (unsigned char)(((id & 1) << 7) | ((unsigned)dlc & 0xF))};
+    unsigned c = 0;
+    int st = 8, n = 0;
+    for (int i = 0; i < 3; i++) {
+        c = crc15_bit(c, (unsigned)head[i]);
+        st = stuff_step(st, head[i], &n);
+    }
+    for (int b = 0; b < 2; b++) {
+        c = ((c << 8) & 0x7FFF) ^ crc15_byte[((c >> 7) ^ bytes[b]) & 0xFF];
+        n += stuff_count[st][bytes[b]];
+        st = stuff_next[st][bytes[b]];
+    }
+    *crc = c, *state = st, *stuffed = n;
+}
+
+/* ... then the data bytes, and the CRC's 15 bits (stuffed too): its first 8 as
+ * a byte, its last 7 */
+static int frame_bits_after(unsigned crc, int state, int stuffed, const unsigned char *data, int dlc) {
+    for (int b = 0; b < dlc; b++) {
+        crc = ((crc << 8) & 0x7FFF) ^ crc15_byte[((crc >> 7) ^ data[b]) & 0xFF];
+        stuffed += stuff_count[state][data[b]];
+        state = stuff_next[state][data[b]];
     }
     stuffed += stuff_count[state][crc >> 7];
     state = stuff_next[state][crc >> 7];
-    for (int i = 6; i >= 0; i--)
-        state = stuff_step(state, (int)(crc >> i) & 1, &stuffed);
+    stuffed += stuff_count7[state][crc & 0x7F];
     return 19 + 8 * dlc + 15 + stuffed + 10 + 3;
+}
+
+AC_EXPORT int artibus_can_frame_bits(unsigned id, const unsigned char *data, int dlc) {
+    unsigned crc;                            /* can.frame_bits, the same count */
+    int state, stuffed;
+    frame_head(id, dlc, &crc, &state, &stuffed);
+    return frame_bits_after(crc, state, stuffed, data, dlc);
 }
 
 /* the raw bits' place in the frame: bit i of the raw value (0 = least significant) */
@@ -281,14 +323,15 @@ static int encode_frame(const ac_can_message *m, int counter, unsigned char *d) 
     return 0;
 }
 
-/* Network._deliver: the receivers' E2E check, then the signals decoded into their inputs */
+/* Network._deliver: the receivers' E2E check, then the signals decoded into
+ * their inputs. Its CRC check (e2e_crc(data, data_id) != data[0]: rejected,
+ * "crc") is not redone: the core runs only without faults and tamper, so the
+ * frame read here is the one encode_frame made this tick, whose byte 0 is
+ * that CRC over the same bytes; the check always passes and rejected_crc
+ * stays 0, as Python counts it. The counter checks may reject (a reference
+ * counter from before this run), so they stay. */
 static void deliver(ac_can_message *m, const unsigned char *d, long tick) {
     const int counter = d[1] & 0x0F;
-    if (artibus_can_e2e_crc(d, m->dlc, m->data_id) != d[0]) {
-        m->rejected++;
-        m->rejected_crc++;
-        return;
-    }
     if (m->last_counter >= 0) {
         const int delta = ((counter - m->last_counter) % 16 + 16) % 16;
         long allowed = floordiv(tick - m->good_tick, m->ratio);
@@ -332,12 +375,7 @@ static int can_tick(ac_can *c, long tick, double t) {
         if (!due[i])
             continue;
         ac_can_message *m = &c->messages[i];
-        const int slot = frames[i][1] & 0x0F;  /* its counter */
-        if (!m->bits_of[slot] || memcmp(m->bits_data[slot], frames[i], (size_t)m->dlc) != 0) {
-            memcpy(m->bits_data[slot], frames[i], (size_t)m->dlc);
-            m->bits_of[slot] = artibus_can_frame_bits(m->id, frames[i], m->dlc);
-        }
-        const int bits = m->bits_of[slot];
+        const int bits = frame_bits_after(m->head_crc, m->head_state, m->head_stuffed, frames[i], m->dlc);
         busy += bits;
         const long end = busy - 3;           /* end of its EOF */
         if (end > m->end_bits)
@@ -395,6 +433,10 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
     const unsigned long long c0 = stamp();
     for (int j = 0; j < sim->n_units; j++)
         sim->units[j].ticks = 0;
+    for (int i = 0; sim->can && i < sim->can->n_messages; i++) {
+        ac_can_message *m = &sim->can->messages[i];
+        frame_head(m->id, m->dlc, &m->head_crc, &m->head_state, &m->head_stuffed);
+    }
     const int result = run_steps(sim, k0, k1);
     const double dm = now() - m0;
     const unsigned long long dc = stamp() - c0;
@@ -420,33 +462,30 @@ static int run_steps(ac_sim *sim, long k0, long k1) {
             if (bad >= 0)
                 return fail(sim, bad, AC_CAN, fmi2OK, k);
         }
-        for (int i = sim->op_start[p]; i < sim->op_start[p + 1]; i++) {
+        const int end = sim->op_start[p + 1];
+        for (int i = sim->op_start[p]; i < end; i++) {
             const int j = sim->op_unit[i];
             ac_unit *u = &sim->units[j];
+            fmi2Status st = fmi2OK;
+            int failed = AC_OK;
             switch (sim->op_kind[i]) {
             case AC_PROPAGATE:
                 propagate(u);
                 break;
-            case AC_WRITE: {
-                fmi2Status st = write_inputs(u);
-                if (st > fmi2Warning)
-                    return fail(sim, j, AC_SET_REAL, st, k);
+            case AC_WRITE: {                                 /* _RawCalls.write, and its step if next */
+                const int step = i + 1 < end && sim->op_kind[i + 1] == AC_STEP && sim->op_unit[i + 1] == j;
+                const int write = inputs_changed(u);
+                if (write || step)
+                    failed = call_unit(u, write, step, t + h - u->step, &st);
+                i += step;
                 break;
             }
-            default: {                                       /* Simulation._step(u, t + h - u.step) */
-                const unsigned long long w = stamp();
-                fmi2Status st = u->doStep(u->component, t + h - u->step, u->step, fmi2True);
-                if (st > fmi2Warning)
-                    return fail(sim, j, AC_DO_STEP, st, k);
-                if (u->n_out) {
-                    st = u->getReal(u->component, u->out_vrs, u->n_out, u->out);
-                    if (st > fmi2Warning)
-                        return fail(sim, j, AC_GET_REAL, st, k);
-                }
-                u->ticks += stamp() - w;
+            default:                                         /* Simulation._step(u, t + h - u.step) */
+                failed = call_unit(u, 0, 1, t + h - u->step, &st);
                 break;
             }
-            }
+            if (failed)
+                return fail(sim, j, failed, st, k);
         }
         record(sim, k + 1, sim->start + (double)(k + 1) * h);   /* t = start + (k + 1) * h */
     }

@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 5          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 6          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -92,10 +92,11 @@ typedef struct {
     long long bits;
     long long end_bits;             /* the longest (busy - 3) bits at the end of one of its frames, -1: none */
     double *since;                  /* per tick: cycles since the last accepted frame */
-    /* its frames' bits on the wire, the last frame of each counter value (0: none yet):
-     * a frame repeats every 16 cycles while its signals hold (can.frame_bits' lru_cache) */
-    unsigned char bits_data[16][8];
-    int bits_of[16];
+    /* its frames' first 19 bits (SOF .. DLC), the same in every frame: the CRC-15
+     * register, the stuffing run's state and the stuff bits after them (the core
+     * sets them at each artibus_core_run) */
+    unsigned head_crc;
+    int head_state, head_stuffed;
 } ac_can_message;
 
 typedef struct {
