@@ -39,6 +39,7 @@ from artibus import ROOT, ArtibusError
 from artibus.parameters import check_against
 from artibus.simulation import Fmu, Result, SimulationError
 from artibus import ssp as ssp_mod
+from artibus import tables
 
 MAX_INIT_ITERATIONS = 50
 
@@ -711,25 +712,35 @@ class Simulation:
             s.enterInitializationMode()
             u.fmu.set_values(self.parameters[u.path])
             u.raw.written = None      # every connected input is set at least once
+        # the fixed point: the inputs of the units that have some (the others are settled
+        # as they are); _propagate leaves a unit without sources or stimuli as it is
+        watched = [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
+        fed = [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
+               for u in self.order]
+        gauss_seidel = self.algorithm == "gauss-seidel"
         for _ in range(MAX_INIT_ITERATIONS):
-            before = [list(u.in_values) for u in self.units]
-            typed_before = [list(getattr(u.raw, "tin_values", ())) for u in self.units]
-            for u in self.order:
+            before = [(list(u.in_values), list(getattr(u.raw, "tin_values", ()))) for u in watched]
+            for u, f, _ in fed:
                 self._busy = u
                 u.raw.read()
-                self._propagate(u if self.algorithm == "gauss-seidel" else None, start)
+                if not gauss_seidel:
+                    self._propagate(None, start)
+                elif f:
+                    self._propagate(u, start)
             if self.can is not None:     # the core's codec when the core ticks the network (_CanCore.settle)
                 (getattr(self, "_core_can", None) or self.can).settle()
-            for u in self.order:
+            for u, f, w in fed:
                 self._busy = u
-                self._propagate(u, start)
-                u.raw.write()
+                if f:
+                    self._propagate(u, start)
+                if w:                    # (without inputs, write sets nothing)
+                    u.raw.write()
             for u in self.units:
                 self._busy = u
                 u.raw.read()
             if all(_settled(b, u.in_values)
                    and tb == list(getattr(u.raw, "tin_values", ()))
-                   for b, tb, u in zip(before, typed_before, self.units)):
+                   for (b, tb), u in zip(before, watched)):
                 break
         else:
             raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
@@ -1083,6 +1094,14 @@ class _CoreStepper:
         self.rec = (c_void_p * max(1, len(sim.record) + self.extra))(
             *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record),
             *([addressof(self._scratch)] * self.extra))
+        # core.h's ac_sim of the run: all but the start, the step and the table (run sets those)
+        self.struct = s = _AcSim(n_units=len(units), units=addressof(self.units), n_cols=len(sim.names) + self.extra,
+                                 rec=addressof(self.rec))
+        if plan.table is not None:
+            s.period, s.op_start = self.period, addressof(self.op_start)
+            s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
+        self._struct_ref = byref(s)
+        self._each = [(a, u, u.raw, written) for a, u, written in zip(self.units, units, self.written)]
 
     def _ops(self, steps, period):
         """op_start/op_kind/op_unit for the core: entry p (0 <= p < period) does base
@@ -1124,23 +1143,22 @@ class _CoreStepper:
     def run(self, start, h, n, progress):
         """Base steps 0 .. n - 1 from the initialised state: the Result, or
         SimulationError with the results up to the failure, as the Python loop."""
-        sim = self.sim
+        sim, s = self.sim, self.struct
         m = len(sim.names)
-        table = self.table = np.empty((n + 1, m + self.extra))     # (see __init__: the CAN columns)
+        # (see __init__: the CAN columns); memory recycled from tables no longer referred to
+        # (artibus.tables: no page faults on memory in use already); the core writes it whole
+        table, s.table = tables.take(n + 1, m + self.extra)
+        self.table = table
         windowed = self.plan.table is None
-        s = _AcSim(n_units=len(sim.units), units=addressof(self.units), start=start, h=h,
-                   n_cols=m + self.extra, rec=addressof(self.rec), table=table.ctypes.data)
+        s.start, s.h = start, h
         if self.can is not None:
             s.can = self.can.begin(n)
-        if not windowed:
-            s.period, s.op_start = self.period, addressof(self.op_start)
-            s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
-        for a, u, written in zip(self.units, sim.units, self.written):
-            a.wall = 0.0
-            a.has_written = u.raw.written is not None
-            if a.has_written:
-                memmove(written, u.raw.written, len(u.raw.written))
-        self.lib.artibus_core_record_start(byref(s))
+        for a, _, raw, written in self._each:    # (the structs are new: a stepper per run)
+            if raw.written is not None:
+                a.has_written = 1
+                memmove(written, raw.written, len(raw.written))
+        lib, ref = self.lib, self._struct_ref
+        lib.artibus_core_record_start(ref)
         every = max(1, n // 50)
         # in pieces, so that Ctrl-C is seen between them (KeyboardInterrupt, as in
         # the Python loop); with the progress bar ending where the Python loop draws it
@@ -1155,7 +1173,7 @@ class _CoreStepper:
                     continue
                 if windowed:
                     self._window(s, k0, k1)
-                failed = self.lib.artibus_core_run(byref(s), k0, k1)
+                failed = lib.artibus_core_run(ref, k0, k1)
                 if failed:
                     break
                 k0 = k1
@@ -1166,10 +1184,10 @@ class _CoreStepper:
             e.result = Result.from_array(sim.names, table[:k0 + 1, :m].copy())
             raise
         finally:
-            for a, u, written in zip(self.units, sim.units, self.written):
+            for a, u, raw, written in self._each:
                 u.wall += a.wall
-                if a.has_written:
-                    u.raw.written = string_at(written, u.raw.n_in * sizeof(c_double))
+                if a.has_written:            # (n_in >= 1 doubles)
+                    raw.written = bytes(written)
             if self.can is not None:
                 self.can.end(start, h)
         if failed == _AC_CAN:          # a frame the encoder refused: artibus.can says why, as in the Python loop

@@ -32,8 +32,8 @@ class Result:
     def from_array(cls, names, table):
         """A result from a filled table (a row per time), kept as its array;
         its rows a view of the table's (no list of a row object per time)."""
-        result = cls(list(names), _ArrayRows(table))
-        result._array = table
+        result = cls.__new__(cls)           # (the fields' defaults without __init__'s calls)
+        result.__dict__.update(names=list(names), rows=_ArrayRows(table), strings={}, units={}, _array=table)
         return result
 
     #: String columns: {name: [text per row]} (their column in the array is NaN)
