@@ -135,6 +135,33 @@ def test_reused_instances_give_a_fresh_instances_results(variant, tmp_path):
     assert sw.release() == 1
 
 
+def test_a_kept_instance_serves_the_next_sweep_only_with_the_same_bench_content(tmp_path):
+    """A worker keeps its instances after a sweep (for the next one on the same
+    cluster); a case of an .ssp whose content changed at the same path (here
+    its variants) gets new instances, and what a plain run gives."""
+    p = tmp_path / f"{BENCH}.ssp"
+    p.write_bytes(Path(SSP).read_bytes())
+    case = {"Driver.vSet": 5.0, "Driver.R": 15.0}
+
+    def run(data):
+        import hashlib
+        row, _ = sw.run_case(BENCH, hashlib.sha256(data).hexdigest(), str(p), data, case, FIXED, STOP, None, False)
+        assert row["status"] == "ok", row["error"]
+        (sim, _), = sw._SIMS.values()
+        return row[KPI], sim
+
+    sw.release()
+    try:
+        k1, sim1 = run(p.read_bytes())
+        k2, sim2 = run(p.read_bytes())                  # the next sweep of the same bench
+        assert sim2 is sim1 and k2 == k1
+        _bench_with_variants(p, 5.0)                    # other content at the same path
+        k3, sim3 = run(p.read_bytes())
+        assert sim3 is not sim1 and k3 == k1 == _plain_kpis(case)[KPI]
+    finally:
+        assert sw.release() == 1
+
+
 def test_a_failing_case_is_recorded_and_the_rest_complete(tmp_path, client):
     kw = dict(grid={"Driver.vSet": "3,500,5", "Driver.R": "15,20"}, keep_series=True)
     res = _run(tmp_path / "s", client, **kw)
@@ -342,7 +369,7 @@ def test_latin_hypercube_and_monte_carlo_designs(tmp_path, client):
 
 
 def test_cases_are_handed_out_once_in_tasks_sized_by_their_time():
-    """_Chunks: every case once, in order; single cases until 2 per worker have
+    """_Chunks: every case once, in order; single cases until 1 per worker has
     come back; then tasks of a 1 / (2 workers) share of what is left, at least
     MIN_S and at most MAX_S seconds of work (by the cases' CPU time so far)."""
     class Client:
@@ -352,15 +379,18 @@ def test_cases_are_handed_out_once_in_tasks_sized_by_their_time():
     assert chunks.in_flight() == 2 * sw._Chunks.IN_FLIGHT           # two workers
     tasks = [chunks.next() for _ in range(4)]
     assert tasks == [[0], [1], [2], [3]]
-    for _ in range(4):
-        chunks.took(0.01)                     # 10 ms a case: MAX_S 2 s -> 200 cases, MIN_S 0.25 s -> 25
+    chunks.took(0.01)
+    tasks.append(chunks.next())
+    assert tasks[-1] == [4]                   # one result for two workers: still one case a task
+    for _ in range(3):
+        chunks.took(0.01)                     # 10 ms a case: MAX_S 2 s -> 200 cases, MIN_S 0.1 s -> 10
     while chunks.pending:
         tasks.append(chunks.next())
     flat = [i for t in tasks for i in t]
     assert flat == list(range(1000))
-    sizes = [len(t) for t in tasks[4:]]
-    assert sizes[0] == 200                    # 996 left: a quarter is 249, MAX_S caps it
-    assert all(25 <= n <= 200 for n in sizes[:-1]) and sizes[-1] <= 25
+    sizes = [len(t) for t in tasks[5:]]
+    assert sizes[0] == 200                    # 995 left: a quarter is 249, MAX_S caps it
+    assert all(10 <= n <= 200 for n in sizes[:-1]) and sizes[-1] <= 10
     assert sizes == sorted(sizes, reverse=True)     # shorter towards the end
     long = sw._Chunks(range(10), Client())
     for _ in range(4):

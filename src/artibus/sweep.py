@@ -12,13 +12,17 @@ The cases run as tasks on dask.distributed: a local cluster with one worker
 process per core (one thread each, Dask's periodic work made rare: QUIET), or
 an existing scheduler (``scheduler=``, ``--scheduler ADDRESS``), so the same
 command runs on a cluster. A task holds one case or several (_Chunks: about
-0.25 to 2 s of work, fewer towards the end), so Dask's cost per task (~10 ms of
-CPU in the client and scheduler, on the cores the workers need) is spread over
-its cases. A worker unpacks the bench once and reuses its FMU instances across
-cases (fmi2Reset, then the case's parameters and a new initialisation; the same
-results as a fresh instance, tests/test_sweep.py); a case that fails drops
-them. The worker also makes each case's row and Parquet files; the client only
-writes them, and makes the table once, at the end.
+0.1 to 2 s of work, fewer towards the end), so Dask's cost per task (~10 ms of
+CPU in the client and scheduler and ~9 ms in the worker, on the cores the
+workers need) is spread over its cases. A worker unpacks the bench once and
+reuses its FMU instances across cases (fmi2Reset, then the case's parameters
+and a new initialisation; the same results as a fresh instance,
+tests/test_sweep.py); a case that fails drops them. On a client the caller
+gives (``client=``), the workers keep them, and the bench's copy, for the next
+sweep of the same bench (``client.run(artibus.sweep.release)`` frees them); a
+sweep's own cluster or ``scheduler=`` client frees them at its end. The worker
+also makes each case's row and Parquet files; the client only writes them, and
+makes the table once, at the end.
 
 Results, in the output folder:
   cases/<key>.parquet    one row per case (its parameters, every KPI of the
@@ -48,6 +52,7 @@ import tempfile
 import threading
 import time
 import types
+import weakref
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,21 +82,44 @@ class BenchInfo:
     ssp_hash: str = ""       # hash of the whole .ssp (a worker's copy is known by it)
 
 
+_INFO = {}          # sha256 of an .ssp's bytes -> what bench_info reads from them (a sweep after another)
+
+
 def bench_info(bench):
-    from fmpy import read_model_description
     from artibus import benches, ssp as ssp_mod
     path = ssp_mod.ssp_path(bench)
-    b = ssp_mod.read(path)
     data = path.read_bytes()
-    variables, common, var_hash = {}, hashlib.sha256(), {}
-    with zipfile.ZipFile(path) as z, tempfile.TemporaryDirectory(prefix="artibus-sweep-") as tmp:
+    ssp_hash = hashlib.sha256(data).hexdigest()
+    got = _INFO.get(ssp_hash)
+    if got is None:                        # the .ssd and every FMU's model description: ~50 ms
+        got = _INFO[ssp_hash] = _ssp_info(path, data)
+        while len(_INFO) > 4:
+            del _INFO[next(iter(_INFO))]
+    name, variables, components, entries, var_hash = got
+    common = hashlib.sha256(entries)
+    bf = benches.bench_file(name)
+    if bf.is_file():
+        common.update(b"bench.py\0" + bf.read_bytes())
+    return BenchInfo(name, path, dict(variables), sorted(var_hash), list(components), common.hexdigest(),
+                     dict(var_hash), data, ssp_hash)
+
+
+def _ssp_info(path, data):
+    """(name, variables, components, the hash input of the entries but the variants, variant hashes) of an .ssp."""
+    import io
+
+    from fmpy import read_model_description
+    from artibus import ssp as ssp_mod
+    b = ssp_mod.read(path)
+    variables, common, var_hash = {}, [], {}
+    with zipfile.ZipFile(io.BytesIO(data)) as z, tempfile.TemporaryDirectory(prefix="artibus-sweep-") as tmp:
         for n in sorted(z.namelist()):
             content = z.read(n)
             h = hashlib.sha256(content).hexdigest()
             if n.startswith(f"{ssp_mod.VARIANT_DIR}/") and n.endswith(".ssv"):
                 var_hash[Path(n).stem] = h
             else:
-                common.update(f"{n}\0{h}\0".encode())
+                common.append(f"{n}\0{h}\0".encode())
         for cpath, c in b.components.items():
             f = Path(tmp) / c.source
             if not f.is_file():
@@ -101,11 +129,7 @@ def bench_info(bench):
             for v in md.modelVariables:
                 if v.causality in ("parameter", "input"):
                     variables[f"{cpath}.{v.name}"] = v
-    bf = benches.bench_file(b.name)
-    if bf.is_file():
-        common.update(b"bench.py\0" + bf.read_bytes())
-    return BenchInfo(b.name, path, variables, sorted(var_hash), list(b.components), common.hexdigest(),
-                     var_hash, data, hashlib.sha256(data).hexdigest())
+    return b.name, variables, list(b.components), b"".join(common), var_hash
 
 
 def typed_value(info, name, value, where):
@@ -361,8 +385,9 @@ def case_key(info, case, settings):
 #: FMU instances reused across cases (fmi2Reset and a new initialisation); False: a fresh Simulation each case
 REUSE = os.environ.get("ARTIBUS_SWEEP_REUSE", "1") != "0"
 _LOCK = threading.Lock()
-_SIMS = {}          # (thread, .ssp, step) -> a Simulation not in use, kept for the thread's next case
-_SSPS = {}          # (bench, content) -> the .ssp's path on this worker
+_SIMS = {}          # (thread, .ssp, step) -> (a Simulation not in use, the .ssp's content hash), kept for
+                    # the thread's next case (of this sweep, or of the next one on the same cluster)
+_SSPS = {}          # (bench, content) -> (the .ssp's path on this worker, its stat where not this worker's copy)
 _DIRS = []          # folders this worker made for .ssp files
 
 
@@ -372,15 +397,28 @@ def _worker_ssp(bench_name, content_hash, ssp_path, ssp_bytes):
     hash of the bytes (BenchInfo.ssp_hash, computed once by the client)."""
     key = (bench_name, content_hash if ssp_bytes else ssp_path)
     with _LOCK:
-        if key not in _SSPS:
-            p = Path(ssp_path)
+        got = _SSPS.get(key)
+        if got is not None and got[1] is not None and got[1] != _stat(got[0]):
+            got = None                  # the file at the path changed since (the cache outlives a sweep)
+        if got is None:
+            p, sig = Path(ssp_path), None
             if ssp_bytes and not (p.is_file() and p.read_bytes() == ssp_bytes):
                 d = Path(tempfile.mkdtemp(prefix="artibus-sweep-worker-"))
                 _DIRS.append(d)
                 p = d / f"{bench_name}.ssp"
                 p.write_bytes(ssp_bytes)
-            _SSPS[key] = str(p)
-        return _SSPS[key]
+            else:
+                sig = _stat(p)
+            got = _SSPS[key] = (str(p), sig)
+        return got[0]
+
+
+def _stat(path):
+    try:
+        st = os.stat(path)
+    except OSError:
+        return False
+    return st.st_ino, st.st_size, st.st_mtime_ns
 
 
 def release():
@@ -388,7 +426,7 @@ def release():
     sweep calls it on every worker at its end; also at exit). Returns how many."""
     import shutil
     with _LOCK:
-        sims = list(_SIMS.values())
+        sims = [sim for sim, _ in _SIMS.values()]
         _SIMS.clear()
         _SSPS.clear()
         dirs = list(_DIRS)
@@ -430,16 +468,20 @@ def _parameters(sim, overrides):
     return params
 
 
-def _simulate(ssp, overrides, stop_time, step):
+def _simulate(ssp, overrides, stop_time, step, content=None):
     """A Result; the Simulation kept for this thread's next case where it may
-    be reused (one a thread: another bench's is closed)."""
+    be reused (one a thread: another bench's is closed; content: the .ssp's
+    hash, a kept one of other content is closed)."""
     from artibus import runner
     me = threading.get_ident()
     key = (me, ssp, step)
     with _LOCK:
-        sim = _SIMS.pop(key, None)
+        sim, kept = _SIMS.pop(key, (None, None))
         others = [k for k in _SIMS if k[0] == me]
-        stale = [_SIMS.pop(k) for k in others]
+        stale = [_SIMS.pop(k)[0] for k in others]
+    if sim is not None and kept != content:
+        stale.append(sim)
+        sim = None
     for old in stale:
         old.close()
     if sim is not None:
@@ -460,7 +502,7 @@ def _simulate(ssp, overrides, stop_time, step):
     finally:
         if ok and REUSE and sim.can is None:
             with _LOCK:
-                _SIMS[key] = sim
+                _SIMS[key] = (sim, content)
         else:
             sim.close()
 
@@ -477,7 +519,7 @@ def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_ti
         overrides = {**(ssp_mod.variant_overrides(ssp, variants) if variants else {}), **fixed,
                      **{k: v for k, v in case.items() if k != "variant"}}
         stop = stop_time if stop_time is not None else (ssp_mod.variant_stop_time(ssp, variants) if variants else None)
-        r = _simulate(ssp, overrides, stop, step)
+        r = _simulate(ssp, overrides, stop, step, content_hash)
         try:
             for k in benches.kpis(bench_name, r):
                 v = k.value
@@ -532,9 +574,18 @@ def _parquet_bytes(table):
 
 
 def _write_bytes(data, path):
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
-    tmp.write_bytes(data)
+    """data into the file path, atomically (a hidden .part file renamed); plain os
+    calls: pathlib's open costs more system calls, paid a case in the client."""
+    path = os.fspath(path)
+    head, name = os.path.split(path)
+    tmp = os.path.join(head, f".{name}.{os.getpid()}.part")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    finally:
+        os.close(fd)
     os.replace(tmp, path)
 
 
@@ -563,6 +614,23 @@ def _table(rows):
 def _series_table(series):
     import pyarrow as pa
     return pa.table({k: np.asarray(v) for k, v in series.items()})
+
+
+_SCATTERED = weakref.WeakKeyDictionary()     # a client -> (.ssp hash, the future of its bytes on the workers)
+
+
+def _scatter(client, info, again=False):
+    """The bench's bytes on every worker (a future). On a client the caller gave,
+    the copy is kept for the next sweep of the same bench, as the workers keep
+    their instances (release() on the workers frees them: client.run(release))."""
+    got = _SCATTERED.get(client)
+    if again or got is None or got[0] != info.ssp_hash or got[1].status != "finished":
+        got = (info.ssp_hash, client.scatter(info.ssp_bytes, broadcast=True, hash=False))
+        try:
+            _SCATTERED[client] = got
+        except TypeError:
+            pass
+    return got[1]
 
 
 def _client(scheduler, workers):
@@ -595,15 +663,20 @@ class _Chunks:
     """The cases to run, handed out as tasks of several cases: a task's fixed
     cost (Dask's scheduler and client, ~10 ms of CPU a task on this 2-core
     machine, taken from the cores the workers run on) is then spread over its
-    cases. The first tasks hold one case each (a case's time is not known yet);
+    cases. The first tasks hold one case each (a case's time is not known yet;
+    as many as a worker's share of the first results: each costs its worker
+    ~30 ms more than its case);
     later ones a 1 / (2 workers) share of the cases left (so the workers finish
     together), but at least as many cases as run in MIN_S seconds and at most as
     many as in MAX_S seconds (by the median CPU time of the cases so far: an
-    interrupted sweep loses about that much a worker). IN_FLIGHT tasks a worker
+    interrupted sweep loses about that much a worker). MIN_S is small: it sets
+    the last tasks' size, and one worker waits up to that long for the other at
+    the end (0.25 s cost 2 workers 10-25 % on a sweep of 60 cases of 20 ms; a
+    task costs ~20 ms of CPU on this machine). IN_FLIGHT tasks a worker
     are submitted at once (one runs, the next waits on the worker). The cases
     of a task whose worker died go out again one a task (`alone`): only the
     case that kills its worker fails, not the others it shared a task with."""
-    MIN_S, MAX_S = 0.25, 2.0
+    MIN_S, MAX_S = 0.1, 2.0
     IN_FLIGHT = 2
 
     def __init__(self, items, client):
@@ -640,7 +713,7 @@ class _Chunks:
         if self.alone:
             return [self.alone.popleft()]
         n = 1
-        if len(self.cpu) >= 2 * self._workers():
+        if len(self.cpu) >= self._workers():
             per_case = max(float(np.median(self.cpu)), 1e-6)
             share = math.ceil(len(self.pending) / (2 * self._workers()))
             n = max(1, int(self.MIN_S / per_case), min(share, int(self.MAX_S / per_case)))
@@ -769,7 +842,8 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
         if own:
             client, cluster = _client(scheduler, workers)
         try:
-            data = client.scatter(info.ssp_bytes, broadcast=True, hash=False)
+            data = _scatter(client, info)
+            cases_dir, series_dir = os.fspath(out / CASES_DIR), os.fspath(out / SERIES_DIR)
             bar = _Progress(len(unique), skipped, progress) if progress else None
             chunks = _Chunks(unique, client)
             running = {}
@@ -792,7 +866,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                     results = f.result()
                 except Exception as e:       # the worker died (not an error of a case)
                     if data.status != "finished":        # the bench's copies died with the workers
-                        data = client.scatter(info.ssp_bytes, broadcast=True, hash=False)
+                        data = _scatter(client, info, again=True)
                     # a task of several: which case killed it? each again alone. A case alone:
                     # again up to 3 times after its worker died (it may have waited on a worker
                     # another case killed), up to 10 after its bench copy was lost with one
@@ -815,18 +889,18 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                     bad = row["status"] != STATUS_OK
                     failed += bad
                     if series_file is not None:
-                        _write_bytes(series_file, out / SERIES_DIR / f"{keys[i]}.parquet")
+                        _write_bytes(series_file, os.path.join(series_dir, f"{keys[i]}.parquet"))
                     _write_bytes(case_file if case_file is not None else _parquet_bytes(_table([row])),
-                                 out / CASES_DIR / f"{keys[i]}.parquet")
+                                 os.path.join(cases_dir, f"{keys[i]}.parquet"))
                     rows[keys[i]] = row
                     if bar:
                         bar.update(bad)
         finally:
-            try:
-                client.run(release)              # the workers' instances and .ssp copies
-            except Exception:
-                pass
             if own:
+                try:
+                    client.run(release)          # the workers' instances and .ssp copies
+                except Exception:
+                    pass
                 client.close()
                 if cluster is not None:
                     cluster.close()
