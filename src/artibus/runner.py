@@ -926,7 +926,7 @@ class Simulation:
 # variables, the library not built, or the core switched off (run(core=False)
 # or ARTIBUS_CORE=0).
 
-CORE_ABI = 6                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 7                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_CAN = 4                        # core.h: a frame could not be encoded
@@ -969,7 +969,8 @@ class _AcCanMessage(Structure):
                 ("produced", c_long), ("sent", c_long), ("rejected", c_long), ("rejected_crc", c_long),
                 ("rejected_repeated", c_long), ("rejected_sequence", c_long), ("bits", c_longlong),
                 ("end_bits", c_longlong), ("since", c_void_p), ("head_crc", c_uint), ("head_state", c_int),
-                ("head_stuffed", c_int)]
+                ("head_stuffed", c_int), ("seen", c_ulonglong * 16), ("seen_bits", c_int * 16),
+                ("seen_crc", c_ubyte * 16)]
 
 
 class _AcCan(Structure):

@@ -48,7 +48,18 @@ static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t) */
 }
 
 static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the FMU holds them already */
-    return u->n_in && !(u->has_written && memcmp(u->in, u->written, u->n_in * sizeof(double)) == 0);
+    if (!u->n_in)
+        return 0;
+    if (!u->has_written)
+        return 1;
+    for (size_t i = 0; i < u->n_in; i++) {   /* memcmp(in, written) != 0, a few doubles: no call */
+        unsigned long long a, b;
+        memcpy(&a, &u->in[i], sizeof a);
+        memcpy(&b, &u->written[i], sizeof b);
+        if (a != b)
+            return 1;
+    }
+    return 0;
 }
 
 /* _RawCalls.write (write: its inputs changed), then Simulation._step(u, t)
@@ -106,7 +117,9 @@ static void make_crc8h2f(void) {
     crc8h2f_made = 1;
 }
 
-AC_EXPORT unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsigned data_id) {
+/* The codec's functions are static, called directly (inlined) in the tick;
+ * the exported artibus_can_* below are for the tests. */
+static unsigned e2e_crc(const unsigned char *data, int dlc, unsigned data_id) {
     if (!crc8h2f_made)                       /* can.e2e_crc */
         make_crc8h2f();
     unsigned crc = 0xFF;
@@ -235,7 +248,7 @@ static double round_half_even(double x) {   /* Python's round(x): rint without l
     return x < 0 ? -((-x + two52) - two52) : (x + two52) - two52;
 }
 
-AC_EXPORT int artibus_can_encode(const ac_can_signal *s, double v, unsigned char *data, int dlc) {
+static int encode_signal(const ac_can_signal *s, double v, unsigned char *data, int dlc) {
     /* cantools: raw = round((v - offset) / scale), half to even (Python's round);
      * bitstruct refuses a raw value its bits cannot hold (OverflowError) */
     const double r = round_half_even((v - s->offset) / s->scale);
@@ -264,7 +277,7 @@ AC_EXPORT int artibus_can_encode(const ac_can_signal *s, double v, unsigned char
     return 0;
 }
 
-AC_EXPORT double artibus_can_decode(const ac_can_signal *s, const unsigned char *data) {
+static double decode_signal(const ac_can_signal *s, const unsigned char *data) {
     unsigned long long u = 0;
     if (!s->big_endian) {
         for (int b = s->start / 8; b <= (s->start + s->length - 1) / 8; b++)
@@ -284,6 +297,18 @@ AC_EXPORT double artibus_can_decode(const ac_can_signal *s, const unsigned char 
     return (double)raw * s->scale + s->offset;
 }
 
+AC_EXPORT unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsigned data_id) {
+    return e2e_crc(data, dlc, data_id);
+}
+
+AC_EXPORT int artibus_can_encode(const ac_can_signal *s, double v, unsigned char *data, int dlc) {
+    return encode_signal(s, v, data, dlc);
+}
+
+AC_EXPORT double artibus_can_decode(const ac_can_signal *s, const unsigned char *data) {
+    return decode_signal(s, data);
+}
+
 static long floordiv(long a, long b) {       /* Python's a // b */
     if (b == 1)
         return a;
@@ -297,15 +322,15 @@ static long floordiv(long a, long b) {       /* Python's a // b */
 static void decode_into(const ac_can_message *m, const unsigned char *d) {
     for (int j = 0; j < m->n_signals; j++) {
         const ac_can_signal *s = &m->signals[j];
-        const double v = artibus_can_decode(s, d);
+        const double v = decode_signal(s, d);
         for (int r = 0; r < s->n_receivers; r++)
             *s->receivers[r].dst = s->receivers[r].factor * v;
     }
 }
 
 /* Network._encode: message m's frame from its senders' outputs with the alive
- * counter and the E2E CRC into d (8 bytes); 1 when a value is outside its
- * signal's range or its raw bits */
+ * counter into d (8 bytes), byte 0 left for the E2E CRC; 1 when a value is
+ * outside its signal's range or its raw bits */
 static int encode_frame(const ac_can_message *m, int counter, unsigned char *d) {
     memcpy(d, m->fixed, 8);
     for (int j = 0; j < m->n_signals; j++) {
@@ -315,12 +340,31 @@ static int encode_frame(const ac_can_message *m, int counter, unsigned char *d) 
         const double v = s->factor * *s->src;
         if (!(isfinite(v) && s->minimum <= v && v <= s->maximum))
             return 1;
-        if (artibus_can_encode(s, v, d, m->dlc))
+        if (encode_signal(s, v, d, m->dlc))
             return 1;
     }
     d[1] |= (unsigned char)counter;          /* AliveCounter: bits 8-11 */
-    d[0] = (unsigned char)artibus_can_e2e_crc(d, m->dlc, m->data_id);
     return 0;
+}
+
+/* The frame's E2E CRC into d[0] and its bits on the wire (can.frame_bits), both
+ * functions of bytes 1..dlc-1 alone: a frame repeats every 16 cycles while its
+ * signals hold, so the last frame of each counter value is kept with them (as
+ * can.frame_bits' lru_cache; the bytes after dlc are 0) */
+static int crc_and_bits(ac_can_message *m, unsigned char *d) {
+    unsigned long long key = 0;
+    for (int b = 1; b < 8; b++)
+        key |= (unsigned long long)d[b] << (8 * b);
+    const int slot = d[1] & 0x0F;            /* its counter */
+    if (m->seen_bits[slot] && m->seen[slot] == key) {
+        d[0] = m->seen_crc[slot];
+        return m->seen_bits[slot];
+    }
+    d[0] = (unsigned char)e2e_crc(d, m->dlc, m->data_id);
+    m->seen[slot] = key;
+    m->seen_crc[slot] = d[0];
+    m->seen_bits[slot] = frame_bits_after(m->head_crc, m->head_state, m->head_stuffed, d, m->dlc);
+    return m->seen_bits[slot];
 }
 
 /* Network._deliver: the receivers' E2E check, then the signals decoded into
@@ -357,7 +401,7 @@ static void deliver(ac_can_message *m, const unsigned char *d, long tick) {
  * whose frame could not be encoded */
 static int can_tick(ac_can *c, long tick, double t) {
     unsigned char frames[64][8];
-    int due[64];
+    int due[64], bits_of[64];
     long busy = 0;
     for (int i = 0; i < c->n_messages; i++) {
         ac_can_message *m = &c->messages[i];
@@ -370,12 +414,13 @@ static int can_tick(ac_can *c, long tick, double t) {
         m->counter = (m->counter + 1) % 16;
         if (encode_frame(m, counter, d))
             return i;
+        bits_of[i] = crc_and_bits(m, d);
     }
     for (int i = 0; i < c->n_messages; i++) {   /* on the wire in identifier order */
         if (!due[i])
             continue;
         ac_can_message *m = &c->messages[i];
-        const int bits = frame_bits_after(m->head_crc, m->head_state, m->head_stuffed, frames[i], m->dlc);
+        const int bits = bits_of[i];
         busy += bits;
         const long end = busy - 3;           /* end of its EOF */
         if (end > m->end_bits)
@@ -415,6 +460,7 @@ AC_EXPORT int artibus_core_can_settle(ac_can *c) {
         unsigned char d[8];
         if (encode_frame(m, m->counter, d))
             return i;
+        d[0] = (unsigned char)e2e_crc(d, m->dlc, m->data_id);
         decode_into(m, d);
         m->last_counter = -1;
         m->good_tick = -(long)m->ratio;

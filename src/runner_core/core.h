@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 6          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 7          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -97,6 +97,11 @@ typedef struct {
      * sets them at each artibus_core_run) */
     unsigned head_crc;
     int head_state, head_stuffed;
+    /* the last frame of each counter value (bytes 1..7 as bits 8..63) with its E2E
+     * CRC and its bits on the wire; seen_bits 0: none yet */
+    unsigned long long seen[16];
+    int seen_bits[16];
+    unsigned char seen_crc[16];
 } ac_can_message;
 
 typedef struct {
