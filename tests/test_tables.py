@@ -132,8 +132,10 @@ def test_take_reuses_only_free_memory():
     del e
     f, _ = tables.take(1000, 7)                                     # far larger: new memory
     assert address(f) not in (at, bt)
-    g, _ = tables.take(3, 7)                                        # far smaller: not a big buffer
-    assert address(g) != address(f)
+    fa = address(f)
+    del f
+    g, _ = tables.take(3, 7)                                        # far smaller: not the big free one
+    assert address(g) != fa
 
 
 def test_pool_is_bounded(monkeypatch):

@@ -20,8 +20,9 @@ Bounded: the pool holds at most POOL_BYTES of tables, in use or not (a table
 beyond that is not pooled and freed as usual), and drops the least recently
 used free ones to make room. Thread-safe: one lock around taking a buffer (a
 free buffer has no other reference, so none can appear while the lock is
-held). POOL_BYTES = 0 switches recycling off."""
+held; a forked child gets a new lock). POOL_BYTES = 0 switches recycling off."""
 import mmap
+import os
 import sys
 import threading
 
@@ -49,6 +50,17 @@ def _calibrate():
 
 
 _FREE = _calibrate()
+
+
+def _after_fork():
+    """A child process (a sweep's worker) starts with the lock free: another thread
+    of the parent may have held it at the fork."""
+    global _lock
+    _lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork)
 
 
 def _huge(count):
@@ -118,11 +130,6 @@ def take(rows, cols):
             if held <= POOL_BYTES:
                 _buffers.append(e)
     return e[3].view(), e[2]
-
-
-def empty(rows, cols):
-    """take's table alone."""
-    return take(rows, cols)[0]
 
 
 def held():
