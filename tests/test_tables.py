@@ -149,6 +149,10 @@ def test_pool_is_bounded(monkeypatch):
         assert tables.held()[0] <= 1 << 20
     big, _ = tables.take(1 << 18, 1)                                # 2 MiB: beyond the pool, not pooled
     assert tables.held()[0] <= 1 << 20
+    many = [tables.take(10, 10)[0] for _ in range(3 * tables.POOL_COUNT)]   # many small ones kept
+    assert len(tables._buffers) <= tables.POOL_COUNT
+    del many
+    tables.take(10, 10)
     monkeypatch.setattr(tables, "POOL_BYTES", 0)                     # switched off
     tables.clear()
     tables.take(10, 10)

@@ -16,9 +16,9 @@ contents (an empty table is written whole before anything reads it):
   advised for transparent huge pages (MADV_HUGEPAGE; the kernel's "madvise"
   mode), 2 MiB aligned: a page fault per 2 MiB instead of per 4 KiB.
 
-Bounded: the pool holds at most POOL_BYTES of tables, in use or not (a table
-beyond that is not pooled and freed as usual), and drops the least recently
-used free ones to make room. Thread-safe: one lock around taking a buffer (a
+Bounded: the pool holds at most POOL_BYTES of tables in at most POOL_COUNT
+buffers, in use or not (a table beyond that is not pooled and freed as usual),
+and drops the least recently used free ones to make room. Thread-safe: one lock around taking a buffer (a
 free buffer has no other reference, so none can appear while the lock is
 held; a forked child gets a new lock). POOL_BYTES = 0 switches recycling off."""
 import mmap
@@ -29,6 +29,7 @@ import threading
 import numpy as np
 
 POOL_BYTES = 64 << 20        # the pool's tables together, in use or free
+POOL_COUNT = 32              # and at most this many (take looks at each)
 HUGE = 2 << 20               # from this size on: a mapping of its own, huge pages advised
 _PAGE = 4096
 _lock = threading.Lock()
@@ -118,16 +119,16 @@ def take(rows, cols):
                 return shaped.view(), e[2]
     buf = _allocate(max(count, 1))
     e = [buf, buf.size, buf.ctypes.data, buf[:count].reshape(rows, cols)]
-    if buf.nbytes <= POOL_BYTES:
+    if buf.nbytes <= POOL_BYTES and POOL_COUNT > 0:
         with _lock:
             held = sum(f[0].nbytes for f in _buffers) + buf.nbytes
             i = 0
-            while held > POOL_BYTES and i < len(_buffers):
+            while (held > POOL_BYTES or len(_buffers) >= POOL_COUNT) and i < len(_buffers):
                 if _free(_buffers[i]):                  # the least recently used free one goes
                     held -= _buffers.pop(i)[0].nbytes
                 else:
                     i += 1
-            if held <= POOL_BYTES:
+            if held <= POOL_BYTES and len(_buffers) < POOL_COUNT:
                 _buffers.append(e)
     return e[3].view(), e[2]
 
