@@ -446,26 +446,42 @@ atexit.register(release)
 
 def _parameters(sim, overrides):
     """The parameters a fresh Simulation would set: the bench's bindings, then
-    the case's overrides (as Simulation._setup does)."""
+    the case's overrides (as Simulation._setup does). The bench's own, resolved
+    and checked, are kept with the Simulation (the same every case: ~0.7 ms a
+    case checked again); each case's overrides are checked."""
     from artibus.parameters import check_against
     where = sim.bench.file
-    params = {p: dict(c.parameters) for p, c in sim.bench.components.items()}
+    units = {u.path: u for u in sim.units}
+    base = getattr(sim, "_sweep_bench_parameters", None)
+    if base is None:
+        base = {p: dict(c.parameters) for p, c in sim.bench.components.items()}
+        for path, values in base.items():
+            _resources(sim, where, values)
+            check_against(values, units[path].fmu.md, where, prefix=f"{path}.")
+        sim._sweep_bench_parameters = base
+    params = {p: dict(values) for p, values in base.items()}
+    changed = {}
     for full, value in overrides.items():
         comp, _, var = full.rpartition(".")
         if comp not in params:
             raise ArtibusError(f"--set {full}={value}: no component '{comp}' in {where}")
         params[comp][var] = value
-    for values in params.values():
-        for var, value in values.items():
-            if isinstance(value, str) and value.startswith("resources/"):
-                f = Path(sim._tmp) / value
-                if not f.is_file():
-                    raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
-                values[var] = str(f)
-    units = {u.path: u for u in sim.units}
-    for path, values in params.items():
+        changed.setdefault(comp, {})[var] = value
+    for path, values in changed.items():
+        _resources(sim, where, values)
         check_against(values, units[path].fmu.md, where, prefix=f"{path}.")
+        params[path].update(values)
     return params
+
+
+def _resources(sim, where, values):
+    """A value "resources/..." as the path of that file of the unpacked .ssp (in values)."""
+    for var, value in values.items():
+        if isinstance(value, str) and value.startswith("resources/"):
+            f = Path(sim._tmp) / value
+            if not f.is_file():
+                raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
+            values[var] = str(f)
 
 
 def _simulate(ssp, overrides, stop_time, step, content=None):
