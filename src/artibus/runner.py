@@ -1150,6 +1150,9 @@ class _CoreStepper:
         # (artibus.tables: no page faults on memory in use already); the core writes it whole
         table, s.table = tables.take(n + 1, m + self.extra)
         self.table = table
+        # the Result made now, while its code is at hand (after the run the FMUs have had
+        # the caches); the core fills its table
+        result = Result.from_array(sim.names, table[:, :m] if self.extra else table)
         windowed = self.plan.table is None
         s.start, s.h = start, h
         if self.can is not None:
@@ -1203,7 +1206,7 @@ class _CoreStepper:
                                   Result.from_array(sim.names, table[:k + 1, :m].copy()), list(log))
         if progress:
             sys.stderr.write("\n")
-        return Result.from_array(sim.names, table[:, :m] if self.extra else table)
+        return result
 
 
 def can_signal(s, q=None):
