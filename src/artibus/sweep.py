@@ -422,8 +422,10 @@ def _stat(path):
 
 
 def release():
-    """Close the instances this process keeps and remove its .ssp copies (the
-    sweep calls it on every worker at its end; also at exit). Returns how many."""
+    """Close the instances this process keeps and remove its .ssp copies (a
+    sweep on its own cluster or scheduler= client calls it on every worker at its
+    end; on a client= the workers keep them for the next sweep:
+    client.run(release) frees them; also at exit). Returns how many."""
     import shutil
     with _LOCK:
         sims = [sim for sim, _ in _SIMS.values()]
@@ -679,9 +681,9 @@ class _Chunks:
     """The cases to run, handed out as tasks of several cases: a task's fixed
     cost (Dask's scheduler and client, ~10 ms of CPU a task on this 2-core
     machine, taken from the cores the workers run on) is then spread over its
-    cases. The first tasks hold one case each (a case's time is not known yet;
-    as many as a worker's share of the first results: each costs its worker
-    ~30 ms more than its case);
+    cases. The first tasks hold one case each (a case's time is not known yet),
+    until one result a worker has come back (each such task costs ~20 ms of CPU
+    more than its case);
     later ones a 1 / (2 workers) share of the cases left (so the workers finish
     together), but at least as many cases as run in MIN_S seconds and at most as
     many as in MAX_S seconds (by the median CPU time of the cases so far: an
