@@ -3,7 +3,9 @@ the runner's Python loop: the same result table bit for bit on every bench it
 applies to and on the runner's own two-FMU benches (Gauss-Seidel, Jacobi,
 multi-rate, transformations), the same error, log and partial results when an
 FMU fails midway (in fmi2DoStep, in fmi2SetReal), and today's loop where the
-core does not apply. ``Simulation.run(core=False)`` (or ARTIBUS_CORE=0) is the
+core does not apply; the initialisation's rounds to the fixed point in the
+core (the same initialised state on every bench, the same errors when an FMU
+fails there or the inputs do not settle). ``Simulation.run(core=False)`` (or ARTIBUS_CORE=0) is the
 Python loop, ``core=True`` the core (an error where it does not apply)."""
 import zipfile
 
@@ -227,3 +229,76 @@ def test_library_next_to_the_fmus_in_use(tmp_path, monkeypatch):
     (tmp_path / "lib").mkdir()
     (tmp_path / "lib" / "libartibus_core.so").write_bytes(b"")
     assert core_library_path() == tmp_path / "lib" / "libartibus_core.so"
+
+
+# --- the initialisation's rounds to the fixed point in the core (artibus_core_settle) ---------
+
+def initialised(sim, core):
+    """Every unit's inputs, outputs and inputs last set, and the CAN network's
+    E2E state, right after Simulation._initialize (the run stops after a few steps)."""
+    state, initialize = [], sim._initialize
+
+    def snapshot(start):
+        initialize(start)
+        state.extend((bytes(u.raw.inp), bytes(u.raw.out), u.raw.written) for u in sim.units)
+        if sim.can is not None:
+            state.extend((m.counter, m.last_counter, m.good_tick) for m in sim.can.messages)
+    sim._initialize = snapshot
+    sim.run(stop_time=sim.bench.start_time + 5 * sim.base_step, core=core)
+    assert sim.stepping.startswith("C core" if core else "Python loop")
+    return state
+
+
+@pytest.mark.parametrize("bench", ssp.bench_names())
+def test_initialisation_of_every_bench_bit_for_bit(bench):
+    """Every unit's inputs, outputs and inputs last set after the rounds to the fixed
+    point in the core (artibus_core_settle), the Python loop's, bit for bit."""
+    states = []
+    for core in (True, False):
+        with Simulation(bench) as sim:
+            states.append(initialised(sim, core))
+            settled = getattr(sim, "settle_wall", 0.0)
+            assert (settled > 0) if core else settled == 0.0     # the core's rounds ran (and timed the FMUs)
+    assert states[0] == states[1]
+
+
+def damper_bench(tmp_path, offset):
+    """pct = 1000 beta[1] + offset: beta[1] is 0 at the start."""
+    damper = ('<ssd:Component name="Damper" source="resources/ArticulationDamper.fmu" '
+              'type="application/x-fmu-sharedlibrary"><ssd:Connectors>'
+              '<ssd:Connector name="pct" kind="input"><ssc:Real/></ssd:Connector>'
+              '<ssd:Connector name="Mmax" kind="output"><ssc:Real/></ssd:Connector>'
+              '</ssd:Connectors></ssd:Component>')
+    elements = component("Lead", [("beta[1]", "output"), ("kappa[0]", "output")]) + damper
+    connections = connection("Lead", "beta[1]", "Damper", "pct", f'factor="1000" offset="{offset}"')
+    return bench_with(tmp_path, elements, connections, ["BusKinematics", "ArticulationDamper"])
+
+
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_failing_set_real_in_the_initialisation_same_error(tmp_path, algorithm):
+    """pct = 75 % at the start, outside the damper's 0..50 %: its fmi2SetReal in the
+    initialisation's first round refuses it; the same error names the damper."""
+    e = failures(damper_bench(tmp_path, 75), algorithm)
+    assert "component 'Damper' failed at t = 0 s" in str(e) and "pct" in str(e)
+    assert len(e.result.time) == 0
+
+
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_not_settled_same_error(tmp_path, monkeypatch, algorithm):
+    """One round allowed: pct goes 0 -> 25 in it, so the inputs have not settled."""
+    import artibus.runner
+    monkeypatch.setattr(artibus.runner, "MAX_INIT_ITERATIONS", 1)
+    path = damper_bench(tmp_path, 25)
+    errors = []
+    for core in (True, False):
+        with Simulation(path, step=0.05, algorithm=algorithm) as sim:
+            with pytest.raises(ArtibusError) as e:
+                sim.run(core=core)
+            assert sim.stepping.startswith("C core" if core else "Python loop")
+            errors.append(str(e.value))
+    assert errors[0] == errors[1] and errors[0].endswith("initialisation did not settle in 1 iterations "
+                                                         "of the connected inputs")
+    monkeypatch.setattr(artibus.runner, "MAX_INIT_ITERATIONS", 2)      # two are enough
+    for core in (True, False):
+        with Simulation(path, step=0.05, algorithm=algorithm) as sim:
+            assert sim.run(stop_time=0.2, core=core)["Damper.Mmax"].size == 5

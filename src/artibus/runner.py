@@ -714,11 +714,15 @@ class Simulation:
             u.raw.written = None      # every connected input is set at least once
         # the fixed point: the inputs of the units that have some (the others are settled
         # as they are); _propagate leaves a unit without sources or stimuli as it is
-        watched = [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
-        fed = [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
-               for u in self.order]
+        settle, self._settle_core = getattr(self, "_settle_core", None), None   # (no cycle: it refers to self)
+        watched = () if settle else [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
+        fed = () if settle else [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
+                                 for u in self.order]
         gauss_seidel = self.algorithm == "gauss-seidel"
         for _ in range(MAX_INIT_ITERATIONS):
+            if settle is not None:       # the C core does these rounds, the same, bit for bit (_CoreStepper.settle)
+                settle.settle()
+                break
             before = [(list(u.in_values), list(getattr(u.raw, "tin_values", ()))) for u in watched]
             for u, f, _ in fed:
                 self._busy = u
@@ -811,6 +815,7 @@ class Simulation:
         plan = _Plan(self.order, n)
         stepper = _core_stepper(self, plan, None, core)
         self._core_can = stepper.can if stepper is not None else None
+        self._settle_core = stepper
         wall0 = _time.perf_counter()
         try:
             self._initialize(start)
@@ -914,7 +919,9 @@ class Simulation:
 # FMUs' own fmi2SetReal/fmi2DoStep/fmi2GetReal, on the same value buffers
 # (_RawCalls'), in the same order, with the same floating-point operations:
 # the results are the Python loop's, bit for bit (tests/test_runner_core.py).
-# Python keeps the set-up, the initialisation, the checks and the errors.
+# Python keeps the set-up, the checks and the errors; of the initialisation the
+# core does the rounds to the fixed point of the connected inputs (_CoreStepper.settle:
+# artibus_core_settle, the same calls, order and test as Simulation._initialize's loop).
 # A bench that routes connections over CAN has its network ticked by the core
 # too (_CanCore: artibus.can.Network.tick's frames, codec, E2E, counts, bits and
 # since series in C, and the initialisation's settle: _CanCore.settle;
@@ -926,10 +933,11 @@ class Simulation:
 # variables, the library not built, or the core switched off (run(core=False)
 # or ARTIBUS_CORE=0).
 
-CORE_ABI = 7                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 8                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_CAN = 4                        # core.h: a frame could not be encoded
+_AC_GET_REAL, _AC_SET_REAL, _AC_UNSETTLED = 2, 3, 5
 
 
 class _AcSource(Structure):
@@ -949,6 +957,12 @@ class _AcSim(Structure):
                 ("op_kind", c_void_p), ("op_unit", c_void_p), ("start", c_double), ("h", c_double),
                 ("can", c_void_p), ("n_cols", c_int), ("rec", c_void_p), ("table", c_void_p),
                 ("fail_unit", c_int), ("fail_function", c_int), ("fail_status", c_int), ("fail_k", c_long)]
+
+
+class _AcSettle(Structure):
+    _fields_ = [("order", c_void_p), ("n_order", c_int), ("gauss_seidel", c_int), ("max_iter", c_int),
+                ("can", c_void_p), ("before", c_void_p), ("fmu_wall", c_double), ("rounds", c_int),
+                ("can_settles", c_long)]
 
 
 class _AcCanReceiver(Structure):
@@ -1016,6 +1030,8 @@ def _core_library():
         lib.artibus_core_run.restype = c_int
         lib.artibus_core_can_settle.argtypes = [c_void_p]
         lib.artibus_core_can_settle.restype = c_int
+        lib.artibus_core_settle.argtypes = [c_void_p, c_void_p]
+        lib.artibus_core_settle.restype = c_int
         got = lib, None
     _core_libs[path] = got
     return got
@@ -1103,6 +1119,48 @@ class _CoreStepper:
             s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
         self._struct_ref = byref(s)
         self._each = [(a, u, u.raw, written) for a, u, written in zip(self.units, units, self.written)]
+        # core.h's ac_settle of the initialisation (settle): the order, the algorithm,
+        # the network, a scratch for the inputs before each round
+        order = (c_int * max(1, len(sim.order)))(*(index[id(u)] for u in sim.order))
+        before = (c_double * max(1, sum(u.raw.n_in for u in units)))()
+        self._keep += [order, before]
+        self.settling = _AcSettle(order=addressof(order), n_order=len(sim.order),
+                                  gauss_seidel=sim.algorithm == "gauss-seidel", before=addressof(before),
+                                  can=addressof(self.can.c) if self.can is not None else None)
+        self._settle_refs = (self._struct_ref, byref(self.settling))
+        self._inputs = [(a, raw, written) for a, _, raw, written in self._each if raw.n_in]
+
+    def settle(self):
+        """Simulation._initialize's rounds to the fixed point of the connected inputs
+        (artibus_core_settle): the same reads, propagations, writes and network settles
+        in the same order on the same buffers, the same test (_settled), the same
+        errors (self.sim._busy the failing unit). The time inside the FMUs' calls
+        there is added to sim.settle_wall (seconds)."""
+        sim, s, z = self.sim, self.struct, self.settling
+        if self.can is not None:           # (_CanCore.settle: the counters in)
+            for a, m in zip(self.can.messages, self.can.net.messages):
+                a.counter = m.counter
+        z.max_iter, z.fmu_wall = MAX_INIT_ITERATIONS, 0.0
+        try:
+            failed = self.lib.artibus_core_settle(*self._settle_refs)
+        finally:
+            sim.settle_wall = getattr(sim, "settle_wall", 0.0) + z.fmu_wall
+            for a, raw, written in self._inputs:
+                raw.written = bytes(written) if a.has_written else None
+        if self.can is not None:           # the messages settled: all once the network settled once
+            ms = self.can.net.messages
+            for m in ms if z.can_settles > 0 else ms[:s.fail_unit] if failed == _AC_CAN else ():
+                m.last_counter = None
+                m.good_tick = -m.ratio
+        if failed == _AC_CAN:              # Network._encode raises its error (t = nan in the initialisation)
+            self.can.refused(s.fail_unit, float("nan"))
+        if failed == _AC_UNSETTLED:
+            raise ArtibusError(f"{sim.bench.file}: initialisation did not settle in "
+                               f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
+        if failed:
+            sim._busy = sim.units[s.fail_unit]
+            raise FMICallException(function="fmi2GetReal" if failed == _AC_GET_REAL else "fmi2SetReal",
+                                   status=s.fail_status)
 
     def _ops(self, steps, period):
         """op_start/op_kind/op_unit for the core: entry p (0 <= p < period) does base

@@ -472,6 +472,102 @@ AC_EXPORT int artibus_core_abi(void) { return ARTIBUS_CORE_ABI; }
 
 AC_EXPORT void artibus_core_record_start(ac_sim *sim) { record(sim, 0, sim->start); }
 
+/* _RawCalls.read: fmi2GetReal of its outputs, its time in ticks */
+static int read_unit(ac_unit *u, fmi2Status *st) {
+    if (!u->n_out)
+        return AC_OK;
+    const unsigned long long w = stamp();
+    *st = u->getReal(u->component, u->out_vrs, u->n_out, u->out);
+    u->ticks += stamp() - w;
+    return *st > fmi2Warning ? AC_GET_REAL : AC_OK;
+}
+
+static int settled(double b, double x) {     /* runner._settled, one pair (tol 1e-12) */
+    const double tol = 1e-12;
+    return b == x || (isfinite(x) && fabs(b - x) <= tol + tol * fabs(x));
+}
+
+static int settle_rounds(ac_sim *sim, ac_settle *z) {
+    fmi2Status st = fmi2OK;
+    int failed;
+    double *before = z->before;
+    for (int it = 0; it < z->max_iter; it++) {
+        z->rounds = it + 1;
+        size_t at = 0;                       /* before = the watched units' inputs */
+        for (int j = 0; j < sim->n_units; j++) {
+            const ac_unit *u = &sim->units[j];
+            if (u->n_in)
+                memcpy(before + at, u->in, u->n_in * sizeof(double));
+            at += u->n_in;
+        }
+        for (int o = 0; o < z->n_order; o++) {
+            const int j = z->order[o];
+            ac_unit *u = &sim->units[j];
+            if ((failed = read_unit(u, &st)))
+                return fail(sim, j, failed, st, -1);
+            if (!z->gauss_seidel)            /* self._propagate(None, start) */
+                for (int q = 0; q < sim->n_units; q++)
+                    propagate(&sim->units[q]);
+            else if (u->n_sources)
+                propagate(u);
+        }
+        if (z->can) {                        /* _CanCore.settle */
+            const int bad = artibus_core_can_settle(z->can);
+            if (bad >= 0)
+                return fail(sim, bad, AC_CAN, fmi2OK, -1);
+            z->can_settles++;
+        }
+        for (int o = 0; o < z->n_order; o++) {
+            const int j = z->order[o];
+            ac_unit *u = &sim->units[j];
+            if (u->n_sources)
+                propagate(u);
+            if (inputs_changed(u) && (failed = call_unit(u, 1, 0, 0.0, &st)))
+                return fail(sim, j, failed, st, -1);
+        }
+        for (int j = 0; j < sim->n_units; j++)
+            if ((failed = read_unit(&sim->units[j], &st)))
+                return fail(sim, j, failed, st, -1);
+        int done = 1;
+        at = 0;
+        for (int j = 0; j < sim->n_units && done; j++) {
+            const ac_unit *u = &sim->units[j];
+            for (size_t i = 0; i < u->n_in && done; i++)
+                done = settled(before[at + i], u->in[i]);
+            at += u->n_in;
+        }
+        if (done)
+            return AC_OK;
+    }
+    return AC_UNSETTLED;
+}
+
+AC_EXPORT int artibus_core_settle(ac_sim *sim, ac_settle *z) {
+    const double m0 = now();
+    const unsigned long long c0 = stamp();
+    sim->fail_unit = -1;
+    sim->fail_function = AC_OK;
+    sim->fail_status = 0;
+    sim->fail_k = -1;
+    z->rounds = 0;
+    z->can_settles = 0;
+    for (int j = 0; j < sim->n_units; j++) {
+        sim->units[j].ticks = 0;
+        sim->units[j].has_written = 0;       /* every connected input is set at least once */
+    }
+    const int result = settle_rounds(sim, z);
+    const double dm = now() - m0;
+    const unsigned long long dc = stamp() - c0;
+    const double second = dc ? dm / (double)dc : 0.0;     /* seconds per count over this call */
+    unsigned long long ticks = 0;
+    for (int j = 0; j < sim->n_units; j++) {
+        ticks += sim->units[j].ticks;
+        sim->units[j].ticks = 0;
+    }
+    z->fmu_wall += (double)ticks * second;
+    return result;
+}
+
 static int run_steps(ac_sim *sim, long k0, long k1);
 
 AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {

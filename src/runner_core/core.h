@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 7          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 8          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -152,6 +152,35 @@ unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsigned data_i
  * -ratio). Returns -1, or the index of the message whose frame could not be
  * encoded (Python's encoder says why); the messages before it are done. */
 int artibus_core_can_settle(ac_can *c);
+
+/* Simulation._initialize's fixed point of the connected inputs (between
+ * the parameters and fmi2ExitInitializationMode), on the units' buffers:
+ * up to max_iter rounds of: each unit of order[0..n_order-1] read
+ * (fmi2GetReal) and its inputs propagated (Gauss-Seidel: its own, if it has
+ * sources; Jacobi: every unit's), the network settled (can: NULL, none), each
+ * unit of the order propagated and written (fmi2SetReal when its inputs
+ * changed; has_written 0 on entry: every input set once), every unit read;
+ * done when each input is within 1e-12 + 1e-12 |x| of its value before the
+ * round (_settled). */
+typedef struct {
+    const int *order;               /* n_order unit indices: Simulation.order */
+    int n_order;
+    int gauss_seidel;               /* 0: Jacobi */
+    int max_iter;                   /* MAX_INIT_ITERATIONS */
+    ac_can *can;                    /* NULL: no network */
+    double *before;                 /* scratch: the units' n_in summed */
+    /* results */
+    double fmu_wall;                /* seconds inside fmi2GetReal/fmi2SetReal (time-stamp counter), added */
+    int rounds;                     /* rounds begun */
+    long can_settles;               /* the network's settles done */
+} ac_settle;
+
+enum { AC_UNSETTLED = 5 };
+
+/* Returns AC_OK, the failing function (ac_sim's fail_unit, fail_status set;
+ * AC_CAN: fail_unit the message whose frame could not be encoded), or
+ * AC_UNSETTLED (max_iter rounds done). */
+int artibus_core_settle(ac_sim *sim, ac_settle *st);
 
 /* Record row 0 at t = start (after the initialisation). */
 void artibus_core_record_start(ac_sim *sim);
