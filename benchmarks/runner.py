@@ -41,8 +41,9 @@ REPEAT = 5   # runs per bench: this machine is shared, so the best and the media
 
 def _timed_initialization(sim):
     """sim's initialisation, timed: [seconds, of them inside the FMUs' calls] once it ran.
-    With the stepping core the rounds to the fixed point run in C, which times the
-    FMUs' fmi2GetReal/fmi2SetReal there itself (sim.settle_wall): counted as the FMUs'."""
+    With the stepping core the rounds to the fixed point and the FMUs' exit from
+    initialization mode run in C, which times the FMUs' fmi2GetReal/fmi2SetReal/
+    fmi2ExitInitializationMode there itself (sim.settle_wall): counted as the FMUs'."""
     spent, initialize = [0.0, 0.0], sim._initialize
 
     def inside(f):

@@ -302,3 +302,35 @@ def test_not_settled_same_error(tmp_path, monkeypatch, algorithm):
     for core in (True, False):
         with Simulation(path, step=0.05, algorithm=algorithm) as sim:
             assert sim.run(stop_time=0.2, core=core)["Damper.Mmax"].size == 5
+
+
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_failing_exit_initialization_same_error(tmp_path, algorithm):
+    """A damper whose geometry its model_init refuses (R = Xrear = Yrear = 5 cm:
+    a cylinder 2 cm long), no output read: its fmi2ExitInitializationMode fails,
+    after the rounds; the same error names the damper."""
+    import artibus.runner
+    damper = ('<ssd:Component name="Damper" source="resources/ArticulationDamper.fmu" '
+              'type="application/x-fmu-sharedlibrary"><ssd:Connectors>'
+              '<ssd:Connector name="pct" kind="input"><ssc:Real/></ssd:Connector>'
+              '</ssd:Connectors></ssd:Component>')
+    elements = component("Lead", [("beta[1]", "output"), ("kappa[0]", "output")]) + damper
+    path = bench_with(tmp_path, elements, connection("Lead", "beta[1]", "Damper", "pct", 'factor="1000" offset="25"'),
+                      ["BusKinematics", "ArticulationDamper"])
+    functions = []
+    initialize = artibus.runner.Simulation._initialize
+
+    def spy(self, start):
+        try:
+            initialize(self, start)
+        except Exception as e:
+            functions.append(getattr(e, "function", None))
+            raise
+    artibus.runner.Simulation._initialize = spy
+    try:
+        e = failures(path, algorithm, overrides={"Damper.R": 0.05, "Damper.Xrear": 0.05, "Damper.Yrear": 0.05})
+    finally:
+        artibus.runner.Simulation._initialize = initialize
+    assert functions == ["fmi2ExitInitializationMode"] * 2
+    assert "component 'Damper' failed at t = 0 s" in str(e) and "geometry R = 0.05 m" in str(e)
+    assert len(e.result.time) == 0

@@ -715,13 +715,14 @@ class Simulation:
         # the fixed point: the inputs of the units that have some (the others are settled
         # as they are); _propagate leaves a unit without sources or stimuli as it is
         settle, self._settle_core = getattr(self, "_settle_core", None), None   # (no cycle: it refers to self)
+        exited = False
         watched = () if settle else [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
         fed = () if settle else [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
                                  for u in self.order]
         gauss_seidel = self.algorithm == "gauss-seidel"
         for _ in range(MAX_INIT_ITERATIONS):
             if settle is not None:       # the C core does these rounds, the same, bit for bit (_CoreStepper.settle)
-                settle.settle()
+                exited = settle.settle()  # (and the loop below, unless FMPy logs the calls)
                 break
             before = [(list(u.in_values), list(getattr(u.raw, "tin_values", ()))) for u in watched]
             for u, f, _ in fed:
@@ -749,7 +750,7 @@ class Simulation:
         else:
             raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
                                f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
-        for u in self.units:
+        for u in () if exited else self.units:
             self._busy = u
             u.fmu.slave.exitInitializationMode()
             u.raw.read()
@@ -933,11 +934,11 @@ class Simulation:
 # variables, the library not built, or the core switched off (run(core=False)
 # or ARTIBUS_CORE=0).
 
-CORE_ABI = 8                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 9                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_CAN = 4                        # core.h: a frame could not be encoded
-_AC_GET_REAL, _AC_SET_REAL, _AC_UNSETTLED = 2, 3, 5
+_AC_GET_REAL, _AC_SET_REAL, _AC_UNSETTLED, _AC_EXIT_INIT = 2, 3, 5, 6
 
 
 class _AcSource(Structure):
@@ -961,7 +962,8 @@ class _AcSim(Structure):
 
 class _AcSettle(Structure):
     _fields_ = [("order", c_void_p), ("n_order", c_int), ("gauss_seidel", c_int), ("max_iter", c_int),
-                ("can", c_void_p), ("before", c_void_p), ("fmu_wall", c_double), ("rounds", c_int),
+                ("can", c_void_p), ("before", c_void_p), ("exit_init", c_void_p), ("fmu_wall", c_double),
+                ("rounds", c_int),
                 ("can_settles", c_long)]
 
 
@@ -1120,13 +1122,19 @@ class _CoreStepper:
         self._struct_ref = byref(s)
         self._each = [(a, u, u.raw, written) for a, u, written in zip(self.units, units, self.written)]
         # core.h's ac_settle of the initialisation (settle): the order, the algorithm,
-        # the network, a scratch for the inputs before each round
+        # the network, a scratch for the inputs before each round, and the FMUs'
+        # fmi2ExitInitializationMode (FMPy's call, without its call logger when none is set)
         order = (c_int * max(1, len(sim.order)))(*(index[id(u)] for u in sim.order))
         before = (c_double * max(1, sum(u.raw.n_in for u in units)))()
-        self._keep += [order, before]
+        exits = None
+        if all(u.fmu.slave.fmiCallLogger is None for u in units):
+            exits = (c_void_p * len(units))(
+                *(cast(u.fmu.slave.dll.fmi2ExitInitializationMode, c_void_p).value for u in units))
+        self._keep += [order, before, exits]
         self.settling = _AcSettle(order=addressof(order), n_order=len(sim.order),
                                   gauss_seidel=sim.algorithm == "gauss-seidel", before=addressof(before),
-                                  can=addressof(self.can.c) if self.can is not None else None)
+                                  can=addressof(self.can.c) if self.can is not None else None,
+                                  exit_init=addressof(exits) if exits is not None else None)
         self._settle_refs = (self._struct_ref, byref(self.settling))
         self._inputs = [(a, raw, written) for a, _, raw, written in self._each if raw.n_in]
 
@@ -1134,8 +1142,9 @@ class _CoreStepper:
         """Simulation._initialize's rounds to the fixed point of the connected inputs
         (artibus_core_settle): the same reads, propagations, writes and network settles
         in the same order on the same buffers, the same test (_settled), the same
-        errors (self.sim._busy the failing unit). The time inside the FMUs' calls
-        there is added to sim.settle_wall (seconds)."""
+        errors (self.sim._busy the failing unit); then, unless an FMU has FMPy's call
+        logger, each unit's fmi2ExitInitializationMode and read: True if so. The time
+        inside the FMUs' calls there is added to sim.settle_wall (seconds)."""
         sim, s, z = self.sim, self.struct, self.settling
         if self.can is not None:           # (_CanCore.settle: the counters in)
             for a, m in zip(self.can.messages, self.can.net.messages):
@@ -1159,8 +1168,10 @@ class _CoreStepper:
                                f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
         if failed:
             sim._busy = sim.units[s.fail_unit]
-            raise FMICallException(function="fmi2GetReal" if failed == _AC_GET_REAL else "fmi2SetReal",
+            raise FMICallException(function={_AC_GET_REAL: "fmi2GetReal", _AC_SET_REAL: "fmi2SetReal",
+                                             _AC_EXIT_INIT: "fmi2ExitInitializationMode"}[failed],
                                    status=s.fail_status)
+        return z.exit_init is not None
 
     def _ops(self, steps, period):
         """op_start/op_kind/op_unit for the core: entry p (0 <= p < period) does base

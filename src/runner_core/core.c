@@ -542,6 +542,23 @@ static int settle_rounds(ac_sim *sim, ac_settle *z) {
     return AC_UNSETTLED;
 }
 
+/* Simulation._initialize's end: each unit fmi2ExitInitializationMode, then read */
+static int exit_initialization(ac_sim *sim, ac_settle *z) {
+    fmi2Status st = fmi2OK;
+    int failed;
+    for (int j = 0; j < sim->n_units; j++) {
+        ac_unit *u = &sim->units[j];
+        const unsigned long long w = stamp();
+        st = z->exit_init[j](u->component);
+        u->ticks += stamp() - w;
+        if (st > fmi2Warning)
+            return fail(sim, j, AC_EXIT_INIT, st, -1);
+        if ((failed = read_unit(u, &st)))
+            return fail(sim, j, failed, st, -1);
+    }
+    return AC_OK;
+}
+
 AC_EXPORT int artibus_core_settle(ac_sim *sim, ac_settle *z) {
     const double m0 = now();
     const unsigned long long c0 = stamp();
@@ -555,7 +572,9 @@ AC_EXPORT int artibus_core_settle(ac_sim *sim, ac_settle *z) {
         sim->units[j].ticks = 0;
         sim->units[j].has_written = 0;       /* every connected input is set at least once */
     }
-    const int result = settle_rounds(sim, z);
+    int result = settle_rounds(sim, z);
+    if (result == AC_OK && z->exit_init)
+        result = exit_initialization(sim, z);
     const double dm = now() - m0;
     const unsigned long long dc = stamp() - c0;
     const double second = dc ? dm / (double)dc : 0.0;     /* seconds per count over this call */

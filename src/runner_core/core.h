@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 8          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 9          /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -161,7 +161,8 @@ int artibus_core_can_settle(ac_can *c);
  * unit of the order propagated and written (fmi2SetReal when its inputs
  * changed; has_written 0 on entry: every input set once), every unit read;
  * done when each input is within 1e-12 + 1e-12 |x| of its value before the
- * round (_settled). */
+ * round (_settled). Then, if exit_init is given, each unit in turn
+ * (units[0..n_units-1]) fmi2ExitInitializationMode and read. */
 typedef struct {
     const int *order;               /* n_order unit indices: Simulation.order */
     int n_order;
@@ -169,13 +170,14 @@ typedef struct {
     int max_iter;                   /* MAX_INIT_ITERATIONS */
     ac_can *can;                    /* NULL: no network */
     double *before;                 /* scratch: the units' n_in summed */
+    fmi2ExitInitializationModeTYPE *const *exit_init;   /* n_units, or NULL: Python exits */
     /* results */
     double fmu_wall;                /* seconds inside fmi2GetReal/fmi2SetReal (time-stamp counter), added */
     int rounds;                     /* rounds begun */
     long can_settles;               /* the network's settles done */
 } ac_settle;
 
-enum { AC_UNSETTLED = 5 };
+enum { AC_UNSETTLED = 5, AC_EXIT_INIT = 6 };
 
 /* Returns AC_OK, the failing function (ac_sim's fail_unit, fail_status set;
  * AC_CAN: fail_unit the message whose frame could not be encoded), or
