@@ -171,15 +171,7 @@ def test_failing_set_real_same_error_and_partial_results(tmp_path, algorithm):
     """pct = 1000 beta[1] + 25 leaves the damper's 0..50 % midway: its
     fmi2SetReal refuses it, and the error names the damper (the Python loop
     named the unit that stepped last before this change)."""
-    damper = ('<ssd:Component name="Damper" source="resources/ArticulationDamper.fmu" '
-              'type="application/x-fmu-sharedlibrary"><ssd:Connectors>'
-              '<ssd:Connector name="pct" kind="input"><ssc:Real/></ssd:Connector>'
-              '<ssd:Connector name="Mmax" kind="output"><ssc:Real/></ssd:Connector>'
-              '</ssd:Connectors></ssd:Component>')
-    elements = component("Lead", [("beta[1]", "output"), ("kappa[0]", "output")]) + damper
-    connections = connection("Lead", "beta[1]", "Damper", "pct", 'factor="1000" offset="25"')
-    path = bench_with(tmp_path, elements, connections, ["BusKinematics", "ArticulationDamper"])
-    e = failures(path, algorithm, overrides={"Lead.testSteerAmp": 0.2})
+    e = failures(damper_bench(tmp_path, 25), algorithm, overrides={"Lead.testSteerAmp": 0.2})
     assert "component 'Damper' failed at t = " in str(e) and "pct" in str(e)
     assert 0.5 < e.result.time[-1] < 10.0
     beta = e.result["Lead.beta[1]"]
