@@ -47,6 +47,7 @@ def client():
     from dask.distributed import Client, LocalCluster
     import logging
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},   # as artibus.sweep's
                            silence_logs=logging.CRITICAL)
     c = Client(cluster)
     yield c
@@ -425,6 +426,7 @@ def test_a_case_that_kills_its_worker_fails_alone(tmp_path):
     with dask.config.set({"distributed.scheduler.allowed-failures": 0,
                           "distributed.scheduler.worker-saturation": 1.0}):
         cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                                silence_logs=logging.CRITICAL)
         c = Client(cluster)
         try:
@@ -439,3 +441,28 @@ def test_a_case_that_kills_its_worker_fails_alone(tmp_path):
     assert dead == [20.0]
     assert all(r["Driver.vSet"] == 4.0 and "worker" in r["error"] for r in rows if r["status"] != "ok")
     assert all(r[KPI] > 0 for r in rows if r["status"] == "ok")
+
+
+def test_own_cluster_leaves_dask_port_8787_alone():
+    """The sweep's own local cluster opens no dashboard and does not take Dask's
+    8787: with 8787 taken (a user's own dashboard), no warning about it."""
+    import socket
+    import warnings
+    s = socket.socket()
+    try:
+        s.bind(("127.0.0.1", 8787))
+        s.listen()
+    except OSError:
+        pass                                    # taken already: the same situation
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            c, cluster = sw._client(None, 1)
+            try:
+                port = c.scheduler_info()["services"].get("dashboard")
+                assert port != 8787
+            finally:
+                c.close()
+                cluster.close()
+    finally:
+        s.close()

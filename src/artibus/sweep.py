@@ -663,7 +663,10 @@ def _client(scheduler, workers):
     import dask
     n = workers or os.cpu_count() or 1
     with dask.config.set(QUIET):
+        # no dashboard; the scheduler's HTTP server (health routes) on a free port of
+        # 127.0.0.1, not on Dask's 8787 (taken by a user's own dashboard: a warning)
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                                silence_logs=logging.CRITICAL)
     return Client(cluster), cluster
 
