@@ -325,6 +325,17 @@ def _order(units, links, where):
 PLAN_TABLE = 4096       # base steps of the plan's period tabulated at most (see _Plan)
 
 
+def resolve_resources(tmp, where, values):
+    """A String parameter "resources/<file>" names a file inside the .ssp: its
+    value in ``values`` becomes that file's path in the unpacked copy ``tmp``."""
+    for var, value in values.items():
+        if isinstance(value, str) and value.startswith("resources/"):
+            f = Path(tmp) / value
+            if not f.is_file():
+                raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
+            values[var] = str(f)
+
+
 def _settled(before, now, tol=1e-12):
     """np.allclose(before, now, rtol=tol, atol=tol), without NumPy's cost on a few
     values: |b - x| <= tol + tol * |x| for each pair, NaN never settled, an infinity
@@ -480,15 +491,8 @@ class Simulation:
                                    f"{_suggest(comp, self.parameters)} (components: {', '.join(self.parameters)})")
             self.parameters[comp][var] = value
             origins.setdefault(comp, {})[var] = "--set/--ssv/--variant"
-        # a String parameter "resources/<file>" names a file inside the .ssp: the
-        # FMU gets its path in the unpacked copy
         for values in self.parameters.values():
-            for var, value in values.items():
-                if isinstance(value, str) and value.startswith("resources/"):
-                    f = Path(self._tmp) / value
-                    if not f.is_file():
-                        raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
-                    values[var] = str(f)
+            resolve_resources(self._tmp, where, values)
         for path, values in self.parameters.items():
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
 

@@ -452,13 +452,14 @@ def _parameters(sim, overrides):
     and checked, are kept with the Simulation (the same every case: ~0.7 ms a
     case checked again); each case's overrides are checked."""
     from artibus.parameters import check_against
+    from artibus.runner import resolve_resources
     where = sim.bench.file
     units = {u.path: u for u in sim.units}
     base = getattr(sim, "_sweep_bench_parameters", None)
     if base is None:
         base = {p: dict(c.parameters) for p, c in sim.bench.components.items()}
         for path, values in base.items():
-            _resources(sim, where, values)
+            resolve_resources(sim._tmp, where, values)
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.")
         sim._sweep_bench_parameters = base
     params = {p: dict(values) for p, values in base.items()}
@@ -470,20 +471,10 @@ def _parameters(sim, overrides):
         params[comp][var] = value
         changed.setdefault(comp, {})[var] = value
     for path, values in changed.items():
-        _resources(sim, where, values)
+        resolve_resources(sim._tmp, where, values)
         check_against(values, units[path].fmu.md, where, prefix=f"{path}.")
         params[path].update(values)
     return params
-
-
-def _resources(sim, where, values):
-    """A value "resources/..." as the path of that file of the unpacked .ssp (in values)."""
-    for var, value in values.items():
-        if isinstance(value, str) and value.startswith("resources/"):
-            f = Path(sim._tmp) / value
-            if not f.is_file():
-                raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
-            values[var] = str(f)
 
 
 def _simulate(ssp, overrides, stop_time, step, content=None):
