@@ -33,6 +33,14 @@ static unsigned long long stamp(void) {
 #endif
 }
 
+/* the counter's rate over a call that began at (now(), stamp()) = (m0, c0):
+ * seconds per count, to turn the FMUs' counts into seconds */
+static double seconds_per_count(double m0, unsigned long long c0) {
+    const double dm = now() - m0;
+    const unsigned long long dc = stamp() - c0;
+    return dc ? dm / (double)dc : 0.0;
+}
+
 static void record(ac_sim *sim, long row, double t) {   /* _Recorder.take */
     double *r = sim->table + (size_t)row * (size_t)sim->n_cols;
     r[0] = t;
@@ -92,6 +100,13 @@ static int call_unit(ac_unit *u, int write, int step, double t, fmi2Status *st) 
         u->has_written = 1;
     }
     return failed;
+}
+
+static void no_failure(ac_sim *sim) {       /* no failure yet (fail() fills these) */
+    sim->fail_unit = -1;
+    sim->fail_function = AC_OK;
+    sim->fail_status = 0;
+    sim->fail_k = -1;
 }
 
 static int fail(ac_sim *sim, int unit, int function, fmi2Status st, long k) {
@@ -562,10 +577,7 @@ static int exit_initialization(ac_sim *sim, ac_settle *z) {
 AC_EXPORT int artibus_core_settle(ac_sim *sim, ac_settle *z) {
     const double m0 = now();
     const unsigned long long c0 = stamp();
-    sim->fail_unit = -1;
-    sim->fail_function = AC_OK;
-    sim->fail_status = 0;
-    sim->fail_k = -1;
+    no_failure(sim);
     z->rounds = 0;
     z->can_settles = 0;
     for (int j = 0; j < sim->n_units; j++) {
@@ -575,9 +587,7 @@ AC_EXPORT int artibus_core_settle(ac_sim *sim, ac_settle *z) {
     int result = settle_rounds(sim, z);
     if (result == AC_OK && z->exit_init)
         result = exit_initialization(sim, z);
-    const double dm = now() - m0;
-    const unsigned long long dc = stamp() - c0;
-    const double second = dc ? dm / (double)dc : 0.0;     /* seconds per count over this call */
+    const double second = seconds_per_count(m0, c0);
     unsigned long long ticks = 0;
     for (int j = 0; j < sim->n_units; j++) {
         ticks += sim->units[j].ticks;
@@ -599,9 +609,7 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
         frame_head(m->id, m->dlc, &m->head_crc, &m->head_state, &m->head_stuffed);
     }
     const int result = run_steps(sim, k0, k1);
-    const double dm = now() - m0;
-    const unsigned long long dc = stamp() - c0;
-    const double second = dc ? dm / (double)dc : 0.0;     /* seconds per count over this call */
+    const double second = seconds_per_count(m0, c0);
     for (int j = 0; j < sim->n_units; j++) {
         sim->units[j].wall += (double)sim->units[j].ticks * second;
         sim->units[j].ticks = 0;
@@ -611,10 +619,7 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
 
 static int run_steps(ac_sim *sim, long k0, long k1) {
     const double h = sim->h;
-    sim->fail_unit = -1;
-    sim->fail_function = AC_OK;
-    sim->fail_status = 0;
-    sim->fail_k = -1;
+    no_failure(sim);
     for (long k = k0; k < k1; k++) {
         const double t = sim->start + (double)k * h;         /* t = start + k * h */
         const int p = (int)(k % sim->period);
