@@ -716,18 +716,27 @@ class Simulation:
             s.enterInitializationMode()
             u.fmu.set_values(self.parameters[u.path])
             u.raw.written = None      # every connected input is set at least once
-        # the fixed point: the inputs of the units that have some (the others are settled
-        # as they are); _propagate leaves a unit without sources or stimuli as it is
         settle, self._settle_core = getattr(self, "_settle_core", None), None   # (no cycle: it refers to self)
-        exited = False
-        watched = () if settle else [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
-        fed = () if settle else [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
-                                 for u in self.order]
+        if settle is not None:           # the C core does the rounds, the same, bit for bit (_CoreStepper.settle),
+            exited = settle.settle()      # and the exits below unless FMPy logs the calls
+        else:
+            self._settle(start)
+            exited = False
+        for u in () if exited else self.units:
+            self._busy = u
+            u.fmu.slave.exitInitializationMode()
+            u.raw.read()
+        self._busy = None
+
+    def _settle(self, start):
+        """The initialisation's rounds to the fixed point of the connected inputs:
+        the inputs of the units that have some (the others are settled as they are);
+        _propagate leaves a unit without sources or stimuli as it is."""
+        watched = [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
+        fed = [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
+               for u in self.order]
         gauss_seidel = self.algorithm == "gauss-seidel"
         for _ in range(MAX_INIT_ITERATIONS):
-            if settle is not None:       # the C core does these rounds, the same, bit for bit (_CoreStepper.settle)
-                exited = settle.settle()  # (and the loop below, unless FMPy logs the calls)
-                break
             before = [(list(u.in_values), list(getattr(u.raw, "tin_values", ()))) for u in watched]
             for u, f, _ in fed:
                 self._busy = u
@@ -750,15 +759,9 @@ class Simulation:
             if all(_settled(b, u.in_values)
                    and tb == list(getattr(u.raw, "tin_values", ()))
                    for (b, tb), u in zip(before, watched)):
-                break
-        else:
-            raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
-                               f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
-        for u in () if exited else self.units:
-            self._busy = u
-            u.fmu.slave.exitInitializationMode()
-            u.raw.read()
-        self._busy = None
+                return
+        raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
+                           f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
 
     class _Recorder:
         """At every base step a copy of each recorded component's output buffer
