@@ -265,3 +265,9 @@ void ode_free(Ode *o) {
     if (o->ctx) SUNContext_Free(&o->ctx);
     free(o);
 }
+
+void ode_free_solver(ModelInstance *comp, Ode *o) {
+    ode_free(o);
+    free(comp->solver);
+    comp->solver = NULL;
+}

@@ -50,6 +50,12 @@ long ode_nrhs(const Ode *o);
 
 void ode_free(Ode *o);
 
+/* model_free of a model that integrates in doStep: its comp->solver is one
+   block from calloc (the model's Solver) that holds the integrator o. Frees o
+   and the block and clears comp->solver, so that the next doStep makes both
+   anew (fmi2Reset, fmi2FreeInstance, model_restored). */
+void ode_free_solver(struct ModelInstance *comp, Ode *o);
+
 #ifdef __cplusplus
 }
 #endif

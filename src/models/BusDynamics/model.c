@@ -237,11 +237,8 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) {
-    Solver *sv = comp->solver;
-    if (!sv) return;
-    ode_free(sv->ode);
-    free(sv);
-    comp->solver = NULL;
+    const Solver *sv = comp->solver;
+    if (sv) ode_free_solver(comp, sv->ode);
 }
 
 /* ---- Model Exchange: x = [z_1 .. z_6, z'_1 .. z'_6], the CVODE state of

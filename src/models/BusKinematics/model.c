@@ -209,11 +209,8 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) {
-    Solver *s = comp->solver;
-    if (!s) return;
-    ode_free(s->ode);
-    free(s);
-    comp->solver = NULL;
+    const Solver *s = comp->solver;
+    if (s) ode_free_solver(comp, s->ode);
 }
 
 /* ---- Model Exchange: x = [theta_j, x_j, y_j, beta_1 .. beta_4], the integrator's

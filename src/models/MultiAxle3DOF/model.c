@@ -166,11 +166,8 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 }
 
 void model_free(ModelInstance *comp) {
-    Solver *s = comp->solver;
-    if (!s) return;
-    ode_free(s->ode);
-    free(s);
-    comp->solver = NULL;
+    const Solver *s = comp->solver;
+    if (s) ode_free_solver(comp, s->ode);
 }
 
 /* ---- Model Exchange: x = [w_r, v, p, phi, psi, x, y], the CVODE state of
