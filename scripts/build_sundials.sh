@@ -17,18 +17,11 @@
 #        (default build-sundials; e.g. -DCMAKE_TOOLCHAIN_FILE=... for win64)
 # Environment: ARTIBUS_SUNDIALS_JOBS (default 2) parallel compile jobs.
 set -euo pipefail
-cd "$(dirname "$0")/.."
-ROOT="$PWD"
-W="${1:-build-sundials}"
+. "$(dirname "$0")/build_common.sh"     # ROOT (the working directory), work_dir, quiet
+W="$(work_dir "${1:-build-sundials}")"
 [ $# -gt 0 ] && shift
-case "$W" in /*) ;; *) W="$ROOT/$W" ;; esac
 JOBS="${ARTIBUS_SUNDIALS_JOBS:-2}"
-mkdir -p "$W"
-# run quietly; on failure show the end of the output
-quiet() {
-  local log="$W/sundials-step.log"
-  "$@" >"$log" 2>&1 || { tail -40 "$log" >&2; echo "sundials: failed: $*" >&2; return 1; }
-}
+QUIET_LOG="$W/sundials-step.log" QUIET_TAG=sundials
 
 # 1. the source: the same Debian version as the installed libsundials-dev
 ver="$(dpkg-query -W -f '${source:Version}' libsundials-dev)"

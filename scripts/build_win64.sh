@@ -13,17 +13,10 @@
 # (setup.sh installs them). Safe to run again: it does only what is missing or out of date.
 # Usage: scripts/build_win64.sh [BUILD_DIR]   (default build-win64)
 set -euo pipefail
-cd "$(dirname "$0")/.."
-ROOT="$PWD"
-B="${1:-build-win64}"
-case "$B" in /*) ;; *) B="$ROOT/$B" ;; esac
+. "$(dirname "$0")/build_common.sh"     # ROOT (the working directory), work_dir, quiet
+B="$(work_dir "${1:-build-win64}")"
 JOBS="${ARTIBUS_WIN64_JOBS:-2}"
-mkdir -p "$B"
-# run quietly; on failure show the end of the output
-quiet() {
-  local log="$B/last-step.log"
-  "$@" >"$log" 2>&1 || { tail -40 "$log" >&2; echo "win64: failed: $*" >&2; return 1; }
-}
+QUIET_LOG="$B/last-step.log" QUIET_TAG=win64
 
 # 1. SUNDIALS, static, for win64 (scripts/build_sundials.sh: Debian's source
 # package, the version of the installed libsundials-dev, as the linux build's)
