@@ -267,6 +267,58 @@ def test_bad_benches_name_file_element_value(tmp_path, case, words):
         assert str(ssp) in msg
 
 
+def road_bench(tmp_path, road_file):
+    """A RoadFollowDriver, its bench's parameter set giving it road = 0 and
+    roadFile = road_file, fed a BusKinematics' x[0]; the .ssp packs the road
+    resources/road.csv (a straight line, 'x,y' per line)."""
+    ssv = ('<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet ' + NS + ' version="1.0" name="p">'
+           '<ssv:Parameters><ssv:Parameter name="road"><ssv:Integer value="0"/></ssv:Parameter>'
+           f'<ssv:Parameter name="roadFile"><ssv:String value="{road_file}"/></ssv:Parameter>'
+           '</ssv:Parameters></ssv:ParameterSet>')
+    driver = ('<ssd:Component name="Driver" source="resources/RoadFollowDriver.fmu" '
+              'type="application/x-fmu-sharedlibrary"><ssd:Connectors><ssd:Connector name="x" kind="input">'
+              '<ssc:Real/></ssd:Connector></ssd:Connectors><ssd:ParameterBindings>'
+              '<ssd:ParameterBinding source="resources/p.ssv"/></ssd:ParameterBindings></ssd:Component>')
+    files = {"p.ssv": ssv, "road.csv": "".join(f"{10.0 * i},0\n" for i in range(11)),
+             "RoadFollowDriver.fmu": fmu_path("RoadFollowDriver").read_bytes()}
+    return make_ssp(tmp_path, component("Car", [("x[0]", "output")]) + driver,
+                    connection("Car", "x[0]", "Driver", "x"), stop=1.0, ssv=files)
+
+
+@pytest.mark.parametrize("where", ["ssv", "override"])
+def test_a_resources_parameter_naming_a_file_not_in_the_ssp(tmp_path, where):
+    """A String parameter "resources/<file>" names a file inside the .ssp
+    (runner.resolve_resources): one the .ssp does not hold, given by the bench's
+    parameter set or by an override, is refused when the bench is set up, before
+    any step, naming the bench, the parameter and the value; not passed on to
+    the FMU, whose own error would be about a path in a temporary directory.
+    The same bench with the file it packs is set up, the value the path of the
+    unpacked file."""
+    missing = "resources/raod.csv"
+    ssp = road_bench(tmp_path, missing if where == "ssv" else "resources/road.csv")
+    overrides = {"Driver.roadFile": missing} if where == "override" else {}
+    with pytest.raises(ArtibusError) as e:
+        Simulation(ssp, step=0.1, overrides=overrides)   # set up only: no step taken
+    msg = str(e.value)
+    assert msg.startswith(f"{ssp}/SystemStructure.ssd: ") and "parameter 'roadFile'" in msg, msg
+    assert f"= '{missing}'" in msg and "no such file in the .ssp" in msg, msg
+
+    # the CLI: the same text, exit status 1, no traceback, no result file
+    args = ["--set", f"Driver.roadFile={missing}"] if where == "override" else []
+    out = tmp_path / "r.csv"
+    r = subprocess.run([sys.executable, "-m", "artibus", "run", str(ssp), "--step", "0.1", *args,
+                        "-o", str(out)], capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 1 and "Traceback" not in r.stderr, r.stderr
+    assert msg in r.stderr and not out.exists(), r.stderr
+
+    # control: the file the .ssp holds is found and handed over as its unpacked path
+    with Simulation(road_bench(tmp_path, "resources/road.csv"), step=0.1) as sim:
+        given = sim.parameters["Driver"]["roadFile"]
+        assert given != "resources/road.csv" and given.endswith("/resources/road.csv")
+        with open(given) as f:
+            assert f.readline() == "0.0,0\n"
+
+
 def test_cli_run_errors_exit_nonzero_without_traceback(tmp_path):
     ssp = make_ssp(tmp_path, LEAD_FOLLOW["elements"], connection("Lead", "omega[9]", "Follow", "gammaF"))
     r = subprocess.run([sys.executable, "-m", "artibus", "run", str(ssp), "--step", "0.1"],
