@@ -30,6 +30,12 @@ def both(ssp_file, run_kw=None, **kw):
             assert sim.stepping == ("C core" if core else "Python loop: switched off (core=False)")
             walls = [u.wall for u in sim.units]
             assert all(w > 0 for w in walls) and sum(walls) < sim.wall   # the FMUs' share, measured in C too
+            net = sim.can.wall if sim.can is not None else 0.0
+            if core:   # the core's own time around them: the FMUs' calls and the network's ticks are within it
+                assert sum(walls) + net < sim.core_wall < sim.wall
+                assert (net > 0) == (sim.can is not None)
+            else:      # the Python loop's network is not timed
+                assert net == 0.0
     return out
 
 

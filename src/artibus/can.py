@@ -497,6 +497,7 @@ class Network:
         self.frames = 0
         self.error_frames = 0
         self.ticks = 0
+        self.wall = 0.0        # s inside its ticks, timed by the stepping core (not by the Python loop)
         self.observed = {}     # identifier -> longest time from queuing to the end of the frame, s
         self._seq = 0          # production order of frames
         self._at_tick = {}     # tick -> delayed frames queued exactly at it: [(seq, _Message, data, burst)]

@@ -822,6 +822,8 @@ class Simulation:
         current = None
         plan = _Plan(self.order, n)
         stepper = _core_stepper(self, plan, None, core)
+        if stepper is not None:
+            stepper.allocate(n)      # (the recorder's, as rec above)
         self._core_can = stepper.can if stepper is not None else None
         self._settle_core = stepper
         wall0 = _time.perf_counter()
@@ -941,7 +943,7 @@ class Simulation:
 # variables, the library not built, or the core switched off (run(core=False)
 # or ARTIBUS_CORE=0).
 
-CORE_ABI = 9                       # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 10                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_CAN = 4                        # core.h: a frame could not be encoded
@@ -963,8 +965,9 @@ class _AcUnit(Structure):
 class _AcSim(Structure):
     _fields_ = [("n_units", c_int), ("units", c_void_p), ("period", c_int), ("op_start", c_void_p),
                 ("op_kind", c_void_p), ("op_unit", c_void_p), ("start", c_double), ("h", c_double),
-                ("can", c_void_p), ("n_cols", c_int), ("rec", c_void_p), ("table", c_void_p),
-                ("fail_unit", c_int), ("fail_function", c_int), ("fail_status", c_int), ("fail_k", c_long)]
+                ("can", c_void_p), ("n_cols", c_int), ("n_runs", c_int), ("runs", c_void_p), ("table", c_void_p),
+                ("fail_unit", c_int), ("fail_function", c_int), ("fail_status", c_int), ("fail_k", c_long),
+                ("wall", c_double)]
 
 
 class _AcSettle(Structure):
@@ -999,7 +1002,11 @@ class _AcCanMessage(Structure):
 class _AcCan(Structure):
     _fields_ = [("n_messages", c_int), ("messages", c_void_p), ("ratio", c_int), ("tau", c_double),
                 ("ticks", c_long), ("frames", c_long), ("frame_cap", c_long), ("frame_tick", c_void_p),
-                ("frame_stamp", c_void_p), ("frame_data", c_void_p)]
+                ("frame_stamp", c_void_p), ("frame_data", c_void_p), ("stamps", c_ulonglong), ("wall", c_double)]
+
+
+class _AcRecRun(Structure):
+    _fields_ = [("src", c_void_p), ("col", c_int), ("n", c_int)]
 
 
 _core_libs = {}
@@ -1110,19 +1117,23 @@ class _CoreStepper:
         # of CORE_PIECE base steps at a time (see _window)
         if plan.table is not None:
             self._ops(range(plan.period), plan.period)
-        # recording: the Recorder's columns, each a place in an output buffer
-        # and, with a CAN network, a column per message for its sinceGood
-        # (Simulation._with_can_columns fills them after the run; the core
-        # records a scratch value there): no copy of the table to add them
+        # recording: the Recorder's columns, each a place in an output buffer, as runs
+        # of consecutive outputs; with a CAN network, a column per message after them
+        # for its sinceGood, filled by Simulation._with_can_columns after the run (no
+        # copy of the table to add them; the core leaves them)
         self.can = _CanCore(sim, lib) if sim.can is not None else None
         self.extra = len(sim.can.messages) if sim.can is not None else 0
-        self._scratch = c_double(0.0)
-        self.rec = (c_void_p * max(1, len(sim.record) + self.extra))(
-            *(addressof(u.raw.out) + double * u.out_names.index(n) for u, n in sim.record),
-            *([addressof(self._scratch)] * self.extra))
+        runs = []                                        # [address, first column, length]
+        for col, (u, n) in enumerate(sim.record, start=1):
+            a = addressof(u.raw.out) + double * u.out_names.index(n)
+            if runs and runs[-1][0] + double * runs[-1][2] == a:
+                runs[-1][2] += 1
+            else:
+                runs.append([a, col, 1])
+        self.runs = (_AcRecRun * max(1, len(runs)))(*(tuple(r) for r in runs))
         # core.h's ac_sim of the run: all but the start, the step and the table (run sets those)
         self.struct = s = _AcSim(n_units=len(units), units=addressof(self.units), n_cols=len(sim.names) + self.extra,
-                                 rec=addressof(self.rec))
+                                 n_runs=len(runs), runs=addressof(self.runs))
         if plan.table is not None:
             s.period, s.op_start = self.period, addressof(self.op_start)
             s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
@@ -1217,20 +1228,25 @@ class _CoreStepper:
         s.period, s.op_start = self.period, addressof(self.op_start)
         s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
 
+    def allocate(self, n):
+        """The run's preallocated table for n base steps (n + 1 rows; see __init__: the
+        CAN columns) and its Result, in the run's set-up (as the Python loop's recorder):
+        memory recycled from tables no longer referred to (artibus.tables: no page faults
+        on memory in use already); the core fills it."""
+        m = len(self.sim.names)
+        self.table, self.struct.table = tables.take(n + 1, m + self.extra)
+        self.result = Result.from_array(self.sim.names, self.table[:, :m] if self.extra else self.table)
+
     def run(self, start, h, n, progress):
-        """Base steps 0 .. n - 1 from the initialised state: the Result, or
-        SimulationError with the results up to the failure, as the Python loop."""
+        """Base steps 0 .. n - 1 from the initialised state into the table of
+        allocate(n): the Result, or SimulationError with the results up to the
+        failure, as the Python loop."""
         sim, s = self.sim, self.struct
         m = len(sim.names)
-        # (see __init__: the CAN columns); memory recycled from tables no longer referred to
-        # (artibus.tables: no page faults on memory in use already); the core writes it whole
-        table, s.table = tables.take(n + 1, m + self.extra)
-        self.table = table
-        # the Result made now, while its code is at hand (after the run the FMUs have had
-        # the caches); the core fills its table
-        result = Result.from_array(sim.names, table[:, :m] if self.extra else table)
+        table, result = self.table, self.result
+        assert len(table) == n + 1, "allocate(n) first"
         windowed = self.plan.table is None
-        s.start, s.h = start, h
+        s.start, s.h, s.wall = start, h, 0.0
         if self.can is not None:
             s.can = self.can.begin(n)
         for a, _, raw, written in self._each:    # (the structs are new: a stepper per run)
@@ -1264,6 +1280,7 @@ class _CoreStepper:
             e.result = Result.from_array(sim.names, table[:k0 + 1, :m].copy())
             raise
         finally:
+            sim.core_wall = s.wall           # s inside artibus_core_run (the FMUs' calls and the network's ticks too)
             for a, u, raw, written in self._each:
                 u.wall += a.wall
                 if a.has_written:            # (n_in >= 1 doubles)
@@ -1359,6 +1376,7 @@ class _CanCore:
             a.bits, a.end_bits = 0, -1
             a.since = self.since[i].ctypes.data
         self.c.ticks = self.c.frames = 0
+        self.c.wall = 0.0
         if self.net.writer is not None:     # every frame recorded, for the log (Network.log_frames)
             cap = sum(-(-ticks // m.ratio) for m in self.net.messages)
             self.frame_tick = np.zeros(cap, dtype=np.int64)      # (c_long: LP64)
@@ -1392,6 +1410,7 @@ class _CanCore:
                 m.longest, m.longest_at = int(since[j]), start + ((net.ticks + j) * self.ratio) * h
         net.frames += self.c.frames
         net.ticks += ticks
+        net.wall += self.c.wall
         if self.c.frame_cap:
             n = min(self.c.frames, self.c.frame_cap)
             ids = self.frame_data[:n, 0].astype(int) | (self.frame_data[:n, 1].astype(int) << 8)

@@ -44,8 +44,11 @@ static double seconds_per_count(double m0, unsigned long long c0) {
 static void record(ac_sim *sim, long row, double t) {   /* _Recorder.take */
     double *r = sim->table + (size_t)row * (size_t)sim->n_cols;
     r[0] = t;
-    for (int c = 1; c < sim->n_cols; c++)
-        r[c] = *sim->rec[c - 1];
+    for (int i = 0; i < sim->n_runs; i++) {  /* runs of consecutive outputs: a copy each */
+        const ac_rec_run *q = &sim->runs[i];
+        for (int c = 0; c < q->n; c++)
+            r[q->col + c] = q->src[c];
+    }
 }
 
 static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t) */
@@ -608,12 +611,19 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
         ac_can_message *m = &sim->can->messages[i];
         frame_head(m->id, m->dlc, &m->head_crc, &m->head_state, &m->head_stuffed);
     }
+    if (sim->can)
+        sim->can->stamps = 0;
     const int result = run_steps(sim, k0, k1);
     const double second = seconds_per_count(m0, c0);
     for (int j = 0; j < sim->n_units; j++) {
         sim->units[j].wall += (double)sim->units[j].ticks * second;
         sim->units[j].ticks = 0;
     }
+    if (sim->can) {
+        sim->can->wall += (double)sim->can->stamps * second;
+        sim->can->stamps = 0;
+    }
+    sim->wall += now() - m0;
     return result;
 }
 
@@ -624,7 +634,9 @@ static int run_steps(ac_sim *sim, long k0, long k1) {
         const double t = sim->start + (double)k * h;         /* t = start + k * h */
         const int p = (int)(k % sim->period);
         if (sim->can && (sim->can->ratio == 1 || k % sim->can->ratio == 0)) {              /* self.can.tick(k // can_ratio, t) */
+            const unsigned long long w = stamp();
             const int bad = can_tick(sim->can, k / sim->can->ratio, t);
+            sim->can->stamps += stamp() - w;
             if (bad >= 0)
                 return fail(sim, bad, AC_CAN, fmi2OK, k);
         }

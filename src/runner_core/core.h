@@ -16,7 +16,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 9          /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 10         /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -115,7 +115,17 @@ typedef struct {
     long *frame_tick;
     double *frame_stamp;
     unsigned char *frame_data;
+    /* the network's own time: its ticks within one artibus_core_run in the
+     * time-stamp counter (stamps), then added in seconds (wall) at its end */
+    unsigned long long stamps;
+    double wall;
 } ac_can;
+
+/* recording: n consecutive outputs from src into the row's columns col .. col + n - 1 */
+typedef struct {
+    const double *src;
+    int col, n;
+} ac_rec_run;
 
 typedef struct {
     int n_units;
@@ -128,13 +138,16 @@ typedef struct {
     const int *op_unit;
     double start, h;                /* t = start + k * h */
     ac_can *can;                    /* NULL: no CAN network */
-    /* recording: row r of table (n_cols doubles, row-major) is time then *rec[c] */
-    int n_cols;                     /* 1 + recorded columns */
-    const double *const *rec;       /* n_cols - 1 */
+    /* recording: row r of table (n_cols doubles, row-major) is the time in column 0,
+     * then each run's outputs in its columns (the columns of no run: not written) */
+    int n_cols;                     /* the row's length */
+    int n_runs;
+    const ac_rec_run *runs;
     double *table;                  /* (steps + 1) * n_cols */
     /* on failure */
     int fail_unit, fail_function, fail_status;
     long fail_k;                    /* the base step that failed */
+    double wall;                    /* seconds inside artibus_core_run, added (the FMUs' and the network's too) */
 } ac_sim;
 
 int artibus_core_abi(void);
