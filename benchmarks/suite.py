@@ -9,7 +9,7 @@
 2. Benches (every bench of ssp/benches, the C stepping core where it applies):
    real-time factor (simulated span / wall time of Simulation.run, the
    initialisation included, the set-up -- unpacking, loading -- not: Simulation.
-   wall, from the initialisation to the Result), best and median of REPEAT runs, and the runner's own share of the best run's wall time:
+   wall, from the initialisation to the Result), best and median of REPEAT runs (in rounds: each bench once a round), and the runner's own share of the best run's wall time:
    1 - (time inside the FMUs' functions) / wall. The time inside the FMUs'
    functions is what the C core measures around each fmi2DoStep, fmi2GetReal and
    fmi2SetReal call (clock_gettime, CLOCK_MONOTONIC) plus, in the
@@ -76,7 +76,7 @@ bench_runner = _load("runner")     # _timed_initialization, the two-BusKinematic
 bench_sweep = _load("sweep")       # run, report (the sweep throughput)
 
 QUICK = "--quick" in sys.argv[1:]
-REPEAT = 1 if QUICK else 5
+REPEAT = 1 if QUICK else 7
 FMU_STEPS = 300 if QUICK else 2000
 SWEEP_LENGTHS = ("short",) if QUICK else ("long", "short")
 SWEEP_REPEAT = 1 if QUICK else 2
@@ -131,38 +131,49 @@ def fmu_cost(path):
 
 # --- 2. benches ----------------------------------------------------------------------
 
-def bench(name, in_bench, variant=None):
-    """A bench's figures; with a variant (its parameter set) labelled BENCH/VARIANT."""
+def bench_run(name, in_bench, variant=None):
+    """One run of a bench: (wall, own share, its parts, init wall, stepping, run() time, span, base step, CAN)."""
     overrides = ssp.variant_overrides(name, [variant]) if variant else None
-    rows = []
+    with runner.Simulation(name, overrides=overrides) as sim:
+        init = bench_runner._timed_initialization(sim)
+        t0 = time.perf_counter()
+        r = sim.run()
+        call = time.perf_counter() - t0
+        span = r.time[-1] - r.time[0]
+        fmu = sum(u.wall for u in sim.units)
+        w = sim.wall
+        net = sim.can.wall if sim.can is not None else 0.0     # the network's ticks (timed by the C core)
+        core = getattr(sim, "core_wall", 0.0)                   # inside artibus_core_run (0: the Python loop)
+        # own = 1 - (fmu + init[1]) / w, in parts: the initialisation's own, the C core's own
+        # (outside the FMUs' calls and the network's ticks), the network's ticks, Python's (the rest)
+        parts = ((init[0] - init[1]) / w, (core - fmu - net) / w if core else 0.0, net / w,
+                 (w - init[0] - (core if core else 0.0)) / w)
+        for u in sim.units:
+            model = u.fmu.md.modelName
+            steps = round(span / u.step)
+            if sim.stepping == "C core" and steps and model not in in_bench:
+                in_bench[model] = (u.wall / steps, name)
+        return (w, 1 - (fmu + init[1]) / w, parts, init[0], sim.stepping, call, span, sim.base_step,
+                sim.can is not None)
+
+
+def benches(todo, in_bench):
+    """Every (bench, variant) of todo, REPEAT rounds of one run each in turn (a slow
+    phase of this shared machine, minutes long, then touches every bench alike
+    instead of all runs of one); a bench whose runs took LONG s stops (the Python loop)."""
+    rows = {key: [] for key in todo}
     for _ in range(REPEAT):
-        if sum(r[-1] for r in rows) > LONG:     # a slow bench (the Python loop): fewer runs
-            break
-        with runner.Simulation(name, overrides=overrides) as sim:
-            init = bench_runner._timed_initialization(sim)
-            t0 = time.perf_counter()
-            r = sim.run()
-            call = time.perf_counter() - t0
-            span = r.time[-1] - r.time[0]
-            fmu = sum(u.wall for u in sim.units)
-            w = sim.wall
-            net = sim.can.wall if sim.can is not None else 0.0     # the network's ticks (timed by the C core)
-            core = getattr(sim, "core_wall", 0.0)                   # inside artibus_core_run (0: the Python loop)
-            # own = 1 - (fmu + init[1]) / w, in parts: the initialisation's own, the C core's own
-            # (outside the FMUs' calls and the network's ticks), the network's ticks, Python's (the rest)
-            parts = ((init[0] - init[1]) / w, (core - fmu - net) / w if core else 0.0, net / w,
-                     (w - init[0] - (core if core else 0.0)) / w)
-            rows.append((w, 1 - (fmu + init[1]) / w, parts, init[0], sim.stepping, call))
-            for u in sim.units:
-                model = u.fmu.md.modelName
-                steps = round(span / u.step)
-                if sim.stepping == "C core" and steps and model not in in_bench:
-                    in_bench[model] = (u.wall / steps, name)
-    walls = [w for w, *_ in rows]
-    w, own, parts, init, stepping, call = min(rows)
-    return SimpleNamespace(name=f"{name}/{variant}" if variant else name, span=span, h=sim.base_step, rt=span / w,
-                           rt_median=span / statistics.median(walls), wall=w, own=own, parts=parts, init=init,
-                           stepping=stepping, call=call, runs=len(rows), can=sim.can is not None)
+        for (name, variant), runs in rows.items():
+            if sum(r[5] for r in runs) <= LONG:
+                runs.append(bench_run(name, in_bench, variant))
+    out = []
+    for (name, variant), runs in rows.items():
+        walls = [r[0] for r in runs]
+        w, own, parts, init, stepping, call, span, h, can = min(runs)
+        out.append(SimpleNamespace(name=f"{name}/{variant}" if variant else name, span=span, h=h, rt=span / w,
+                                   rt_median=span / statistics.median(walls), wall=w, own=own, parts=parts,
+                                   init=init, stepping=stepping, call=call, runs=len(runs), can=can))
+    return out
 
 
 # --- 3. against fmpy.ssp -------------------------------------------------------------
@@ -232,10 +243,9 @@ def main():
          f"stepping core {runner.core_library_path()}")
 
     # 2 first: the benches give the FMUs' cost inside a bench too
-    in_bench, results = {}, []
-    for name in ssp.bench_names():
-        results.append(bench(name, in_bench))
-    results.append(bench(GFM[0], in_bench, GFM[1]))       # seed 000's whole steering system, a target
+    in_bench = {}
+    results = benches([(name, None) for name in ssp.bench_names()]
+                      + [GFM], in_bench)                    # GFM: seed 000's whole steering system, a target
 
     line(f"\n1. FMUs: us per fmi2DoStep at the nominal step, alone (default experiment, direct ctypes calls, "
          f"best of {max(3, REPEAT)} x {FMU_STEPS} steps) and in a bench (doStep + getReal + setReal, C core)")
@@ -252,7 +262,8 @@ def main():
         line(f"   {path.stem:24s} {h:7.3g} {alone} {(f'{1e6 * ib[0]:12.2f}' if ib else f'{chr(45):>12s}')}  "
              f"{ib[1] if ib else ''}")
 
-    line(f"\n2. Benches: real-time factor and the runner's own share (best of {REPEAT} runs, fewer past {LONG:g} s; "
+    line(f"\n2. Benches: real-time factor and the runner's own share (best of {REPEAT} runs, in rounds over the "
+         f"benches, fewer past {LONG:g} s; "
          "own = 1 - time inside the FMUs' functions / wall, the initialisation included), and its profile: "
          "own = init (the initialisation's own) + core (the C core's loop outside the FMUs' calls) + CAN "
          "(the network's ticks in the core) + Py (Python around the core), each in % of the wall time")
