@@ -290,7 +290,8 @@ def test_a_resources_parameter_naming_a_file_not_in_the_ssp(tmp_path, where):
     """A String parameter "resources/<file>" names a file inside the .ssp
     (runner.resolve_resources): one the .ssp does not hold, given by the bench's
     parameter set or by an override, is refused when the bench is set up, before
-    any step, naming the bench, the parameter and the value; not passed on to
+    any step, naming the bench, the parameter, the value and where the value is
+    from (the .ssv inside the .ssp, or --set); not passed on to
     the FMU, whose own error would be about a path in a temporary directory.
     The same bench with the file it packs is set up, the value the path of the
     unpacked file."""
@@ -302,6 +303,8 @@ def test_a_resources_parameter_naming_a_file_not_in_the_ssp(tmp_path, where):
     msg = str(e.value)
     assert msg.startswith(f"{ssp}/SystemStructure.ssd: ") and "parameter 'roadFile'" in msg, msg
     assert f"= '{missing}'" in msg and "no such file in the .ssp" in msg, msg
+    # and where the value is from: the parameter set inside the .ssp, or the override
+    assert (f"(from {ssp}/resources/p.ssv" if where == "ssv" else "(from --set") in msg, msg
 
     # the CLI: the same text, exit status 1, no traceback, no result file
     args = ["--set", f"Driver.roadFile={missing}"] if where == "override" else []

@@ -325,14 +325,18 @@ def _order(units, links, where):
 PLAN_TABLE = 4096       # base steps of the plan's period tabulated at most (see _Plan)
 
 
-def resolve_resources(tmp, where, values):
+def resolve_resources(tmp, where, values, origins=None):
     """A String parameter "resources/<file>" names a file inside the .ssp: its
-    value in ``values`` becomes that file's path in the unpacked copy ``tmp``."""
+    value in ``values`` becomes that file's path in the unpacked copy ``tmp``.
+    An error names the bench (``where``) and where the value is from
+    (``origins[var]``: the parameter file and its element, or --set) where given."""
     for var, value in values.items():
         if isinstance(value, str) and value.startswith("resources/"):
             f = Path(tmp) / value
             if not f.is_file():
-                raise ArtibusError(f"{where}: parameter '{var}' = {value!r}: no such file in the .ssp")
+                origin = (origins or {}).get(var)
+                raise ArtibusError(f"{where}: parameter '{var}' = {value!r}"
+                                   + (f" (from {origin})" if origin else "") + ": no such file in the .ssp")
             values[var] = str(f)
 
 
@@ -491,8 +495,8 @@ class Simulation:
                                    f"{_suggest(comp, self.parameters)} (components: {', '.join(self.parameters)})")
             self.parameters[comp][var] = value
             origins.setdefault(comp, {})[var] = "--set/--ssv/--variant"
-        for values in self.parameters.values():
-            resolve_resources(self._tmp, where, values)
+        for path, values in self.parameters.items():
+            resolve_resources(self._tmp, where, values, origins.get(path))
         for path, values in self.parameters.items():
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
 
