@@ -149,3 +149,30 @@ def test_hinge_force_peak_only_while_moving():
     assert kpi.peak_while_moving(np.where(t > 11.0, F, 0.0), v) == pytest.approx(3000.0, rel=1e-3)   # backwards
     assert math.isnan(kpi.peak_while_moving(F, np.zeros_like(t)))
     assert kpi.peak_while_moving([7.0, 1.0], [0.1, 0.2]) == 1.0   # |v| = 0.1 is standing still
+
+
+def test_swept_path_projection_a_few_instants_at_a_time_is_each_instant_alone():
+    """kpi._project_local projects several instants at a time, each on its own
+    window of the reference (padded to the longest): the same numbers, bit for
+    bit, as _project on each instant's window alone (its arc length from the
+    window's start, plus the start's), on random references, outlines, windows
+    that clip at either end and batch sizes."""
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        n = int(rng.integers(3, 60))
+        ref = np.cumsum(rng.normal(size=(n, 2)), axis=0)
+        frames = rng.normal(scale=3.0, size=(int(rng.integers(1, 20)), int(rng.integers(1, 9)), 2)) \
+            + ref[rng.integers(0, n - 1)]
+        centre, window = rng.integers(0, n - 1, size=len(frames)), float(rng.uniform(0.1, 20.0))
+        seg = np.hypot(*np.diff(ref, axis=0).T)
+        s0 = np.concatenate([[0.0], np.cumsum(seg)])[:-1]
+        alone = []
+        for k in range(len(frames)):
+            lo = max(0, int(np.searchsorted(s0, s0[centre[k]] - window)) - 1)
+            hi = min(len(seg), max(int(np.searchsorted(s0, s0[centre[k]] + window, side="right")), lo + 1))
+            s, off, inside = kpi._project(ref[lo:hi + 1], frames[k])
+            alone.append((s + s0[lo], off, inside))
+        expected = [np.concatenate(x) for x in zip(*alone)]
+        got = kpi._project_local(ref, frames, centre, window, batch=int(rng.integers(1, 7)))
+        for e, g in zip(expected, got):
+            assert e.dtype == g.dtype and e.tobytes() == g.tobytes()

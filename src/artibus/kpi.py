@@ -170,25 +170,55 @@ def _outline_points(outlines, samples_per_edge):
     return np.concatenate(pts)
 
 
-def _project_local(ref, frames, centre, window):
+def _project_local(ref, frames, centre, window, batch=6):
     """_project for the outline samples of each instant (frames [time, n, 2])
     onto only the part of the reference within ``window`` m of arc length of
     that instant's reference point (centre: its segment index): a path that
     crosses itself (a full circle and the straight through it) does not mix
-    one pass's outlines into another's."""
+    one pass's outlines into another's.
+
+    ``batch`` instants at a time, each on its own window of segments (padded to
+    the batch's longest, the padding never the nearest): the same operations on
+    each element as _project on ref[lo:hi + 1] (the window's arc length summed
+    from its start, then its start's added), the same numbers bit for bit, ~2 x
+    faster than an instant at a time (a sweep computes the KPIs of every case;
+    a few instants at a time keep the temporaries small: fresh large ones cost
+    page faults)."""
     a, d = ref[:-1], np.diff(ref, axis=0)
     seg = np.hypot(d[:, 0], d[:, 1])
     s0 = np.concatenate([[0.0], np.cumsum(seg)])[:-1]
-    s_out, off_out, in_out = [], [], []
-    for k in range(len(frames)):
-        sc = s0[centre[k]]
-        lo, hi = np.searchsorted(s0, sc - window), np.searchsorted(s0, sc + window, side="right")
-        lo, hi = max(0, lo - 1), min(len(seg), max(hi, lo + 1))
-        s, off, inside = _project(ref[lo:hi + 1], frames[k])    # beyond the window: dropped (window > reach)
-        s_out.append(s + s0[lo])
-        off_out.append(off)
-        in_out.append(inside)
-    return np.concatenate(s_out), np.concatenate(off_out), np.concatenate(in_out)
+    seg_len2 = seg ** 2
+    m = len(seg)
+    sc = s0[centre]
+    lo = np.maximum(0, np.searchsorted(s0, sc - window) - 1)
+    hi = np.minimum(m, np.maximum(np.searchsorted(s0, sc + window, side="right"), lo + 1))
+    n_f, n_p = frames.shape[:2]
+    s_out, off_out, in_out = np.empty((n_f, n_p)), np.empty((n_f, n_p)), np.empty((n_f, n_p), bool)
+    for b in range(0, n_f, batch):
+        fl, fh, p = lo[b:b + batch], hi[b:b + batch], frames[b:b + batch]
+        f = len(fl)
+        idx = fl[:, None] + np.arange(int((fh - fl).max()))[None, :]     # [f, w]: each instant's segments
+        valid = idx < fh[:, None]
+        idx = np.minimum(idx, m - 1)
+        da, db = d[idx, 0][:, None, :], d[idx, 1][:, None, :]            # [f, 1, w]
+        r0 = p[:, :, 0, None] - a[idx, 0][:, None, :]                    # [f, n, w]: rel = p - a
+        r1 = p[:, :, 1, None] - a[idx, 1][:, None, :]
+        u = (r0 * da + r1 * db) / seg_len2[idx][:, None, :]
+        uc = np.clip(u, 0.0, 1.0)
+        e0, e1 = r0 - uc * da, r1 - uc * db
+        dist2 = e0 * e0 + e1 * e1
+        dist2[~np.broadcast_to(valid[:, None, :], dist2.shape)] = np.inf
+        i = np.argmin(dist2, axis=2)                                     # [f, n]
+        F, P = np.arange(f)[:, None], np.arange(n_p)[None, :]
+        local_s0 = np.zeros(idx.shape)                                   # the window's own arc length
+        local_s0[:, 1:] = np.cumsum(np.where(valid, seg[idx], 0.0)[:, :-1], axis=1)
+        g = idx[F, i]
+        cross = d[g, 0] * r1[F, P, i] - d[g, 1] * r0[F, P, i]
+        s_out[b:b + batch] = (local_s0[F, i] + uc[F, P, i] * seg[g]) + s0[fl][:, None]
+        off_out[b:b + batch] = np.copysign(np.sqrt(dist2[F, P, i]), cross)
+        u_i = u[F, P, i]
+        in_out[b:b + batch] = ~(((i == 0) & (u_i < 0)) | ((i == (fh - fl - 1)[:, None]) & (u_i > 1)))
+    return s_out.ravel(), off_out.ravel(), in_out.ravel()
 
 
 def swept_path(ref_x, ref_y, outlines, bin_length=0.25, samples_per_edge=8, window=None):
