@@ -147,7 +147,7 @@ def bench_run(name, in_bench, variant=None):
         # own = 1 - (fmu + init[1]) / w, in parts: the initialisation's own, the C core's own
         # (outside the FMUs' calls and the network's ticks), the network's ticks, Python's (the rest)
         parts = ((init[0] - init[1]) / w, (core - fmu - net) / w if core else 0.0, net / w,
-                 (w - init[0] - (core if core else 0.0)) / w)
+                 (w - init[0] - core) / w)
         for u in sim.units:
             model = u.fmu.md.modelName
             steps = round(span / u.step)

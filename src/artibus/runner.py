@@ -1284,7 +1284,8 @@ class _CoreStepper:
             e.result = Result.from_array(sim.names, table[:k0 + 1, :m].copy())
             raise
         finally:
-            sim.core_wall = s.wall           # s inside artibus_core_run (the FMUs' calls and the network's ticks too)
+            # s inside artibus_core_run (the FMUs' calls and the network's ticks too), added as their walls are
+            sim.core_wall = getattr(sim, "core_wall", 0.0) + s.wall
             for a, u, raw, written in self._each:
                 u.wall += a.wall
                 if a.has_written:            # (n_in >= 1 doubles)
