@@ -6,51 +6,70 @@
 # optimisation (-O0); BusDynamics spends a good part of its doStep in them.
 # The one place that knows how to fetch and configure SUNDIALS: scripts/setup.sh
 # calls it for the linux build, scripts/build_win64.sh for the win64 one.
-#   build-sundials/src/       the source package, fetched once and shared
-#   WORK_DIR/sundials-build/  the CMake build tree
-#   WORK_DIR/sundials-install/  the install: WORK_DIR/sundials-install/lib/cmake/sundials
-#                             is what -DSUNDIALS_DIR= takes
+#
+# A third-party build that does not change: it is cached outside the clone, in
+# $ARTIBUS_CACHE (default ~/.cache/artibus, see build_common.sh), keyed by the
+# SUNDIALS version, the configure flags, the toolchain file and the compiler, so
+# a fresh clone on a machine that built it once reuses it:
+#   $ARTIBUS_CACHE/src/sundials-VERSION/        the source package, fetched once
+#   $ARTIBUS_CACHE/sundials/VERSION-KEY/        the install (.artibus-complete when whole)
+#   WORK_DIR/sundials-install -> that install   what -DSUNDIALS_DIR=WORK_DIR/sundials-install/lib/cmake/sundials takes
+# Concurrent builds of the same key wait for each other (flock).
 # Needs the apt package dpkg-dev and a deb-src entry (setup.sh adds them).
-# Safe to run again: it builds only when the install lacks the stamp of the
-# installed libsundials-dev's version.
 # Usage: scripts/build_sundials.sh [WORK_DIR [extra CMake arguments]]
 #        (default build-sundials; e.g. -DCMAKE_TOOLCHAIN_FILE=... for win64)
 # Environment: ARTIBUS_SUNDIALS_JOBS (default 2) parallel compile jobs.
 set -euo pipefail
-. "$(dirname "$0")/build_common.sh"     # ROOT (the working directory), work_dir, quiet
+. "$(dirname "$0")/build_common.sh"     # ROOT (the working directory), CACHE, work_dir, quiet, cache_key
 W="$(work_dir "${1:-build-sundials}")"
 [ $# -gt 0 ] && shift
 JOBS="${ARTIBUS_SUNDIALS_JOBS:-2}"
 QUIET_LOG="$W/sundials-step.log" QUIET_TAG=sundials
 
-# 1. the source: the same Debian version as the installed libsundials-dev
+FLAGS=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_POSITION_INDEPENDENT_CODE=ON
+  -DBUILD_STATIC_LIBS=ON -DBUILD_SHARED_LIBS=OFF
+  -DBUILD_ARKODE=ON -DBUILD_CVODE=ON -DBUILD_CVODES=OFF -DBUILD_IDA=OFF
+  -DBUILD_IDAS=OFF -DBUILD_KINSOL=OFF -DBUILD_NVECTOR_MANYVECTOR=OFF
+  -DBUILD_FORTRAN_MODULE_INTERFACE=OFF -DBUILD_TESTING=OFF
+  -DEXAMPLES_ENABLE_C=OFF -DEXAMPLES_ENABLE_CXX=OFF -DEXAMPLES_INSTALL=OFF
+  -DSUNDIALS_PRECISION=double -DSUNDIALS_INDEX_SIZE=64 "$@")
+
+# 1. the source: the same Debian version as the installed libsundials-dev, once per machine
 ver="$(dpkg-query -W -f '${source:Version}' libsundials-dev)"
 upstream="${ver#*:}"; upstream="${upstream%-*}"
-srcdir="$ROOT/build-sundials/src/sundials-$upstream"
-# (earlier versions of build_win64.sh fetched it into build-win64/src: reuse that)
-[ ! -f "$srcdir/CMakeLists.txt" ] && [ -f "$ROOT/build-win64/src/sundials-$upstream/CMakeLists.txt" ] \
-  && srcdir="$ROOT/build-win64/src/sundials-$upstream"
-if [ ! -f "$srcdir/CMakeLists.txt" ]; then
-  echo "sundials: fetching Debian's source package sundials $ver"
-  mkdir -p "$ROOT/build-sundials/src"
-  (cd "$ROOT/build-sundials/src" && quiet apt-get source -qq "sundials=$ver")
-fi
+srcroot="$CACHE/src/sundials-$ver"
+srcdir="$srcroot/sundials-$upstream"
+mkdir -p "$CACHE/src"
+(
+  flock 9
+  if [ ! -f "$srcroot/.artibus-complete" ]; then
+    echo "sundials: fetching Debian's source package sundials $ver into $srcroot"
+    rm -rf "$srcroot"; mkdir -p "$srcroot"
+    (cd "$srcroot" && quiet apt-get source -qq "sundials=$ver")
+    touch "$srcroot/.artibus-complete"
+  fi
+) 9>"$srcroot.lock"
 
-# 2. built and installed, static and Release
-inst="$W/sundials-install"
-if [ ! -f "$inst/.artibus-$ver" ]; then
-  echo "sundials: building SUNDIALS $upstream (static, Release) into $inst"
-  rm -rf "$W/sundials-build" "$inst"
-  quiet cmake -S "$srcdir" -B "$W/sundials-build" "$@" \
-    -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX="$inst" \
-    -DCMAKE_POSITION_INDEPENDENT_CODE=ON \
-    -DBUILD_STATIC_LIBS=ON -DBUILD_SHARED_LIBS=OFF \
-    -DBUILD_ARKODE=ON -DBUILD_CVODE=ON -DBUILD_CVODES=OFF -DBUILD_IDA=OFF \
-    -DBUILD_IDAS=OFF -DBUILD_KINSOL=OFF -DBUILD_NVECTOR_MANYVECTOR=OFF \
-    -DBUILD_FORTRAN_MODULE_INTERFACE=OFF -DBUILD_TESTING=OFF \
-    -DEXAMPLES_ENABLE_C=OFF -DEXAMPLES_ENABLE_CXX=OFF -DEXAMPLES_INSTALL=OFF \
-    -DSUNDIALS_PRECISION=double -DSUNDIALS_INDEX_SIZE=64
-  quiet cmake --build "$W/sundials-build" -j"$JOBS"
-  quiet cmake --install "$W/sundials-build"
-  touch "$inst/.artibus-$ver"
+# 2. built and installed, static and Release, once per key
+key="$(cache_key "$ver" "${FLAGS[@]}")"
+inst="$CACHE/sundials/$upstream-$key"
+mkdir -p "$CACHE/sundials"
+(
+  flock 9
+  if [ ! -f "$inst/.artibus-complete" ]; then
+    echo "sundials: building SUNDIALS $upstream (static, Release) into $inst"
+    tmp="$(mktemp -d "$CACHE/sundials/build.XXXXXX")"
+    rm -rf "$inst"
+    quiet cmake -S "$srcdir" -B "$tmp" "${FLAGS[@]}" -DCMAKE_INSTALL_PREFIX="$inst"
+    quiet cmake --build "$tmp" -j"$JOBS"
+    quiet cmake --install "$tmp"
+    rm -rf "$tmp"
+    touch "$inst/.artibus-complete"
+  fi
+) 9>"$inst.lock"
+
+# 3. the clone's link to it (an install left by an older version of this script is replaced)
+if [ "$(readlink "$W/sundials-install" 2>/dev/null)" != "$inst" ]; then
+  rm -rf "$W/sundials-install"
+  ln -s "$inst" "$W/sundials-install"
 fi

@@ -4,11 +4,13 @@
 #   sundials-install/     SUNDIALS built static for win64 (CVODE, ARKODE and the
 #                         serial vector, dense matrix and dense solver they use) by
 #                         scripts/build_sundials.sh from Debian's source package
-#                         (the version of the installed libsundials-dev)
+#                         (the version of the installed libsundials-dev): a link
+#                         into the cache outside the clone ($ARTIBUS_CACHE)
 #   win64/<Name>.dll      every FMU's binary; scripts/setup.sh packs them into
 #                         binaries/win64 of each FMU (-DARTIBUS_WIN64_DIR)
 #   fmu_check_<Name>.exe  the C importer (tests/c/fmu_check.c) for Wine
-#   wineprefix/           the Wine prefix tests/test_win64.py runs it in
+#   wineprefix/           the Wine prefix tests/test_win64.py runs it in: a link to
+#                         $ARTIBUS_CACHE/wineprefix-<Wine version>, made once per machine
 # Needs the apt packages mingw-w64, dpkg-dev and wine64 and a deb-src entry
 # (setup.sh installs them). Safe to run again: it does only what is missing or out of date.
 # Usage: scripts/build_win64.sh [BUILD_DIR]   (default build-win64)
@@ -21,7 +23,7 @@ QUIET_LOG="$B/last-step.log" QUIET_TAG=win64
 # 1. SUNDIALS, static, for win64 (scripts/build_sundials.sh: Debian's source
 # package, the version of the installed libsundials-dev, as the linux build's)
 inst="$B/sundials-install"
-ARTIBUS_SUNDIALS_JOBS="$JOBS" bash scripts/build_sundials.sh "$B" \
+ARTIBUS_SUNDIALS_JOBS="$JOBS" CACHE_CC=x86_64-w64-mingw32-gcc bash scripts/build_sundials.sh "$B" \
   -DCMAKE_TOOLCHAIN_FILE="$ROOT/cmake/mingw-w64.cmake"
 
 # 2. every FMU's DLL and its importer, from the same CMakeLists.txt
@@ -37,10 +39,23 @@ quiet cmake --build "$B" -j"$JOBS" --target $targets
 echo "win64: $(ls "$B"/win64/*.dll | wc -l) DLLs in $B/win64"
 
 # 3. a Wine prefix for tests/test_win64.py (Debian's wine64 package), made once
+# per machine and Wine version in the cache, linked from the build directory
 wine="$(command -v wine64 || command -v wine || true)"
 [ -z "$wine" ] && [ -x /usr/lib/wine/wine64 ] && wine=/usr/lib/wine/wine64
-if [ -n "$wine" ] && [ ! -f "$B/wineprefix/system.reg" ]; then
-  echo "win64: creating the Wine prefix $B/wineprefix (once, about 30 s)"
-  WINEPREFIX="$B/wineprefix" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" \
-    quiet "$wine" wineboot --init
+if [ -n "$wine" ]; then
+  prefix="$CACHE/wineprefix-$("$wine" --version 2>/dev/null | tr -c 'A-Za-z0-9.\n' '_' | head -1)"
+  (
+    flock 9
+    if [ ! -f "$prefix/.artibus-complete" ]; then
+      echo "win64: creating the Wine prefix $prefix (once, about 30 s)"
+      rm -rf "$prefix"
+      WINEPREFIX="$prefix" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" \
+        quiet "$wine" wineboot --init
+      touch "$prefix/.artibus-complete"
+    fi
+  ) 9>"$prefix.lock"
+  if [ "$(readlink "$B/wineprefix" 2>/dev/null)" != "$prefix" ]; then
+    rm -rf "$B/wineprefix"
+    ln -s "$prefix" "$B/wineprefix"
+  fi
 fi

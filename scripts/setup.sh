@@ -53,13 +53,24 @@ cmake --build build -j"$(nproc)"
 
 # fmi-sim (crates.io), a second importer the tests run every FMU in. It needs a
 # recent Rust toolchain (rustup's, not Debian 12's) and libclang; without them
-# the tests that use it say so and are skipped.
+# the tests that use it say so and are skipped. Built once per machine into the
+# cache outside the clone ($ARTIBUS_CACHE, scripts/build_common.sh), linked as
+# .tools/bin/fmi-sim.
+. scripts/build_common.sh        # CACHE
 FMI_SIM_VERSION=0.7.0
-if [ ! -x .tools/bin/fmi-sim ] && command -v cargo >/dev/null 2>&1; then
+fmi_sim="$CACHE/fmi-sim-$FMI_SIM_VERSION"
+if [ ! -x "$fmi_sim/bin/fmi-sim" ] && command -v cargo >/dev/null 2>&1; then
   if ! dpkg -s libclang-dev >/dev/null 2>&1; then
     $SUDO apt-get install -y -qq --no-install-recommends libclang-dev >/dev/null || true
   fi
-  echo "setup: building fmi-sim $FMI_SIM_VERSION from crates.io into .tools/ (a few minutes, once)"
-  cargo install -q fmi-sim --version "$FMI_SIM_VERSION" --locked --root .tools \
-    || echo "setup: fmi-sim could not be built; its tests will be skipped"
+  echo "setup: building fmi-sim $FMI_SIM_VERSION from crates.io into $fmi_sim (a few minutes, once per machine)"
+  (
+    flock 9
+    [ -x "$fmi_sim/bin/fmi-sim" ] || cargo install -q fmi-sim --version "$FMI_SIM_VERSION" --locked --root "$fmi_sim" \
+      || echo "setup: fmi-sim could not be built; its tests will be skipped"
+  ) 9>"$fmi_sim.lock"
+fi
+if [ -x "$fmi_sim/bin/fmi-sim" ] && [ "$(readlink .tools/bin/fmi-sim 2>/dev/null)" != "$fmi_sim/bin/fmi-sim" ]; then
+  mkdir -p .tools/bin
+  ln -sfn "$fmi_sim/bin/fmi-sim" .tools/bin/fmi-sim
 fi

@@ -46,3 +46,50 @@ def init(fmu, **values):
 
 
 DEG = math.pi / 180
+
+
+# --- markers: which tests the sanitizer pass runs, which are slow --------------
+# `sanitize`: what the sanitizers add to the suite. test.sh runs these a second
+# time with every FMU (and the C stepping core) from the AddressSanitizer +
+# UBSan build (ARTIBUS_SANITIZER_PASS=1 deselects everything else): the FMUs'
+# C code under the fuzzers and the state, call-order, misuse and hardening
+# tests, the C core on the small benches. Left out there: the checks of the
+# release binaries themselves (their imports and exports), the second importer,
+# and the whole-bench bit-for-bit runs (the same FMU code as above, ten times
+# slower under the sanitizers).
+SANITIZE_FILES = {
+    "test_fmu_state.py", "test_fmu_standard.py", "test_hardening.py", "test_model_exchange.py",
+    "test_runner_core.py", "test_can_core.py", "test_runner_types.py",
+}
+SANITIZE_SKIP = ("binary_depends_only_on_system_libraries", "only_fmi_symbols_exported", "fmi_sim",
+                 "bench_bit_for_bit")
+# `slow`: the end-to-end runs (whole benches, sweeps, reports, other processes).
+# ./test.sh runs them (it is the whole suite); `./test.sh -m "not slow"` is the quick loop.
+SLOW_FILES = {
+    "test_benches.py", "test_benches_roads.py", "test_bus36m_equilibrium.py", "test_can.py",
+    "test_can_backwards.py", "test_can_faults.py", "test_circle_variants.py", "test_damping_benches.py",
+    "test_replay_can.py", "test_reports.py", "test_runner_safety.py", "test_simulate_partial.py",
+    "test_steering_controllers_benches.py", "test_sweep.py",
+}
+SLOW_TESTS = ("bus36m_hinge_forces_on_a_circle",)
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "sanitize: also run in the sanitizer pass of test.sh")
+    config.addinivalue_line("markers", "slow: an end-to-end run (a bench, a sweep, a report, a subprocess)")
+
+
+def pytest_collection_modifyitems(config, items):
+    import os
+    for item in items:
+        fname = item.path.name
+        if fname in SANITIZE_FILES and not any(s in item.name for s in SANITIZE_SKIP):
+            item.add_marker(pytest.mark.sanitize)
+        if fname in SLOW_FILES or any(s in item.name for s in SLOW_TESTS):
+            item.add_marker(pytest.mark.slow)
+    if os.environ.get("ARTIBUS_SANITIZER_PASS"):
+        kept = [i for i in items if i.get_closest_marker("sanitize")]
+        dropped = [i for i in items if not i.get_closest_marker("sanitize")]
+        if dropped:
+            config.hook.pytest_deselected(items=dropped)
+        items[:] = kept
