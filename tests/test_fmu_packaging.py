@@ -3,6 +3,7 @@
 display units on top of the repository's XML, documentation listing every variable, and,
 for the models that need only the C library, sources that compile to a binary giving the
 same results as the shipped one. Packed by src/fmi/package_fmu.py."""
+import importlib.util
 import math
 import os
 import re
@@ -13,7 +14,9 @@ import tomllib
 import xml.etree.ElementTree as ET
 import zipfile
 from html.parser import HTMLParser
+from pathlib import Path
 
+import fmpy
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
@@ -142,7 +145,86 @@ def test_packed_description_is_the_repository_xml_plus_additions(name):
     for k, v in repo.attrib.items():
         if k not in meta:
             assert packed.get(k) == v, k
+    # the top-level elements as the schema orders them (the packer does, test_element_order)
+    order = _schema_order(repo.get("fmiVersion"))
+    children = sorted((c for c in repo if isinstance(c.tag, str)), key=lambda c: order.index(c.tag))
+    for c in list(repo):
+        repo.remove(c)
+    repo.extend(children)
     assert _strip(packed, meta + ("displayUnit",)) == _strip(repo, meta + ("displayUnit",))
+
+
+XS = "{http://www.w3.org/2001/XMLSchema}"
+
+
+def _schema_order(fmi_version):
+    """the children of <fmiModelDescription> in the order of the FMI version's XSD (FMPy's
+    copy of the standard's schema)"""
+    major = fmi_version.split(".")[0]
+    xsd = Path(fmpy.__file__).parent / "schema" / f"fmi{major}" / f"fmi{major}ModelDescription.xsd"
+    root = next(e for e in ET.parse(xsd).iter(XS + "element") if e.get("name") == "fmiModelDescription")
+
+    def walk(node):
+        for c in node:
+            if c.tag == XS + "element":
+                yield c.get("name") or c.get("ref")
+            elif c.tag in (XS + "complexType", XS + "sequence", XS + "choice", XS + "all"):
+                yield from walk(c)
+    return tuple(walk(root))
+
+
+def _packer():
+    spec = importlib.util.spec_from_file_location("package_fmu", ROOT / "src/fmi/package_fmu.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_packer_element_order_is_the_schemas():
+    """the packer's table of element order per FMI version (FMI 2.0, and FMI 3.0 for the
+    builds to come) is the order of the standard's XSDs"""
+    order = _packer().ELEMENT_ORDER
+    assert order["2"] == _schema_order("2.0")
+    assert order["3"] == _schema_order("3.0")
+    for version in order.values():
+        assert version.index("ModelExchange") < version.index("CoSimulation")
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_element_order(name):
+    """Model Exchange before Co-Simulation, every element in the schema's order, none twice
+    (the FMI Library, under libcosim, PyFMI, OMSimulator, skips a ModelExchange after
+    CoSimulation with an error; FMPy's XSD check allows it: issue 29)"""
+    md = _packed_md(name)
+    order = _schema_order(md.get("fmiVersion"))
+    tags = [c.tag for c in md if isinstance(c.tag, str)]
+    assert [order.index(t) for t in tags] == sorted({order.index(t) for t in tags}), tags
+
+
+def test_packer_writes_model_exchange_first(tmp_path):
+    """a model description written with CoSimulation first is packed in the schema's order:
+    the same modelDescription.xml as the one written in order (comments and layout kept)"""
+    name = "BusKinematics"
+    src = (ROOT / "modelDescription" / f"{name}.xml").read_text(encoding="utf-8")
+    me = re.search(r"^  <ModelExchange [^\n]*/>\n", src, re.M).group(0)
+    cs = re.search(r"^  <CoSimulation [^\n]*/>\n", src, re.M).group(0)
+    assert src.index(me) < src.index(cs)
+    old = src.replace(me + cs, cs + me)
+    assert old != src
+    xml = tmp_path / f"{name}.xml"
+    xml.write_text(old, encoding="utf-8")
+    tree = tmp_path / "tree"
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        z.extractall(tree)
+    env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "SOURCE_DATE_EPOCH")}
+    subprocess.run([sys.executable, str(ROOT / "src/fmi/package_fmu.py"), "--name", name,
+                    "--root", str(ROOT), "--xml", str(xml), "--gen", str(tmp_path), "--tree", str(tree),
+                    "--fmu", str(tmp_path / "out.fmu"), "--win64-dir=",
+                    "--sources", f"src/models/{name}/model.c", f"src/models/{name}/kinematics.c",
+                    "--resources"], check=True, env=env)
+    with zipfile.ZipFile(tmp_path / "out.fmu") as z:
+        packed = z.read("modelDescription.xml")
+    assert packed == _read(name, "modelDescription.xml")
 
 
 @pytest.mark.parametrize("name", FMU_NAMES)

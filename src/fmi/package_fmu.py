@@ -6,7 +6,9 @@ The tree <build>/fmu/<Name>/ already holds binaries/linux64/<Name>.so. This adds
   modelDescription.xml     the repository's modelDescription/<Name>.xml (the single source,
                            kept whole) with author, version (pyproject.toml's), copyright,
                            license, generationTool, DisplayUnits (the table DISPLAY_UNITS
-                           below) and, where sources/ is shipped, <SourceFiles>;
+                           below) and, where sources/ is shipped, <SourceFiles>; its
+                           elements in the order of the FMI version's schema
+                           (ELEMENT_ORDER below), whatever the order written;
   model.png                src/models/<Name>/model.png (made by scripts/make_icons.py);
   documentation/index.html from the model description and src/models/<Name>/README.md;
   documentation/licenses/  artibus's LICENSE and the notices of the libraries inside;
@@ -49,6 +51,20 @@ DISPLAY_UNITS = {
     "m/s": ("km/h", 3.6, 0.0, re.compile(r"lateral|piston|slip angle", re.I)),
     "N": ("kN", 1e-3, 0.0, None),
     "N.m": ("kN.m", 1e-3, 0.0, None),
+}
+
+#: the children of <fmiModelDescription> in the order of each FMI version's schema (by the
+#: major version of fmiVersion=): fmi2ModelDescription.xsd, and fmi3ModelDescription.xsd.
+#: The FMI 2.0 schema lets its interface elements repeat (an outer sequence of up to two
+#: ModelExchange / CoSimulation), so FMPy's XSD check accepts CoSimulation first; the FMI
+#: Library (FMIL: libcosim, PyFMI, OMSimulator and many tools) does not: it skips a
+#: ModelExchange after CoSimulation with an error and loads a Co-Simulation-only FMU.
+#: The packer writes this order whatever the order in modelDescription/<Name>.xml.
+ELEMENT_ORDER = {
+    "2": ("ModelExchange", "CoSimulation", "UnitDefinitions", "TypeDefinitions", "LogCategories",
+          "DefaultExperiment", "VendorAnnotations", "ModelVariables", "ModelStructure"),
+    "3": ("ModelExchange", "CoSimulation", "ScheduledExecution", "UnitDefinitions", "TypeDefinitions",
+          "LogCategories", "DefaultExperiment", "ModelVariables", "ModelStructure", "Annotations"),
 }
 
 #: libraries a binary may contain: (marker bytes in the binary, licence file, what)
@@ -204,6 +220,36 @@ def add_source_files(md, c_files):
         sf.tail = "\n  " if len(el) == 1 else "\n    "
         if len(el) == 1:
             el.text = "\n    "
+
+
+def order_elements(md):
+    """Put the children of <fmiModelDescription> into ELEMENT_ORDER's order for its
+    fmiVersion. A comment travels with the element after it; the layout (each position's
+    whitespace) stays as written. An element the schema does not have, or one given twice,
+    is an error (the schema allows neither)."""
+    version = md.get("fmiVersion", "")
+    order = ELEMENT_ORDER.get(version.split(".")[0])
+    if order is None:
+        raise ValueError(f"fmiVersion = {version!r}: no element order known (ELEMENT_ORDER)")
+    nodes = list(md)
+    groups, pending = [], []
+    for node in nodes:
+        pending.append(node)
+        if isinstance(node.tag, str):
+            if node.tag not in order:
+                raise ValueError(f"<{node.tag}> is no child of <fmiModelDescription> in FMI {version}")
+            if any(tag == node.tag for tag, _ in groups):
+                raise ValueError(f"<{node.tag}> given twice in <fmiModelDescription>")
+            groups.append((node.tag, pending))
+            pending = []
+    groups.sort(key=lambda g: order.index(g[0]))   # stable; trailing comments stay last
+    ordered = [n for _, g in groups for n in g] + pending
+    tails = [n.tail for n in nodes]
+    for node in nodes:
+        md.remove(node)
+    for node, tail in zip(ordered, tails):
+        node.tail = tail
+        md.append(node)
 
 
 def write_xml(tree, path):
@@ -524,6 +570,10 @@ def main(argv=None):
 
     tree_md = parse(a.xml)
     md = tree_md.getroot()
+    try:
+        order_elements(md)
+    except ValueError as e:
+        sys.exit(f"package_fmu.py: {a.xml}: {e}")
     set_metadata(md, version, libraries)
     add_display_units(md)
     indent_unit_children(md)
