@@ -25,7 +25,7 @@ import signal
 import sys
 from pathlib import Path
 
-from artibus import ArtibusError, __version__, fmu_dir, fmu_path
+from artibus.base import ArtibusError, __version__, fmu_dir, fmu_path
 
 
 def _seconds(text):
@@ -102,7 +102,7 @@ def _fmu_names():
 
 def cmd_info(args):
     from fmpy import read_model_description
-    from artibus import ssp
+    from artibus.bench import ssp
     name = str(args.fmu)
     if name.endswith(".ssp") or name in ssp.bench_names():
         return _info_ssp(name)
@@ -137,7 +137,7 @@ def cmd_info(args):
 
 
 def _info_ssp(path):
-    from artibus import ssp
+    from artibus.bench import ssp
     bench = ssp.read(ssp.ssp_path(path))
     print(f"{bench.name}: {bench.file}")
     print(f"default experiment: {bench.start_time} .. {bench.stop_time} s")
@@ -154,7 +154,7 @@ def _info_ssp(path):
 
 def cmd_list(args):
     """One line per bench and per FMU; --parameters: every bench's bound parameters too."""
-    from artibus import ssp
+    from artibus.bench import ssp
     names = ssp.bench_names()
     print(f"benches ({len(names)}; `artibus info BENCH` for one, `artibus run BENCH` to run it):"
           if names else "no benches in ssp/benches/")
@@ -187,15 +187,16 @@ def cmd_list(args):
 
 
 def cmd_pack(args):
-    from artibus import ssp
+    from artibus.bench import ssp
     for name in args.bench or ssp.bench_names():
         print(ssp.pack(name))
     return 0
 
 
 def cmd_run(args):
-    from artibus import runner, ssp
-    from artibus.parameters import read_parameters
+    from artibus import runner
+    from artibus.bench import ssp
+    from artibus.bench.parameters import read_parameters
     if args.all == bool(args.bench):
         raise ArtibusError("give one BENCH or --all")
     if args.all and args.variant:
@@ -211,7 +212,7 @@ def cmd_run(args):
     if args.stop_time is None and not args.all:
         args.stop_time = ssp.variant_stop_time(args.bench, args.variant)    # None: the bench's own
     summary = []
-    from artibus import comparison
+    from artibus.report import comparison
     kept = {}
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, args.variant), **user}
@@ -242,7 +243,7 @@ def cmd_run(args):
             print(f"{name}: {out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
                   f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
             if out_dir is not None:
-                from artibus.benches import write_report
+                from artibus.bench.script import write_report
                 kpis = write_report(name, result, out_dir, sim.wall)
                 if can_summary is not None:
                     from artibus.files import write_text
@@ -256,7 +257,7 @@ def cmd_run(args):
                 if args.can_fault:
                     _fault_free_kpis(bench, args, overrides, out_dir, kpis)
     if args.all and args.report:
-        from artibus.report import write_index
+        from artibus.report.pages import write_index
         page = comparison.write(Path(args.report) / "comparison", kept)
         pages = [("comparison/index.html", comparison.TITLE, "unsteered, guided, guided + force minimisation "
                   "and pathMemory side by side")] if page else []
@@ -281,7 +282,7 @@ def _fault_free_kpis(bench, args, overrides, out_dir, kpis):
     """The same bench without the faults: its KPIs next to the faulty run's,
     printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free)."""
     from artibus import runner
-    from artibus.benches import write_report
+    from artibus.bench.script import write_report
     with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
                            algorithm=args.algorithm, can=args.can) as sim:
         result = sim.run(stop_time=args.stop_time)
@@ -300,7 +301,8 @@ def _fault_free_kpis(bench, args, overrides, out_dir, kpis):
 
 
 def cmd_replay(args):
-    from artibus import replay, runner
+    from artibus.can import replay
+    from artibus import runner
     out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"))
     rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
                         overrides=_parse_set(args.set), steering_map_name=args.steering_map,
@@ -324,7 +326,8 @@ def cmd_replay(args):
 
 
 def cmd_can_decode(args):
-    from artibus import ROOT, can
+    from artibus.base import ROOT
+    from artibus import can
     from artibus.files import check_output
     if args.csv:
         check_output(args.csv, "--csv")
@@ -346,8 +349,8 @@ def cmd_can_decode(args):
 
 def cmd_bode(args):
     import numpy as np
-    from artibus import bode
-    from artibus import ssp
+    from artibus.study import bode
+    from artibus.bench import ssp
     from artibus.files import write_text
     if not args.measure:
         hint = (f" (-o/--output is the results file now, as in every command: "
@@ -382,7 +385,7 @@ def cmd_bode(args):
 def cmd_calibrate(args):
     """seed 001, 5.2.2: each damping option's gain for a peak damping of 13.5 %
     on the 200 m / 100 km/h / rear-friction-0.2 lane change."""
-    from artibus import damping
+    from artibus.study import damping
     gains, reached = damping.calibrate(target=args.target)
     print(f"\n{'gain':6s} {'artibus':>10s} {'thesis':>8s} {'ratio':>7s}  peak damping on lc200_100")
     for name, value in gains.items():
@@ -397,15 +400,15 @@ def cmd_calibrate(args):
 
 
 def cmd_simulate(args):
-    from artibus.parameters import read_parameters, check_against
-    from artibus.simulation import simulate
+    from artibus.bench.parameters import read_parameters, check_against
+    from artibus.fmu.instance import simulate
     fmu = _fmu_arg(args.fmu)
     out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"))
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
     extra = _parse_set(args.set)
     if any("[" in k for k in extra):          # mu[*], mu[1:6]: each element
         from fmpy import read_model_description
-        from artibus.names import expand_all
+        from artibus.bench.names import expand_all
         names = [v.name for v in read_model_description(str(fmu)).modelVariables]
         extra = expand_all(extra, lambda full: ("", names))
     check_against(extra, fmu, "--set")
@@ -415,7 +418,7 @@ def cmd_simulate(args):
     except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
         _partial(e, out)
         raise
-    from artibus.runner import save
+    from artibus.runner.simulation import save
     save(result, out)
     print(f"{out}: {len(result.rows)} rows")
     return 0
@@ -424,10 +427,10 @@ def cmd_simulate(args):
 def cmd_demo(args):
     """Urbino 18 Electric (seed 003, Table I) pushed at 3 m/s through an
     S-curve: 25 deg left, 25 deg right, straight; results and a plot."""
-    from artibus.parameters import read_parameters
+    from artibus.bench.parameters import read_parameters
     import numpy as np
-    from artibus.report import birds_eye, signals
-    from artibus.simulation import simulate
+    from artibus.report.pages import birds_eye, signals
+    from artibus.fmu.instance import simulate
     out = _make_dir(args.report)
     csv = out / "BusKinematics_Urbino18_SCurve.csv"
     if args.output:
@@ -447,7 +450,7 @@ def cmd_demo(args):
     result = simulate(fmu, parameters=params, inputs={"gammaF": gammaF, "v": lambda t: 3.0},
                       stop_time=40.0, step=0.05)
     png = out / "BusKinematics_Urbino18_SCurve.png"
-    from artibus.runner import save
+    from artibus.runner.simulation import save
     save(result, csv)
     theta0 = result["theta[0]"]
     front = (result["x[0]"] + params["L0"] * np.cos(theta0), result["y[0]"] + params["L0"] * np.sin(theta0))
@@ -565,7 +568,7 @@ def build_parser():
     s.add_argument("--report", metavar="DIR", default="out", help="directory of results and plots (default: out)")
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: DIR/BusKinematics_Urbino18_SCurve.csv)")
     s.set_defaults(func=cmd_demo)
-    from artibus import sweep as sweep_mod      # artibus sweep: its options and command in artibus/sweep.py
+    from artibus.study import sweep as sweep_mod      # artibus sweep: its options and command in artibus/sweep.py
     sweep_mod.add_parser(sub)
     return p
 

@@ -19,7 +19,7 @@ import os
 import secrets
 from pathlib import Path
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
 
 TMP_MARK = ".tmp-"          # NAME.tmp-PID-XXXX.SUFFIX
 

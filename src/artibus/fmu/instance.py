@@ -10,7 +10,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
 
 
 class SimulationError(ArtibusError):
@@ -110,7 +110,7 @@ def _callbacks(log):
     _LOGS[env] = log
     cb = fmi2CallbackFunctions()
     cb.logger = _dispatcher()
-    from artibus import memory     # the process's calloc/free (a preloaded ASan sees the FMUs' heap)
+    from artibus.fmu import memory     # the process's calloc/free (a preloaded ASan sees the FMUs' heap)
     cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(memory.calloc)
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(memory.free)
     cb.componentEnvironment = env
@@ -223,14 +223,14 @@ class Fmu:
         try:
             return self.vars[name]
         except KeyError:
-            from artibus.parameters import no_variable
+            from artibus.bench.parameters import no_variable
             raise ArtibusError(f"{self.path}: {no_variable(self.md, name)}") from None
 
     def set_values(self, values):
         """Set each {name: value}, the value checked against the variable's
         declared type first (artibus.parameters.coerce: no rounding, no
         "yes" for true, an Enumeration by item name or value)."""
-        from artibus.parameters import coerce
+        from artibus.bench.parameters import coerce
         for name, value in values.items():
             v = self.var(name)
             try:

@@ -59,7 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
 
 CASES_DIR, SERIES_DIR = "cases", "series"
 TABLE, MANIFEST, WORST, PLOT = "results.parquet", "sweep.json", "worst.txt", "study.png"
@@ -86,7 +86,7 @@ _INFO = {}          # sha256 of an .ssp's bytes -> what bench_info reads from th
 
 
 def bench_info(bench):
-    from artibus import benches, ssp as ssp_mod
+    from artibus.bench import script as benches, ssp as ssp_mod
     path = ssp_mod.ssp_path(bench)
     data = path.read_bytes()
     ssp_hash = hashlib.sha256(data).hexdigest()
@@ -109,7 +109,7 @@ def _ssp_info(path, data):
     import io
 
     from fmpy import read_model_description
-    from artibus import ssp as ssp_mod
+    from artibus.bench import ssp as ssp_mod
     b = ssp_mod.read(path)
     variables, common, var_hash = {}, [], {}
     with zipfile.ZipFile(io.BytesIO(data)) as z, tempfile.TemporaryDirectory(prefix="artibus-sweep-") as tmp:
@@ -451,8 +451,8 @@ def _parameters(sim, overrides):
     the case's overrides (as Simulation._setup does). The bench's own, resolved
     and checked, are kept with the Simulation (the same every case: ~0.7 ms a
     case checked again); each case's overrides are checked."""
-    from artibus.parameters import check_against
-    from artibus.runner import resolve_resources
+    from artibus.bench.parameters import check_against
+    from artibus.runner.simulation import resolve_resources
     where = sim.bench.file
     units = {u.path: u for u in sim.units}
     base = getattr(sim, "_sweep_bench_parameters", None)
@@ -518,7 +518,7 @@ def _simulate(ssp, overrides, stop_time, step, content=None):
 
 def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_time, step, keep_series):
     """One case on a worker: (row, series or None). A failure is a row with its error."""
-    from artibus import benches, ssp as ssp_mod
+    from artibus.bench import script as benches, ssp as ssp_mod
     t0 = time.perf_counter()
     row = {"status": STATUS_OK, "error": ""}
     series = None

@@ -15,8 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import files, kpi, report
-from artibus.report import FAIL, PASS
+from artibus import files, report
+from artibus.study import kpi
+from artibus.report.pages import FAIL, PASS
 
 BENCH = "Bus36m_Circle"
 #: the page's cases: label -> (variants of BENCH, further overrides); the first, the bench's
@@ -66,7 +67,7 @@ def write(out_dir, results, run_extra=_run_extra):
     """out_dir/index.html with the figures and a table; results: {bench: Result}
     of the run, BENCH's its default (the variants are run here, run_extra(bench,
     overrides)). Returns the page's path, or None when BENCH is missing from results."""
-    from artibus import ssp
+    from artibus.bench import ssp
     out = Path(out_dir)
     if not BENCHES <= set(results):
         return None
@@ -79,7 +80,7 @@ def write(out_dir, results, run_extra=_run_extra):
             r = run_extra(BENCH, {**ssp.variant_overrides(BENCH, list(variants)), **(overrides or {})})
         data[label] = _figures(r)
     import matplotlib.pyplot as plt
-    from artibus.benchkit import circle_road
+    from artibus.report.benchkit import circle_road
     road = circle_road()
     colours = dict(zip(CASES, report._colours()))
     # Fig. 8: the traces, one panel per case, the same axes

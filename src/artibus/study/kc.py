@@ -29,8 +29,8 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from artibus import runner
-from artibus.bode import frequency_response
-from artibus.parameters import read_parameters
+from artibus.study.bode import frequency_response
+from artibus.bench.parameters import read_parameters
 
 BENCH = "Scania18m_OpenLoop"
 INPUT = "Bus.delta[1]"
@@ -185,7 +185,7 @@ def plot_kc(path, rows, f_lo=F_LO, f_check=F_CHECK):
     sec = ax.secondary_xaxis("top", functions=(lambda x: x / 3.6, lambda x: x * 3.6))
     sec.set_xlabel("speed v [m/s]")
     fig.tight_layout()
-    from artibus.report import save_figure
+    from artibus.report.pages import save_figure
     save_figure(fig, path, dpi=110)
 
 
@@ -193,7 +193,7 @@ def plot_bode(path, v, points, geo, kc=1.0, title=""):
     """delta -> Lambda: the reference model (closed form, times kc) as a line,
     the plant as measured points (artibus.bode.plot, the reference through its
     ``reference`` argument)."""
-    from artibus import bode
+    from artibus.study import bode
     f = np.array([p.frequency for p in points])
     fr = np.geomspace(f.min(), f.max(), 300)
     ref_label = "reference model, eq. 2.9" + (f", times Kc = {kc:.3f}" if kc != 1.0 else "")
@@ -262,7 +262,7 @@ def bode_figures(out, kc100, geo=None):
 def report(r, out):
     """The Scania18m_OpenLoop bench's report: seed 001's Figs. 4.1-4.3 (the
     bench's own run, straight ahead, is not what it is for)."""
-    from artibus.report import Kpi
+    from artibus.report.pages import Kpi
     geo = reference_geometry()
     ssv = read_parameters("Scania18mKc")
     speeds = [ssv[f"KcSpeed[{i}]"] for i in range(1, ssv["nKc"] + 1)]

@@ -35,11 +35,11 @@ from pathlib import Path
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
-from artibus import ROOT, ArtibusError
-from artibus.parameters import check_against
-from artibus.simulation import Fmu, Result, SimulationError
-from artibus import ssp as ssp_mod
-from artibus import tables
+from artibus.base import ROOT, ArtibusError
+from artibus.bench.parameters import check_against
+from artibus.fmu.instance import Fmu, Result, SimulationError
+from artibus.bench import ssp as ssp_mod
+from artibus.runner import tables
 
 MAX_INIT_ITERATIONS = 50
 
@@ -245,7 +245,7 @@ def _last_message(log):
 
 
 def _suggest(name, known):
-    from artibus.parameters import suggest
+    from artibus.bench.parameters import suggest
     return suggest(name, known)
 
 
@@ -458,7 +458,7 @@ class Simulation:
         # a component without a step (its FMU's default experiment has no stepSize, FMI 2.0
         # allows it; no annotation, no --step): the others' shortest, else the bench's
         # span / DEFAULT_STEPS
-        from artibus.simulation import DEFAULT_STEPS
+        from artibus.fmu.instance import DEFAULT_STEPS
         known = [u.step for u in units.values() if u.step is not None]
         for u in units.values():
             if u.step is None:
@@ -482,7 +482,7 @@ class Simulation:
         # parameters: bindings, then the user's overrides ("comp.var" -> value)
         self.parameters = {p: dict(c.parameters) for p, c in self.bench.components.items()}
         origins = {p: dict(c.origins) for p, c in self.bench.components.items()}
-        from artibus.names import expand_all      # Bus.mu[*], Bus.mu[1:6]: each element
+        from artibus.bench.names import expand_all      # Bus.mu[*], Bus.mu[1:6]: each element
 
         def variables_of(full):
             comp = full.split("[", 1)[0].rpartition(".")[0]
@@ -519,7 +519,7 @@ class Simulation:
             a, b = units[c.start[0]], units[c.end[0]]
             va, vb = a.fmu.vars.get(c.start[1]), b.fmu.vars.get(c.end[1])
             if va is None or vb is None:
-                from artibus.parameters import no_variable
+                from artibus.bench.parameters import no_variable
                 u, var = (a, c.start[1]) if va is None else (b, c.end[1])
                 raise ArtibusError(f"{label}: no variable '{u.path}.{var}' ({no_variable(u.fmu.md, var)})")
             if va.type != vb.type:
@@ -572,7 +572,7 @@ class Simulation:
                 raise ArtibusError(f"--record {name}: no component '{comp}' in {where}"
                                    f"{_suggest(comp, units)} (components: {', '.join(units)})")
             if var not in units[comp].fmu.vars:
-                from artibus.parameters import no_variable
+                from artibus.bench.parameters import no_variable
                 raise ArtibusError(f"--record {name}: {comp}: {no_variable(units[comp].fmu.md, var)}")
             self.record.append((units[comp], var))
         if not record:   # every output connector the bench declares, and every connected output
@@ -795,7 +795,7 @@ class Simulation:
         unless given): the Result, with String columns in Result.strings; the
         results up to a failure or an interrupt go with the exception (its
         ``result``). See _run."""
-        from artibus.simulation import check_times, claim_logger_proxy
+        from artibus.fmu.instance import check_times, claim_logger_proxy
         claim_logger_proxy()
         start = self.bench.start_time if start_time is None else start_time
         stop = stop_time if stop_time is not None else self.bench.stop_time
@@ -1331,7 +1331,7 @@ class _CanCore:
     Network.report, summary and since_series read as after the Python loop."""
 
     def __init__(self, sim, lib):
-        from artibus.can import COUNTER_SIGNAL
+        from artibus.can.network import COUNTER_SIGNAL
         net = self.net = sim.can
         double = sizeof(c_double)
         self._keep = []

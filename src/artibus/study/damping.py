@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ROOT, ArtibusError, runner, ssp
+from artibus.base import ROOT, ArtibusError
+from artibus import runner
+from artibus.bench import ssp
 
 BENCH = "Scania18m_Damping"
 DEG = 180 / math.pi
@@ -105,7 +107,7 @@ def kpis(r, case="lc60_100"):
 # ---- calibration (seed 001, 5.2.2) ------------------------------------------------
 
 def read_gains(path=GAINS_FILE):
-    from artibus.parameters import read_parameters
+    from artibus.bench.parameters import read_parameters
     return read_parameters(str(path))
 
 
@@ -182,7 +184,7 @@ def _overlay(path, runs, signals, title, t_window=None):
     """One panel per quantity, every damping function overlaid (as the thesis's
     Figs. 5.11-5.14 compare the options). signals: [(ylabel, f(result) -> values)]."""
     import matplotlib.pyplot as plt
-    from artibus.report import _colours
+    from artibus.report.pages import _colours
     fig, axes = plt.subplots(len(signals), 1, figsize=(10, 2.6 * len(signals)), sharex=True, squeeze=False)
     colours = dict(zip(FUNCTIONS + ("reference",), _colours() * 2))
     for ax, (ylabel, f) in zip(axes[:, 0], signals):
@@ -200,15 +202,15 @@ def _overlay(path, runs, signals, title, t_window=None):
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].set_title(title)
     fig.tight_layout()
-    from artibus.report import save_figure
+    from artibus.report.pages import save_figure
     save_figure(fig, path, dpi=110)
 
 
 def _rear_path(path, runs, case, title):
     """The rear axle's lateral position against x with the lane (seed 001, Figs. 5.9-5.10)."""
     import matplotlib.pyplot as plt
-    from artibus import roads
-    from artibus.report import _colours
+    from artibus.bench import roads
+    from artibus.report.pages import _colours
     c = CASES[case]
     x, y = roads.generate(roads.LANE_CHANGE, laneLength=c.length, laneOffset=OFFSET,
                           before=ROAD_BEFORE, after=600.0)
@@ -231,7 +233,7 @@ def _rear_path(path, runs, case, title):
         ax.grid(True, alpha=0.3)
     axes[0].legend(loc="lower right", fontsize=8, ncol=2)
     fig.tight_layout()
-    from artibus.report import save_figure
+    from artibus.report.pages import save_figure
     save_figure(fig, path, dpi=110)
 
 
@@ -243,7 +245,7 @@ def report(r, out):
     """The Scania18m_Damping report: every damping function on the thesis's
     comparison case, the 130 km/h case, the calibration case and the
     reference-model case; a KPI table per case."""
-    from artibus.report import Kpi
+    from artibus.report.pages import Kpi
     out = Path(out)
     runs = {f: run(f, "lc60_100") for f in FUNCTIONS}   # whatever variant r was run with
     k = {f: kpis(rr, "lc60_100") for f, rr in runs.items()}

@@ -19,14 +19,15 @@ import importlib.util
 import sys
 from pathlib import Path
 
-from artibus import ArtibusError, report
+from artibus.base import ArtibusError
+from artibus import report
 
 FILE = "bench.py"
 
 
 def bench_file(bench):
     """ssp/benches/<bench>/bench.py (bench: a name, or an .ssp path named after its folder)."""
-    from artibus import ssp
+    from artibus.bench import ssp
     return ssp.BENCH_DIR / Path(str(bench)).stem / FILE
 
 

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ArtibusError, runner
+from artibus.base import ArtibusError
+from artibus import runner
 
 
 @dataclass
@@ -68,7 +69,7 @@ def plot(path, responses, title, units=None, reference=None, input_unit=""):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from artibus.report import save_figure
+    from artibus.report.pages import save_figure
     groups = {o: (v if isinstance(v, dict) else {"measured": v}) for o, v in responses.items()}
     units = units or {}
     reference = reference or {}
@@ -109,7 +110,7 @@ def output_units(bench, names):
     """{"comp.var": unit} of outputs of a bench, from its FMUs' model descriptions."""
     import zipfile
     from fmpy import read_model_description
-    from artibus import ssp
+    from artibus.bench import ssp
     b = ssp.read(ssp.ssp_path(bench))
     units = {}
     with zipfile.ZipFile(ssp.ssp_path(bench)) as z:

@@ -5,20 +5,21 @@ import math
 
 import numpy as np
 
-from artibus import kpi, report
-from artibus.report import Kpi
+from artibus.study import kpi
+from artibus import report
+from artibus.report.pages import Kpi
 
 DEG = 180 / math.pi
 
 
 def circle_road(R=17.5, before=25.0, after=50.0):
-    from artibus import roads
+    from artibus.bench import roads
     x, y = roads.generate(roads.CIRCLE, R=R, before=before, after=after)
     return x, y
 
 
 def lane_change_road(length, offset, before=25.0, after=50.0):
-    from artibus import roads
+    from artibus.bench import roads
     x, y = roads.generate(roads.LANE_CHANGE, laneLength=length, laneOffset=offset, before=before, after=after)
     return x, y
 
@@ -39,7 +40,7 @@ def outlines(r, n_modules):
 def slalom_road_module():
     """ssp/roads/slalom.py, which wrote the Bus36m_Slalom road (its geometry, one source)."""
     import importlib.util
-    from artibus import ROOT
+    from artibus.base import ROOT
     spec = importlib.util.spec_from_file_location("artibus_slalom_road", ROOT / "ssp" / "roads" / "slalom.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

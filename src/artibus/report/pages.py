@@ -86,7 +86,7 @@ def swept(outlines, reference=None, target_frames=350, bin_length=0.5, samples_p
     """The swept path of the outlines (kpi.SweptPath) along ``reference`` (x, y)
     or the longest corner trace; the outlines are thinned to about
     ``target_frames`` instants (the benches' KPIs take every 20th of 7001)."""
-    from artibus import kpi
+    from artibus.study import kpi
     out = np.asarray(outlines, float)
     step = max(1, len(out) // target_frames)
     rx, ry = reference if reference is not None else _longest_corner_trace(out, step)
@@ -577,7 +577,7 @@ def write_html(out_dir, title, intro, kpis, images, notes=""):
 
 def run_metadata():
     """{date, artibus version, git commit, platform} of this run."""
-    from artibus import ROOT, __version__
+    from artibus.base import ROOT, __version__
     try:
         commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short=12", "HEAD"], capture_output=True,
                                 text=True, timeout=10).stdout.strip()

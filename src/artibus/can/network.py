@@ -67,7 +67,7 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
 
 #: units a signal or a connected variable may carry: (SI unit, factor to it)
 UNITS = {
@@ -932,7 +932,7 @@ class Network:
 
 
 def _unit(unit, var):
-    from artibus.runner import _unit_of
+    from artibus.runner.simulation import _unit_of
     return _unit_of(unit.fmu.md, var)
 
 

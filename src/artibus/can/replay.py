@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ROOT, ArtibusError
+from artibus.base import ROOT, ArtibusError
 
 DEG = math.pi / 180
 
@@ -134,7 +134,7 @@ def read_log(path, dbc=None):
 
 def steering_map(name_or_path):
     """The coefficients c[0..3] (deg) of a seed 003 Appendix A steering map."""
-    from artibus.parameters import find_ssv, read_parameters
+    from artibus.bench.parameters import find_ssv, read_parameters
     f = find_ssv(name_or_path)
     p = read_parameters(f)
     try:
@@ -260,8 +260,9 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
     variants: the bench's variants (as ``artibus run --variant``); record:
     more outputs to record; offsets: {input: constant} added to a driven
     input, in the input's unit (sensitivity to a sensor offset)."""
-    from artibus import can as can_mod, ssp
-    from artibus.runner import Simulation, _unit_of
+    from artibus import can as can_mod
+    from artibus.bench import ssp
+    from artibus.runner.simulation import Simulation, _unit_of
     log_path = Path(log_path)
     bench_ssp = ssp.ssp_path(bench)
     b = ssp.read(bench_ssp)

@@ -9,7 +9,7 @@ import math
 from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssv
 
-from artibus import ArtibusError, ROOT
+from artibus.base import ArtibusError, ROOT
 
 PARAMETER_DIR = ROOT / "ssp" / "parameters"
 
