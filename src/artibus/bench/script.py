@@ -20,7 +20,6 @@ import sys
 from pathlib import Path
 
 from artibus.base import ArtibusError
-from artibus import report
 
 FILE = "bench.py"
 
@@ -58,31 +57,3 @@ def kpis(bench, result):
     """The bench's KPIs of one run (the result alone); [] for a bench without a bench.py."""
     mod = load(bench)
     return [] if mod is None else list(mod.kpis(result))
-
-
-def generic(r, out):
-    series = {n: r[n] for n in r.names[1:]}
-    panels = [(n, {n: v}) for n, v in list(series.items())[:8]]
-    report.signals(out / "signals.png", r.time, panels, title="recorded signals")
-    return [], [("signals.png", "The first recorded signals over time.")], ""
-
-
-def _report(bench, result, out):
-    mod = load(bench)
-    if mod is None:
-        return generic(result, out)
-    if callable(getattr(mod, "study", None)):
-        return mod.study(result, out)
-    return mod.kpis(result), mod.figures(result, out), getattr(mod, "TEXT", "")
-
-
-def write_report(bench, result, out_dir, wall=None):
-    """PNGs and index.html for one bench run; returns the KPIs."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    kpis, images, notes = _report(bench, result, out)
-    images = list(images) + report.bench_animation(result, out, title=f"{bench}, bird's-eye view")
-    span = result.time[-1] - result.time[0]
-    intro = f"Bench {bench}: {span:g} s simulated" + (f" in {wall:.2f} s." if wall else ".")
-    report.write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes)
-    return kpis

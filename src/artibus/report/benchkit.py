@@ -5,9 +5,9 @@ import math
 
 import numpy as np
 
-from artibus.study import kpi
-from artibus import report
+from artibus.report import plots
 from artibus.report.pages import Kpi
+from artibus.study import kpi
 
 DEG = 180 / math.pi
 
@@ -50,12 +50,12 @@ def slalom_road_module():
 def lateral_path(path, traces, road, cones, title, outlines=None):
     """Axle traces against x with y stretched (a bird's-eye view at equal scale
     would be a thin line for a 300 m long manoeuvre); with outlines, the
-    swept-path envelope (report.swept_area)."""
+    swept-path envelope (plots.swept_area)."""
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(9, 3.6))
     ax.plot(road[0], road[1], color="0.75", lw=6, solid_capstyle="round", label="road", zorder=0)
     if outlines is not None:
-        report._draw_swept_area(ax, report.swept_area(outlines, resolution=0.03))   # y is stretched: finer
+        plots._draw_swept_area(ax, plots.swept_area(outlines, resolution=0.03))   # y is stretched: finer
     for label, (x, y) in traces.items():
         ax.plot(x, y, lw=1.2, label=label)
     if cones is not None:
@@ -68,7 +68,7 @@ def lateral_path(path, traces, road, cones, title, outlines=None):
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    report.save_figure(fig, path, dpi=110)
+    plots.save_figure(fig, path, dpi=110)
 
 
 # ---- issue 6: the steered 36 m bus's road tests (Bus36m_LaneChange, Bus36m_Slalom) ----
@@ -113,7 +113,7 @@ def road_test_figures(r, out, title, road, t_after, what, cones=None):
     images.append(("path.png", "Lateral position of the axles against x (y stretched): the road (grey, followed "
                                "by the front axle A1), the swept-path envelope (red, dashed)"
                                + (", the cones (black)." if cones is not None else ".")))
-    report.signals(out / "signals.png", t, [
+    plots.signals(out / "signals.png", t, [
         ("lateral position [m]", {f"A{a}": ax[a][1] for a in (1, 2, 4, 6)}),
         ("articulation [deg]", {"hinge 1": r["Bus.artAngle[1]"] * DEG, "hinge 2": r["Bus.artAngle[2]"] * DEG}),
         ("steering [deg]", {"A1 (driver)": r["Driver.delta"] * DEG, "A3": r["ForceMin.gamma3"] * DEG,

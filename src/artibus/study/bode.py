@@ -69,7 +69,7 @@ def plot(path, responses, title, units=None, reference=None, input_unit=""):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from artibus.report.pages import save_figure
+    from artibus.report import save_figure
     groups = {o: (v if isinstance(v, dict) else {"measured": v}) for o, v in responses.items()}
     units = units or {}
     reference = reference or {}
@@ -128,3 +128,14 @@ def output_units(bench, names):
                     u = v.unit or (getattr(v.declaredType, "unit", None) if v.declaredType is not None else None)
                     units[name] = u or "-"
     return units
+
+
+def csv_rows(frequencies, responses, outputs, input, units):
+    """The lines of ``artibus bode``'s CSV: a header (each output's gain in its
+    unit per the input's, its phase in rad), then a row per frequency."""
+    per = lambda o: f"{units.get(o, '-')} per {units.get(input, '-')}"    # noqa: E731 (gain's unit)
+    rows = ["frequency [Hz]," + ",".join(f"{o} gain [{per(o)}],{o} phase [rad]" for o in outputs)]
+    for k, f in enumerate(frequencies):
+        rows.append(f"{f:.6g}," + ",".join(f"{responses[o][k].gain:.8g},{responses[o][k].phase:.8g}"
+                                           for o in outputs))
+    return rows

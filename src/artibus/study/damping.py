@@ -184,9 +184,9 @@ def _overlay(path, runs, signals, title, t_window=None):
     """One panel per quantity, every damping function overlaid (as the thesis's
     Figs. 5.11-5.14 compare the options). signals: [(ylabel, f(result) -> values)]."""
     import matplotlib.pyplot as plt
-    from artibus.report.pages import _colours
+    from artibus.report import plots
     fig, axes = plt.subplots(len(signals), 1, figsize=(10, 2.6 * len(signals)), sharex=True, squeeze=False)
-    colours = dict(zip(FUNCTIONS + ("reference",), _colours() * 2))
+    colours = dict(zip(FUNCTIONS + ("reference",), plots.colours() * 2))
     for ax, (ylabel, f) in zip(axes[:, 0], signals):
         for name, r in runs.items():
             y = f(r, name)
@@ -202,7 +202,7 @@ def _overlay(path, runs, signals, title, t_window=None):
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].set_title(title)
     fig.tight_layout()
-    from artibus.report.pages import save_figure
+    from artibus.report import save_figure
     save_figure(fig, path, dpi=110)
 
 
@@ -210,7 +210,7 @@ def _rear_path(path, runs, case, title):
     """The rear axle's lateral position against x with the lane (seed 001, Figs. 5.9-5.10)."""
     import matplotlib.pyplot as plt
     from artibus.bench import roads
-    from artibus.report.pages import _colours
+    from artibus.report import plots
     c = CASES[case]
     x, y = roads.generate(roads.LANE_CHANGE, laneLength=c.length, laneOffset=OFFSET,
                           before=ROAD_BEFORE, after=600.0)
@@ -218,7 +218,7 @@ def _rear_path(path, runs, case, title):
     for ax, zoom in zip(axes, (False, True)):
         ax.fill_between(x, y - 1.5, y + 1.5, color="0.9", label="lane (3 m)")
         ax.plot(x, y, color="0.6", lw=1, label="lane centre")
-        for (name, r), col in zip(runs.items(), _colours() * 2):
+        for (name, r), col in zip(runs.items(), plots.colours() * 2):
             ax.plot(r["Bus.xAxle[3]"], r["Bus.yAxle[3]"], lw=1.2, color=col, label=LABELS.get(name, name))
         x_end = ROAD_BEFORE + c.length
         if zoom:
@@ -233,7 +233,7 @@ def _rear_path(path, runs, case, title):
         ax.grid(True, alpha=0.3)
     axes[0].legend(loc="lower right", fontsize=8, ncol=2)
     fig.tight_layout()
-    from artibus.report.pages import save_figure
+    from artibus.report import save_figure
     save_figure(fig, path, dpi=110)
 
 
@@ -245,7 +245,7 @@ def report(r, out):
     """The Scania18m_Damping report: every damping function on the thesis's
     comparison case, the 130 km/h case, the calibration case and the
     reference-model case; a KPI table per case."""
-    from artibus.report.pages import Kpi
+    from artibus.report import Kpi
     out = Path(out)
     runs = {f: run(f, "lc60_100") for f in FUNCTIONS}   # whatever variant r was run with
     k = {f: kpis(rr, "lc60_100") for f, rr in runs.items()}

@@ -185,7 +185,7 @@ def plot_kc(path, rows, f_lo=F_LO, f_check=F_CHECK):
     sec = ax.secondary_xaxis("top", functions=(lambda x: x / 3.6, lambda x: x * 3.6))
     sec.set_xlabel("speed v [m/s]")
     fig.tight_layout()
-    from artibus.report.pages import save_figure
+    from artibus.report import save_figure
     save_figure(fig, path, dpi=110)
 
 
@@ -262,7 +262,7 @@ def bode_figures(out, kc100, geo=None):
 def report(r, out):
     """The Scania18m_OpenLoop bench's report: seed 001's Figs. 4.1-4.3 (the
     bench's own run, straight ahead, is not what it is for)."""
-    from artibus.report.pages import Kpi
+    from artibus.report import Kpi
     geo = reference_geometry()
     ssv = read_parameters("Scania18mKc")
     speeds = [ssv[f"KcSpeed[{i}]"] for i in range(1, ssv["nKc"] + 1)]
