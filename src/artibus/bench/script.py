@@ -13,8 +13,9 @@
   still takes ``kpis(result)``.
 
 A bench without a bench.py gets the generic report (the first recorded signals
-over time) and no KPIs. The bench's variants are its ``variants/*.ssv``
-(artibus.ssp)."""
+over time, artibus.report.pages.generic) and no KPIs; the report of a run is
+artibus.report.pages.write_report. The bench's variants are its ``variants/*.ssv``
+(artibus.bench.ssp)."""
 import importlib.util
 import sys
 from pathlib import Path

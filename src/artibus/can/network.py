@@ -41,7 +41,7 @@ bit for bit (tests/test_can_core.py), where it can (``Network.core_support``:
 no faults, no tamper function, the virtual bus, integer signals): its own codec
 (cantools' scaling and rounding, checked against cantools on every signal),
 CRC, counter, the receivers' check and the counts, and the initialisation's
-``settle`` too (runner._CanCore.settle); the frames go to the log
+``settle`` too (artibus.runner.can_core._CanCore.settle); the frames go to the log
 after the run (``log_frames``), the bus carries none. Faults, a tamper function
 or a real interface tick here (``Network.tick``), as the run's
 ``Simulation.stepping`` says.

@@ -145,7 +145,7 @@ class Fmu:
 
     def set_values(self, values):
         """Set each {name: value}, the value checked against the variable's
-        declared type first (artibus.parameters.coerce: no rounding, no
+        declared type first (artibus.bench.parameters.coerce: no rounding, no
         "yes" for true, an Enumeration by item name or value)."""
         from artibus.bench.parameters import coerce
         for name, value in values.items():

@@ -48,7 +48,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     """Simulate one FMU.
 
     parameters: {name: value} set in initialization mode (checked against
-    each variable's type, see artibus.parameters.coerce).
+    each variable's type, see artibus.bench.parameters.coerce).
     inputs: {name: f(t)} evaluated at each communication point (held over the step).
     outputs: names to record, of any type (default: every output).
     Without stop_time/step: the default experiment's, else DEFAULT_STOP_TIME

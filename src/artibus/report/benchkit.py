@@ -1,6 +1,6 @@
 """What several benches' KPIs and figures share (roads, outlines, the steered
 36 m bus's road tests). A bench's own KPIs, figures and text are in its folder,
-``ssp/benches/<Bench>/bench.py`` (see artibus.benches)."""
+``ssp/benches/<Bench>/bench.py`` (see artibus.bench.script)."""
 import math
 
 import numpy as np

@@ -294,7 +294,7 @@ class _CoreStepper:
     def allocate(self, n):
         """The run's preallocated table for n base steps (n + 1 rows; see __init__: the
         CAN columns) and its Result, in the run's set-up (as the Python loop's recorder):
-        memory recycled from tables no longer referred to (artibus.tables: no page faults
+        memory recycled from tables no longer referred to (artibus.runner.tables: no page faults
         on memory in use already); the core fills it."""
         m = len(self.sim.names)
         self.table, self.struct.table = tables.take(n + 1, m + self.extra)

@@ -2,7 +2,7 @@
 
 - parameters from the bench's bindings (.ssv inside the .ssp), then from
   ``--ssv`` files and ``--set comp.var=value`` given by the user;
-- every value checked against the FMU's declared type (artibus.parameters.coerce);
+- every value checked against the FMU's declared type (artibus.bench.parameters.coerce);
 - connections between component variables, through nested systems, with SSP
   linear transformations; without one, values are converted between the
   connected variables' units (FMI unit definitions, base units and factor/offset);

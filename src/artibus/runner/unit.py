@@ -45,7 +45,7 @@ class Unit:
     stimuli: list = field(default_factory=list)   # (input index, f(t), base value or None)
     wall: float = 0.0
     raw: object = None                           # _RawCalls, once the variables are known
-    # Integer, Boolean, String and Enumeration variables (artibus.runner._TypedCalls):
+    # Integer, Boolean, String and Enumeration variables (_TypedCalls):
     tout: list = field(default_factory=list)     # outputs read: (name, type, value reference)
     tin: list = field(default_factory=list)      # connected inputs: (name, type, value reference)
     typed_sources: list = field(default_factory=list)  # (input index, source unit, output index, convert)
