@@ -32,4 +32,3 @@ def fmu_path(name):
             raise ArtibusError(f"{name}: no such FMU; did you mean {' or '.join(close)}?")
         raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
     return path
-

@@ -65,6 +65,5 @@ def load_dbc(path, label=None):
     return db
 
 
-
 def dbc_in(ssp_dir, spec):
     return Path(ssp_dir) / (spec.get("source") or "")

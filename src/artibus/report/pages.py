@@ -54,8 +54,6 @@ class Kpi:
         return "" if self.passed is None else (PASS if bool(self.passed) else FAIL)
 
 
-
-
 def thumbnail(src, dst, width=240):
     """A small PNG of an image (the index's thumbnails)."""
     from PIL import Image

@@ -9,16 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from artibus.base import ArtibusError
-from artibus.bench.parameters import check_against
+from artibus.bench.parameters import check_against, suggest
 from artibus.bench.units import declared_unit, unit_conversion
 from artibus.fmu import Fmu
 from artibus.runner.plan import _order
 from artibus.runner.unit import Link, Unit, _RawCalls, _TypedCalls, _typed_convert
-
-
-def _suggest(name, known):
-    from artibus.bench.parameters import suggest
-    return suggest(name, known)
 
 
 def resolve_resources(tmp, where, values, origins=None):
@@ -34,7 +29,6 @@ def resolve_resources(tmp, where, values, origins=None):
                 raise ArtibusError(f"{where}: parameter '{var}' = {value!r}"
                                    + (f" (from {origin})" if origin else "") + ": no such file in the .ssp")
             values[var] = str(f)
-
 
 
 class _Setup:
@@ -92,7 +86,7 @@ class _Setup:
             comp, _, var = full.rpartition(".")
             if comp not in self.parameters:
                 raise ArtibusError(f"--set {full}={value}: no component '{comp}' in {where}"
-                                   f"{_suggest(comp, self.parameters)} (components: {', '.join(self.parameters)})")
+                                   f"{suggest(comp, self.parameters)} (components: {', '.join(self.parameters)})")
             self.parameters[comp][var] = value
             origins.setdefault(comp, {})[var] = "--set/--ssv/--variant"
         for path, values in self.parameters.items():
@@ -170,7 +164,7 @@ class _Setup:
             comp, _, var = name.rpartition(".")
             if comp not in units:
                 raise ArtibusError(f"--record {name}: no component '{comp}' in {where}"
-                                   f"{_suggest(comp, units)} (components: {', '.join(units)})")
+                                   f"{suggest(comp, units)} (components: {', '.join(units)})")
             if var not in units[comp].fmu.vars:
                 from artibus.bench.parameters import no_variable
                 raise ArtibusError(f"--record {name}: {comp}: {no_variable(units[comp].fmu.md, var)}")

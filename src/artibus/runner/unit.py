@@ -210,4 +210,3 @@ def _last_message(log):
     """The FMU's last error message, else its last message."""
     errors = [m for m in log if m.startswith(("[Error]", "[Fatal]"))]
     return errors[-1] if errors else log[-1] if log else "no message"
-

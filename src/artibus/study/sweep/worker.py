@@ -16,7 +16,6 @@ from artibus.study.sweep.designs import _variant_list
 from artibus.study.sweep.store import STATUS_FAILED, STATUS_OK, _case_row, _parquet_bytes, _series_table, _table
 
 
-
 #: FMU instances reused across cases (fmi2Reset and a new initialisation); False: a fresh Simulation each case
 REUSE = os.environ.get("ARTIBUS_SWEEP_REUSE", "1") != "0"
 _LOCK = threading.Lock()
