@@ -43,8 +43,8 @@ import ctypes     # noqa: E402
 import time       # noqa: E402
 
 from artibus import fmu_path
-from artibus.parameters import read_parameters
-from artibus.simulation import Fmu
+from artibus.bench.parameters import read_parameters
+from artibus.fmu import Fmu
 
 STOP, H, SPEED, DELTA, FX_HELD = 60.0, 0.01, 3.0, 0.40, 69e3
 

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import can as pycan
 
-from artibus import can as artcan
-from artibus import runner, ssp
+from artibus import can as artcan, runner
+from artibus.bench import ssp
 
 REPEAT = 3
 

@@ -30,7 +30,8 @@ from pathlib import Path
 
 from fmpy.ssp.simulation import simulate_ssp
 
-from artibus import runner, ssp
+from artibus import runner
+from artibus.bench import ssp
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_runner import component, connection, make_ssp  # noqa: E402

@@ -61,8 +61,9 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT / "tests"))
 
-from artibus import fmu_dir, runner, ssp  # noqa: E402
-from artibus.simulation import default_step  # noqa: E402
+from artibus import fmu_dir, runner
+from artibus.bench import ssp  # noqa: E402
+from artibus.fmu import default_step  # noqa: E402
 
 
 def _load(name):

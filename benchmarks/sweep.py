@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import artibus
-from artibus import ssp
+from artibus.bench import ssp
 
 BENCH = "Bus36m_Circle"
 LENGTHS = {
@@ -109,8 +109,8 @@ def timed(bench, client, length, out, owned=()):
 
 def local(n_workers):
     """A local cluster as artibus sweep makes it (sweep._client)."""
-    from artibus import sweep as sw
-    client, cluster = sw._client(None, n_workers)
+    from artibus.study.sweep import cluster as sw_cluster
+    client, cluster = sw_cluster._client(None, n_workers)
     return client, [cluster]
 
 

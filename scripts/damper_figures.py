@@ -5,7 +5,7 @@ co-simulation stability figure h c / J for J = 5e4 kg m2 at a 10 ms step)."""
 import math
 
 from artibus import fmu_dir
-from artibus.simulation import Fmu
+from artibus.fmu import Fmu
 
 DEG = math.pi / 180
 OUTS = ["Mjoint", "Mmax", "F[1]", "F[2]", "Ldot[1]", "Ldot[2]"]

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import kc
+from artibus.study import kc
 
 
 def main(argv=None):

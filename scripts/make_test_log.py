@@ -36,8 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from artibus import fmu_path  # noqa: E402
-from artibus.parameters import read_parameters  # noqa: E402
-from artibus.simulation import simulate  # noqa: E402
+from artibus.bench.parameters import read_parameters  # noqa: E402
+from artibus.fmu import simulate  # noqa: E402
 
 OUT = ROOT / "ssp" / "logs" / "Urbino18_test.csv"
 SEED = 2024

@@ -7,7 +7,9 @@ usage: .venv/bin/python scripts/way_constant_sweep.py
 """
 import numpy as np
 
-from artibus import kpi, runner, ssp
+from artibus import runner
+from artibus.bench import ssp
+from artibus.study import kpi
 
 BENCH, VARIANT = "Bus36m_Circle", "guidedForceMin"
 ARC = 2 * np.pi * 17.5

@@ -4,13 +4,13 @@ from pathlib import Path
 import pytest
 
 from artibus import fmu_dir
-from artibus.simulation import Fmu
+from artibus.fmu import Fmu
 
 # FMPy's default memory callbacks (fmpy.simulate_fmu, an FMU2Slave given no
 # callbacks) call libc's calloc/free looked up in libc.so.6, which a preloaded
 # ASan never sees: the process's own, as artibus.simulation's (artibus.memory)
 import fmpy.fmi2 as _fmi2                     # noqa: E402
-from artibus import memory as _memory         # noqa: E402
+from artibus.fmu import memory as _memory         # noqa: E402
 _fmi2.defaultCallbacks.allocateMemory = _fmi2.fmi2CallbackAllocateMemoryTYPE(_memory.calloc)
 _fmi2.defaultCallbacks.freeMemory = _fmi2.fmi2CallbackFreeMemoryTYPE(_memory.free)
 

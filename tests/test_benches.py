@@ -9,9 +9,11 @@ import pytest
 from fmpy.ssp.ssd import read_ssd, read_ssv
 from lxml import etree
 
-from artibus import fmu_dir, kpi, runner, ssp
-from artibus.benches import write_report
-from artibus.parameters import read_parameters
+from artibus import fmu_dir, runner
+from artibus.bench import ssp
+from artibus.bench.parameters import read_parameters
+from artibus.report import write_report
+from artibus.study import kpi
 from test_bus_dynamics_vehicles import linear_modes, sway_mode
 
 BENCHES = ssp.bench_names()

@@ -21,7 +21,9 @@ import math
 import numpy as np
 import pytest
 
-from artibus import ROOT, kpi, roads, runner, ssp
+from artibus import ROOT, runner
+from artibus.bench import roads, ssp
+from artibus.study import kpi
 
 WET = {f"Bus.mu[{a}]": 0.5 for a in range(1, 7)}
 DRY = {f"Bus.mu[{a}]": 1.0 for a in range(1, 7)}

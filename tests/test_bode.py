@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from artibus.bode import frequency_response
+from artibus.study.bode import frequency_response
 from test_multiaxle_model import BUS, state_space, steer_weights, zero_sideslip_gain
 
 FREQS = [0.1, 0.3, 1.0, 2.0]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from artibus import fmu_path
-from artibus.simulation import Fmu, SimulationError, simulate
+from artibus.fmu import Fmu, SimulationError, simulate
 from conftest import DEG
 
 NO_TEST_STEER = {"testSteerAmp": 0.0}
@@ -318,7 +318,7 @@ def _bus36m_co_simulated(solver, rtol, n_steps=3000, h=0.01):
     """Bus36m at 3 m/s steered as a driver FMU would: the front axle from
     straight into 0.4 rad and back over 30 s, and the drive force of a PI
     speed governor, both updated every 20 ms (every second step of 10 ms)."""
-    from artibus.parameters import read_parameters
+    from artibus.bench.parameters import read_parameters
     p = read_parameters("Bus36m", fmu_path("BusDynamics"))
     p.update(testSteerAmp=0.0, tyreModel=1, vx_start=3.0, solver=solver, rtol=rtol, atol=rtol)
     held = {"delta[1]": 0.0, "Fx[2]": 0.0, "I": 0.0}
@@ -365,7 +365,7 @@ def test_explicit_runge_kutta_state_round_trip():
     """FMU state with the explicit integrator: continued and restored runs are
     bit-identical (both restart it from scratch), and an input change after
     the restore is taken the same way."""
-    from artibus.parameters import read_parameters
+    from artibus.bench.parameters import read_parameters
     p = read_parameters("Bus36m", fmu_path("BusDynamics"))
     p.update(testSteerAmp=0.0, vx_start=3.0, solver=2)
     with Fmu(fmu_path("BusDynamics")).initialize(p) as fmu:

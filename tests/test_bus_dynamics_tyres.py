@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from artibus import fmu_path
-from artibus.simulation import Fmu, SimulationError, simulate
+from artibus.fmu import Fmu, SimulationError, simulate
 from test_bus_dynamics import BICYCLE, NO_TEST_STEER, THREE
 
 G = 9.81

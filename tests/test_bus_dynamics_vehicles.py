@@ -8,7 +8,7 @@ import pytest
 from fmpy import read_model_description
 
 from artibus import fmu_path
-from artibus.parameters import read_parameters
+from artibus.bench.parameters import read_parameters
 from circle_equilibrium import fit_circle, solve_equilibrium
 from test_bus_dynamics import run_loop
 

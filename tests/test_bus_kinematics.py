@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from artibus import fmu_path
-from artibus.parameters import read_parameters
-from artibus.simulation import SimulationError, simulate
+from artibus.bench.parameters import read_parameters
+from artibus.fmu import SimulationError, simulate
 from conftest import DEG
 
 URBINO = {"N": 1, "k": 1, "L0": 5.9, "Lh[1]": 1.789, "L[1]": 4.211, "testSteerAmp": 0.0}

@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 from cantools.autosar.end_to_end import compute_profile2_crc
 
-from artibus import ArtibusError, kpi, ssp
-from artibus import can as artcan
+from artibus import ArtibusError, can as artcan
+from artibus.bench import ssp
 from artibus.runner import Simulation, run
+from artibus.study import kpi
 from can_bound import DBC, T, TO_SI, assert_within_bound, kpi_bound
 
 DIRECT, CAN_BENCH = "Bus36m_Circle", "Bus36m_Circle_CAN"

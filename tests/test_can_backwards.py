@@ -9,8 +9,9 @@ import cantools
 import numpy as np
 import pytest
 
-from artibus import kpi, ssp
+from artibus.bench import ssp
 from artibus.runner import run
+from artibus.study import kpi
 from can_bound import DBC, assert_within_bound, kpi_bound
 
 DIRECT, CAN_BENCH = "Bus36m_Circle_Backwards", "Bus36m_Circle_CAN_Backwards"

@@ -17,7 +17,8 @@ import cantools
 import numpy as np
 import pytest
 
-from artibus import ROOT, ArtibusError, ssp
+from artibus import ArtibusError, ROOT
+from artibus.bench import ssp
 from artibus.can import e2e_crc, frame_bits
 from artibus.runner import Simulation, can_signal, core_library_path
 
@@ -198,7 +199,8 @@ def test_settle_through_the_core_is_network_settle():
     network state (last_counter None, good_tick -ratio, nothing sent or
     counted), or the same error."""
     from artibus.can import COUNTER_SIGNAL
-    from artibus.runner import _core_stepper, _Plan
+    from artibus.runner.core import _core_stepper
+    from artibus.runner.plan import _Plan
     rng = np.random.default_rng(16)
     with Simulation("Bus36m_Circle_CAN") as sim:
         net, core = sim.can, _core_stepper(sim, _Plan(sim.order, 10), None, True).can

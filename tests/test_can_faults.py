@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 from cantools.autosar.end_to_end import compute_profile2_crc
 
-from artibus import ROOT, ArtibusError
-from artibus import can as artcan
+from artibus import ArtibusError, ROOT, can as artcan
 from artibus.runner import Simulation
 
 DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"

@@ -7,7 +7,8 @@ import sys
 
 import pytest
 
-from artibus import ROOT, check
+from artibus import ROOT
+from artibus.bench import check
 
 PARAMS = ROOT / "ssp" / "parameters"
 TEMPLATE = PARAMS / "Template.ssv"

@@ -19,7 +19,8 @@ import pytest
 from fmpy import simulate_fmu
 from lxml import etree
 
-from artibus import ArtibusError, benches, fmu_path, runner, ssp
+from artibus import ArtibusError, fmu_path, report, runner
+from artibus.bench import script, ssp
 
 BENCH = "Bus36m_Circle"
 VARIANTS = ["guided", "guidedAll", "guidedForceMin"]
@@ -89,7 +90,7 @@ def test_unsteered_default_is_the_bus_without_controllers(runs, tmp_path):
     assert len(b.names) > 50 and set(b.names) <= set(r.names)
     for n in b.names:
         assert np.array_equal(b[n], r[n]), n
-    assert benches.load(BENCH).variant_of(r) == "unsteered"
+    assert script.load(BENCH).variant_of(r) == "unsteered"
 
 
 def test_the_switched_off_controllers_do_not_warn():
@@ -142,7 +143,7 @@ def test_guided_force_min_steers_a3_a5_its_own_way(runs):
 
 
 def test_the_kpis_tell_the_variant_that_ran(runs):
-    mod = benches.load(BENCH)
+    mod = script.load(BENCH)
     for v in VARIANTS:
         assert mod.variant_of(runs[v]) == v
         k = {x.name: x for x in mod.kpis(runs[v])}
@@ -153,11 +154,11 @@ def test_a_run_that_is_none_of_the_variants_has_kpis_without_bounds(tmp_path):
     """A3/A5 force-minimising with A4/A6 straight is no variant: its KPIs carry no
     paper value or verdict, and its report sets the four variants beside it."""
     r = runner.run(BENCH, stop_time=30.0, overrides={"ForceMin.law": 1})
-    mod = benches.load(BENCH)
+    mod = script.load(BENCH)
     assert mod.variant_of(r) is None and np.any(r["ForceMin.gamma3"])
     k = mod.kpis(r)
     assert len(k) == 9 and all(x.passed is None and x.paper == "" for x in k)
-    kpis = benches.write_report(BENCH, r, tmp_path)
+    kpis = report.write_report(BENCH, r, tmp_path)
     names = [x.name for x in kpis]
     assert names[:9] == [f"this run: {x.name}" for x in k]
     assert [n.split(":")[0] for n in names[9::9]] == ["unsteered", *VARIANTS]

@@ -8,8 +8,9 @@ import sys
 import pytest
 
 import artibus
-from artibus import ArtibusError, fmu_dir, ssp
-from artibus.names import expand
+from artibus import ArtibusError, fmu_dir
+from artibus.bench import ssp
+from artibus.bench.names import expand
 
 
 def artibus_cli(*args, cwd):

@@ -11,8 +11,8 @@ import sys
 import numpy as np
 import pytest
 
-from artibus import damping, kpi
-from artibus.parameters import read_parameters
+from artibus.bench.parameters import read_parameters
+from artibus.study import damping, kpi
 from test_bus_dynamics_vehicles import linear_modes, params, prony, sway_mode
 
 DEG = 180 / math.pi

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from artibus import fmu_path, roads
-from artibus.simulation import Fmu
+from artibus import fmu_path
+from artibus.bench import roads
+from artibus.fmu import Fmu
 
 V50 = 50 / 3.6
 CAR = dict(L0=2.7, refX=2.7, refY=0.0)          # the test double's wheelbase

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from artibus import ArtibusError, fmu_path, roads
-from artibus.simulation import Fmu
+from artibus import ArtibusError, fmu_path
+from artibus.bench import roads
+from artibus.fmu import Fmu
 from test_driver import CAR, drive_car
 
 BEFORE, AFTER = 25.0, 50.0

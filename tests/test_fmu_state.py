@@ -26,7 +26,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 
 from conftest import FMU_NAMES
-from artibus.simulation import Fmu
+from artibus.fmu import Fmu
 from conftest import fmu_file
 
 HEADER = 80            # magic, size, guid[64], checksum: then the body (src/fmi/fmi2Functions.c)

@@ -6,7 +6,7 @@ from fmpy import simulate_fmu, read_model_description
 from fmpy.fmi1 import FMICallException
 
 from conftest import FMU_NAMES, fmu_file, init
-from artibus.simulation import Fmu
+from artibus.fmu import Fmu
 
 STIMULI = {"testSteerAmp": 0.0, "testSpeedRate": 0.0, "testVehicle": False}
 
@@ -32,7 +32,7 @@ def test_default_experiment_alone_is_finite_and_not_trivial(name):
 def test_bad_resource_location_is_refused():
     """'%4' at the end of the location once decoded past the end of the buffer"""
     from ctypes import byref
-    from artibus.simulation import _callbacks
+    from artibus.fmu.instance import _callbacks
     f = Fmu(fmu_file("RoadFollowDriver"))
     try:
         log = []
@@ -95,7 +95,7 @@ def test_fmus_allocate_through_a_preloaded_sanitizer():
     import ctypes
     import os
     import fmpy
-    from artibus import memory
+    from artibus.fmu import memory
     addr = lambda f: ctypes.cast(f, ctypes.c_void_p).value   # noqa: E731
     preload = [p for p in os.environ.get("LD_PRELOAD", "").split() if "libasan" in p]
     if preload:

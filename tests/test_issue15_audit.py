@@ -10,8 +10,9 @@ import sys
 import numpy as np
 import pytest
 
-from artibus import ROOT, benches, runner
-from artibus.simulation import SimulationError
+from artibus import ROOT, runner
+from artibus.bench import script
+from artibus.fmu import SimulationError
 from artibus.runner import Simulation
 from test_runner_types import comp, make_ssp
 
@@ -58,7 +59,7 @@ def test_readme_example_mu_on_scania_lane_change_acts():
 
 def test_backwards_bench_says_why_its_kpis_match_the_forwards_bench():
     """'Identical Backwards/Forwards KPIs are not explained (the bus is symmetric).'"""
-    text = benches.load("Bus36m_Circle_Backwards").TEXT
+    text = script.load("Bus36m_Circle_Backwards").TEXT
     assert "symmetric" in text and "forwards" in text
 
 
@@ -109,7 +110,7 @@ def test_bode_page_has_enough_frequencies_and_a_panel_per_output(tmp_path, monke
     MultiAxle_StepSteer's study (its step runs real, the sine runs stubbed: a
     first-order lag per output) asks for at least 20 log-spaced frequencies over
     more than a decade and draws a column per output, each with its own unit."""
-    from artibus import bode
+    from artibus.study import bode
     asked, drawn = [], {}
 
     def fake_response(bench, input, outputs, frequencies, amplitude, **kw):
@@ -124,7 +125,7 @@ def test_bode_page_has_enough_frequencies_and_a_panel_per_output(tmp_path, monke
 
     monkeypatch.setattr(bode, "frequency_response", fake_response)
     monkeypatch.setattr(bode, "plot", spy_plot)
-    b = benches.load("MultiAxle_StepSteer")
+    b = script.load("MultiAxle_StepSteer")
     b.study(None, tmp_path)
     f = asked[0]
     assert len(f) >= 20 and f[-1] / f[0] > 10

@@ -9,8 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from artibus import ArtibusError, fmu_path, kc
-from artibus.parameters import check_against, read_parameters
+from artibus import ArtibusError, fmu_path
+from artibus.bench.parameters import check_against, read_parameters
+from artibus.study import kc
 from test_bus_dynamics import run_loop
 from test_bus_dynamics_vehicles import linear_modes
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from artibus import fmu_path
-from artibus.parameters import read_parameters
-from artibus.simulation import simulate
+from artibus.bench.parameters import read_parameters
+from artibus.fmu import simulate
 
 FMU = fmu_path("BusKinematics")
 OUT = ["theta[0]", "theta[1]", "x[0]", "y[0]", "x[1]", "y[1]", "beta[1]", "omega[0]", "omega[1]", "vel[1]",

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from artibus import kpi
+from artibus.study import kpi
 
 
 def circle(R, a0=0.0, a1=2 * math.pi, n=2000, cx=0.0, cy=0.0):

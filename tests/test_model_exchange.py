@@ -20,7 +20,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from conftest import fmu_file
-from artibus.simulation import Fmu
+from artibus.fmu import Fmu
 
 TS = 0.02           # the benches' driver samples at 50 Hz
 TOL = 1e-10         # both integrators' relative tolerance

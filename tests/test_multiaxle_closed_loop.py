@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from artibus.simulation import Fmu  # noqa: E402
+from artibus.fmu import Fmu  # noqa: E402
 from conftest import fmu_file  # noqa: E402
 from test_multiaxle_model import (BUS, fmu_parameters, state_space, steady_state,  # noqa: E402
                                   steer_weights, zero_sideslip_gain)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from artibus.simulation import Fmu, SimulationError, simulate
+from artibus.fmu import Fmu, SimulationError, simulate
 from conftest import ROOT, fmu_file, init
 from test_multiaxle_model import (BUS, bicycle, eq4, fmu_parameters, state_space, steady_state,
                                   step_response)

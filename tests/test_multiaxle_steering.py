@@ -10,7 +10,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from artibus.simulation import SimulationError, simulate
+from artibus.fmu import SimulationError, simulate
 from conftest import ROOT, fmu_file, init
 from test_multiaxle_model import BUS, fmu_parameters, steer_weights, zero_sideslip_gain
 

@@ -19,7 +19,9 @@ import math
 import numpy as np
 import pytest
 
-from artibus import kpi, runner, ssp
+from artibus import runner
+from artibus.bench import ssp
+from artibus.study import kpi
 from conftest import init
 from test_steering_controllers_benches import H, KIN_36M, L1, fit_circle, opened
 

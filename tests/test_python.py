@@ -6,7 +6,7 @@ import sys
 import pytest
 
 from artibus import ArtibusError, fmu_path
-from artibus.parameters import read_parameters
+from artibus.bench.parameters import read_parameters
 from conftest import ROOT
 
 SSV = """<?xml version="1.0" encoding="UTF-8"?>

@@ -7,9 +7,10 @@ import sys
 import numpy as np
 import pytest
 
-from artibus import ROOT, ArtibusError, fmu_path, replay
-from artibus.parameters import read_parameters
-from artibus.simulation import simulate
+from artibus import ArtibusError, ROOT, fmu_path
+from artibus.bench.parameters import read_parameters
+from artibus.can import replay
+from artibus.fmu import simulate
 
 LOG = ROOT / "ssp" / "logs" / "Urbino18_test.csv"
 C = [0.69, 0.71, 9.8e-5, 3.2e-5]          # seed 003, Appendix A, as printed

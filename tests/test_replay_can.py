@@ -9,7 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from artibus import ROOT, ArtibusError, replay
+from artibus import ArtibusError, ROOT
+from artibus.can import replay
 
 CAN_BENCH = "Bus36m_Circle_CAN"
 DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
@@ -21,7 +22,7 @@ PLANT = ([f"Bus.{n}[{a}]" for n in ("xAxle", "yAxle") for a in range(1, 7)]
 
 def can_routes():
     """{receiver "C.v": (message, signal)} of the bench's routed connections (read from its .ssd)."""
-    from artibus import ssp
+    from artibus.bench import ssp
     b = ssp.read(ssp.ssp_path(CAN_BENCH))
     return {f"{c.end[0]}.{c.end[1]}": (c.can["message"], c.can["signal"]) for c in b.connections if c.can}
 

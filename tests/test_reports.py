@@ -18,8 +18,10 @@ import pytest
 from lxml import html as lhtml
 from PIL import Image
 
-from artibus import benches, comparison, kpi, report, runner, ssp
-from artibus.report import FAIL, PASS, Kpi
+from artibus import report, runner
+from artibus.bench import ssp
+from artibus.report import FAIL, Kpi, PASS, comparison, plots
+from artibus.study import kpi
 
 BENCHES = {"Bus36m_Circle": 30.0, "Scania18m_LaneChange": None}
 
@@ -32,7 +34,7 @@ def site(tmp_path_factory):
     for b, stop in BENCHES.items():
         with runner.Simulation(b) as sim:
             r = sim.run(stop_time=stop)
-        kpis = benches.write_report(b, r, root / b, sim.wall)
+        kpis = report.write_report(b, r, root / b, sim.wall)
         summary.append((b, root / b, kpis))
         if comparison.wanted(b):
             kept[b] = r
@@ -218,7 +220,7 @@ def test_swept_area_of_a_rigid_body_on_a_circle():
 
 def test_long_birds_eye_drawing_is_split_into_readable_panels(tmp_path):
     # the Scania lane change: 455 m long, 16 m wide
-    windows, tall = report._panels((-15.0, 440.0), (-2.0, 14.0))
+    windows, tall = plots._panels((-15.0, 440.0), (-2.0, 14.0))
     assert not tall and 3 <= len(windows) <= 4
     assert windows[0][0] == pytest.approx(-15.0, abs=3) and windows[-1][1] == pytest.approx(440.0, abs=3)
     x = np.linspace(0, 450, 900)
@@ -238,7 +240,7 @@ def test_long_birds_eye_drawing_is_split_into_readable_panels(tmp_path):
 def test_bode_phase_unwrapped_over_frequency(tmp_path):
     """A third-order lag 1/(1 + s/w0)^3: its phase falls through -180 deg to
     -270 deg; the plot's phase follows it without a jump."""
-    from artibus import bode
+    from artibus.study import bode
     w0 = 2 * math.pi * 1.0
     f = np.geomspace(0.05, 30, 40)
     G = 1 / (1 + 1j * 2 * math.pi * f / w0) ** 3

@@ -10,9 +10,9 @@ import pytest
 from lxml import etree
 
 from artibus import ROOT
+from artibus.bench.units import unit_of
 from artibus.cli import main
 from artibus.runner import read_units, run, save, units_path
-from artibus.simulation import unit_of
 
 RECORD = ["Bus.x[1]", "Bus.psi[1]", "Bus.vy[2]", "Bus.FzFromMasses"]
 

@@ -346,7 +346,7 @@ def test_a_bench_by_name_is_packed_again_when_a_file_it_packs_is_newer(tmp_path,
     packed again (the run sees it), an unchanged bench is left as it is."""
     import os
     import shutil
-    from artibus import ssp as ssp_mod
+    from artibus.bench import ssp as ssp_mod
     benches, fmus = tmp_path / "benches", tmp_path / "fmus"
     (benches / "Tiny").mkdir(parents=True)
     fmus.mkdir()
@@ -404,7 +404,7 @@ def test_a_pack_left_in_fmus_of_no_bench_is_refused_by_name(tmp_path, monkeypatc
     not run that stale pack silently but name it, and the bench and variant meant."""
     import shutil
     from artibus import ArtibusError
-    from artibus import ssp as ssp_mod
+    from artibus.bench import ssp as ssp_mod
     real = ssp_mod.ssp_path("Bus36m_Circle")
     monkeypatch.setenv("ARTIBUS_FMU_DIR", str(tmp_path))
     shutil.copy(real, tmp_path / "Bus36m_Circle_GuidedForceMin.ssp")

@@ -12,7 +12,8 @@ import zipfile
 import numpy as np
 import pytest
 
-from artibus import ROOT, ArtibusError, fmu_path, ssp
+from artibus import ArtibusError, ROOT, fmu_path
+from artibus.bench import ssp
 from artibus.runner import Simulation, core_library_path
 
 from test_runner import L0, LEAD_FOLLOW, NS, QUIET, component, connection, make_ssp, nested_bench
@@ -284,8 +285,8 @@ def test_failing_set_real_in_the_initialisation_same_error(tmp_path, algorithm):
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
 def test_not_settled_same_error(tmp_path, monkeypatch, algorithm):
     """One round allowed: pct goes 0 -> 25 in it, so the inputs have not settled."""
-    import artibus.runner
-    monkeypatch.setattr(artibus.runner, "MAX_INIT_ITERATIONS", 1)
+    import artibus.runner.simulation
+    monkeypatch.setattr(artibus.runner.simulation, "MAX_INIT_ITERATIONS", 1)
     path = damper_bench(tmp_path, 25)
     errors = []
     for core in (True, False):
@@ -296,7 +297,7 @@ def test_not_settled_same_error(tmp_path, monkeypatch, algorithm):
             errors.append(str(e.value))
     assert errors[0] == errors[1] and errors[0].endswith("initialisation did not settle in 1 iterations "
                                                          "of the connected inputs")
-    monkeypatch.setattr(artibus.runner, "MAX_INIT_ITERATIONS", 2)      # two are enough
+    monkeypatch.setattr(artibus.runner.simulation, "MAX_INIT_ITERATIONS", 2)      # two are enough
     for core in (True, False):
         with Simulation(path, step=0.05, algorithm=algorithm) as sim:
             assert sim.run(stop_time=0.2, core=core)["Damper.Mmax"].size == 5

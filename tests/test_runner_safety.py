@@ -75,7 +75,8 @@ from pathlib import Path
 import numpy as np
 
 from artibus import fmu_path, runner
-from artibus.simulation import Result
+from artibus.fmu import Result
+from artibus.runner import core as runner_core, plan as runner_plan, results as runner_results
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_runner import LEAD_FOLLOW, component, connection, make_ssp  # noqa: E402
@@ -145,7 +146,7 @@ def test_plan_memory_does_not_grow_with_the_period():
     without allocating per step, and each step's entry is the definition's."""
     units = [_U(1), _U(1_000_003), _U(7), _U(1_000_033)]
     tracemalloc.start()
-    plan = runner._Plan(units, 10_000_000)
+    plan = runner_plan._Plan(units, 10_000_000)
     entries = [plan[k] for k in (0, 6, 7, 1_000_002, 1_000_003, 9_999_999)]
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
@@ -159,7 +160,7 @@ def test_plan_memory_does_not_grow_with_the_period():
 
 def test_short_period_plan_is_tabulated_once():
     units = [_U(1), _U(2), _U(3)]
-    plan = runner._Plan(units, 1000)
+    plan = runner_plan._Plan(units, 1000)
     assert plan.period == 6 and len(plan.table) == 6
     assert plan[13] is plan[1]
 
@@ -187,8 +188,8 @@ def test_untabulated_plan_bit_for_bit(tmp_path, monkeypatch, algorithm):
         return out
 
     tabulated = results()
-    monkeypatch.setattr(runner, "PLAN_TABLE", 1)
-    monkeypatch.setattr(runner, "CORE_PIECE", 7)
+    monkeypatch.setattr(runner_plan, "PLAN_TABLE", 1)
+    monkeypatch.setattr(runner_core, "CORE_PIECE", 7)
     windowed = results()
     assert np.max(np.abs(tabulated[0][:, 1:])) > 1e-3
     for a, b in zip(tabulated + windowed, [tabulated[0]] * 4):
@@ -309,8 +310,8 @@ def test_results_too_large_for_memory_refused_before_the_run(tmp_path, long_benc
     """A run whose result table cannot fit (10^11 base steps) is one line before
     it starts, not a MemoryError or the OOM killer later."""
     with pytest.raises(ArtibusError, match=r"3 columns of results would take 2\.4 GB, more than half"):
-        runner._check_room(100_000_000, 3, "b.ssd", available=4_000_000_000)
-    runner._check_room(100_000_000, 3, "b.ssd", available=8_000_000_000)
+        runner_results._check_room(100_000_000, 3, "b.ssd", available=4_000_000_000)
+    runner_results._check_room(100_000_000, 3, "b.ssd", available=8_000_000_000)
     t0 = time.perf_counter()
     r = artibus("run", str(long_bench), "--step", "1e-9", "--stop-time", "100", "-o", str(tmp_path / "r.csv"),
                 cwd=tmp_path, timeout=120)

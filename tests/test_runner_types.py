@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from artibus import ArtibusError, fmu_path
+from artibus.fmu import DEFAULT_STEPS, simulate
 from artibus.runner import Simulation, SimulationError
-from artibus.simulation import DEFAULT_STEPS, simulate
 
 NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
       'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
@@ -378,7 +378,7 @@ def test_messages_reach_their_instance_after_fmpy_ran_an_fmu_of_its_own():
     import gc
     from fmpy import simulate_fmu
     from fmpy.fmi1 import FMICallException
-    from artibus.simulation import Fmu
+    from artibus.fmu import Fmu
     with Fmu(fmu_path("TypesTest"), instance_name="Mine") as f:
         simulate_fmu(str(fmu_path("TypesTest")))
         gc.collect()

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 from artibus import fmu_path
-from artibus.parameters import read_parameters
-from artibus.simulation import Fmu
+from artibus.bench.parameters import read_parameters
+from artibus.fmu import Fmu
 
 H = 0.01                     # communication step = the controllers' sample period
 L1, LG, LW = 5.9, 3.15, 9.05

@@ -20,8 +20,10 @@ import pyarrow.parquet as pq
 import pytest
 
 import artibus
-from artibus import ArtibusError, benches, runner, ssp
-from artibus import sweep as sw
+from artibus import ArtibusError, runner
+from artibus.bench import script, ssp
+from artibus.study import sweep as sw
+from artibus.study.sweep import cluster as sw_cluster, worker as sw_worker
 
 BENCH = "Bus36m_Circle"
 FIXED = {"Driver.roadBefore": 2.0}
@@ -78,7 +80,7 @@ def same_table(a, b, drop=()):
 
 def _plain_kpis(overrides):
     r = runner.run(SSP, overrides={**FIXED, **overrides}, stop_time=STOP)
-    return {f"{k.name} [{k.unit}]": k.value for k in benches.kpis(BENCH, r)}
+    return {f"{k.name} [{k.unit}]": k.value for k in script.kpis(BENCH, r)}
 
 
 def test_grid_of_60_cases_table_plot_and_worst_cases(tmp_path, client):
@@ -123,12 +125,12 @@ def test_reused_instances_give_a_fresh_instances_results(variant, tmp_path):
     a = {**FIXED, **steer, "Driver.vSet": 6.0, "Driver.R": 12.5}
     b = {**FIXED, **steer, "Driver.vSet": 3.0, "Driver.R": 20.0}
     sw.release()
-    sw._simulate(p, a, STOP, None)
-    assert [k[1:] for k in sw._SIMS] == [(p, None)]            # kept for the next case
-    again = sw._simulate(p, b, STOP, None)
+    sw_worker._simulate(p, a, STOP, None)
+    assert [k[1:] for k in sw_worker._SIMS] == [(p, None)]            # kept for the next case
+    again = sw_worker._simulate(p, b, STOP, None)
     with pytest.raises(ArtibusError, match="Driver.vSet"):
-        sw._simulate(p, {**FIXED, "Driver.vSet": 500.0}, STOP, None)   # out of range: refused
-    after_error = sw._simulate(p, b, STOP, None)
+        sw_worker._simulate(p, {**FIXED, "Driver.vSet": 500.0}, STOP, None)   # out of range: refused
+    after_error = sw_worker._simulate(p, b, STOP, None)
     fresh = runner.run(p, overrides=b, stop_time=STOP)
     assert again.names == fresh.names
     assert np.array_equal(again.array(), fresh.array())
@@ -148,7 +150,7 @@ def test_a_kept_instance_serves_the_next_sweep_only_with_the_same_bench_content(
         import hashlib
         row, _ = sw.run_case(BENCH, hashlib.sha256(data).hexdigest(), str(p), data, case, FIXED, STOP, None, False)
         assert row["status"] == "ok", row["error"]
-        (sim, _), = sw._SIMS.values()
+        (sim, _), = sw_worker._SIMS.values()
         return row[KPI], sim
 
     sw.release()
@@ -376,8 +378,8 @@ def test_cases_are_handed_out_once_in_tasks_sized_by_their_time():
     class Client:
         def nthreads(self):
             return {"a": 1, "b": 1}
-    chunks = sw._Chunks(range(1000), Client())
-    assert chunks.in_flight() == 2 * sw._Chunks.IN_FLIGHT           # two workers
+    chunks = sw_cluster._Chunks(range(1000), Client())
+    assert chunks.in_flight() == 2 * sw_cluster._Chunks.IN_FLIGHT           # two workers
     tasks = [chunks.next() for _ in range(4)]
     assert tasks == [[0], [1], [2], [3]]
     chunks.took(0.01)
@@ -393,7 +395,7 @@ def test_cases_are_handed_out_once_in_tasks_sized_by_their_time():
     assert sizes[0] == 200                    # 995 left: a quarter is 249, MAX_S caps it
     assert all(10 <= n <= 200 for n in sizes[:-1]) and sizes[-1] <= 10
     assert sizes == sorted(sizes, reverse=True)     # shorter towards the end
-    long = sw._Chunks(range(10), Client())
+    long = sw_cluster._Chunks(range(10), Client())
     for _ in range(4):
         long.took(3.0)                        # a case longer than MAX_S: one a task
     assert [len(long.next()) for _ in range(10)] == [1] * 10
@@ -411,7 +413,7 @@ def test_a_case_that_kills_its_worker_fails_alone(tmp_path):
 
     class Killer(WorkerPlugin):
         def setup(self, worker):
-            from artibus import sweep as s
+            from artibus.study.sweep import worker as s
             run_case = s.run_case
 
             def killing(*a, **k):
@@ -457,7 +459,7 @@ def test_own_cluster_leaves_dask_port_8787_alone():
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            c, cluster = sw._client(None, 1)
+            c, cluster = sw_cluster._client(None, 1)
             try:
                 port = c.scheduler_info()["services"].get("dashboard")
                 assert port != 8787

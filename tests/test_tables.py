@@ -7,8 +7,7 @@ import threading
 import numpy as np
 import pytest
 
-from artibus import tables
-from artibus.runner import Simulation, core_library_path
+from artibus.runner import Simulation, core_library_path, tables
 
 BENCH = "MultiAxle_StepSteer"          # 1001 rows x 8 columns, ~1 ms a run
 core = pytest.mark.skipif(not core_library_path().is_file(),
@@ -80,16 +79,16 @@ def test_interrupted_run_partial_result_is_a_copy(monkeypatch):
     """A run interrupted (Ctrl-C between two pieces of the core) hands over a copy of
     its rows: the pooled table goes back to the pool, and a later run taking that
     memory leaves the partial result as it was."""
-    from artibus import runner
-    real = runner._CoreStepper.run
+    from artibus.runner.core import _CoreStepper
+    real = _CoreStepper.run
 
     def interrupted(stepper, *a):
         stepper.lib = _Interrupting(stepper.lib)
         return real(stepper, *a)
-    monkeypatch.setattr(runner._CoreStepper, "run", interrupted)
+    monkeypatch.setattr(_CoreStepper, "run", interrupted)
     with pytest.raises(KeyboardInterrupt) as e:
         run()
-    monkeypatch.setattr(runner._CoreStepper, "run", real)
+    monkeypatch.setattr(_CoreStepper, "run", real)
     part = e.value.result.array()
     saved = part.tobytes()
     assert part.shape == (1, 8) and part.flags.owndata                # the first row, copied

@@ -9,7 +9,8 @@ import zipfile
 import numpy as np
 import pytest
 
-from artibus import ArtibusError, ssp
+from artibus import ArtibusError
+from artibus.bench import ssp
 from artibus.runner import run
 from test_runner import LEAD_FOLLOW, QUIET, make_ssp
 
@@ -96,7 +97,7 @@ def test_heavy_rear_rebinds_the_vehicle_for_plant_and_controller():
 def test_heavy_rear_set_is_scania18m_but_for_table_5_4():
     """One source of truth: Scania18mHeavyRear.ssv repeats Scania18m.ssv but
     for the values Table 5.4 changes (and the given static loads)."""
-    from artibus.parameters import read_parameters
+    from artibus.bench.parameters import read_parameters
     base, heavy = read_parameters("Scania18m"), read_parameters("Scania18mHeavyRear")
     changed = {k for k in set(base) | set(heavy) if base.get(k) != heavy.get(k)}
     assert changed == {"m[2]", "lHr[1]", "xA[3]", "FzFromMasses", "Fz0[1]", "Fz0[2]", "Fz0[3]"}

@@ -1,43 +1,40 @@
 """artibus: co-simulation components for articulated and multi-axle buses.
 
 The FMUs are built from C (``src/models``); this package runs them with FMPy,
-reads parameter sets (SSP ``.ssv``), and draws the results.
+reads parameter sets (SSP ``.ssv``), and draws the results. Its parts
+(docs/developer/layout.md): ``artibus.bench`` (SSP benches, parameter sets,
+names, units, the vehicle check, roads), ``artibus.fmu`` (one FMU alone),
+``artibus.runner`` (the co-simulation master), ``artibus.can`` (the CAN network,
+logs, replay), ``artibus.study`` (sweeps, KPIs, frequency responses, the damping
+study), ``artibus.report`` (report pages and plots), ``artibus.cli``.
+
+The public API at the top, imported when first used::
+
+    import artibus
+    result = artibus.run("Bus36m_Circle")                  # artibus.runner.run
+    with artibus.Simulation("Bus36m_Circle") as sim:       # artibus.runner.Simulation
+        result = sim.run()
+    table = artibus.sweep("Bus36m_Circle", grid={"Driver.vSet": [2, 3, 4]}, out="sweep-out")
 """
-import os
-from pathlib import Path
+from artibus.base import ROOT, ArtibusError, __version__, fmu_dir, fmu_path   # noqa: F401
 
-__version__ = "0.1.0"
-
-#: the repository this package was installed from (editable install)
-ROOT = Path(__file__).resolve().parents[2]
-
-
-class ArtibusError(Exception):
-    """A user error: bad file, element or value. The CLI prints it without a traceback."""
-
-
-def fmu_dir():
-    """Where the built FMUs are: ``fmus/``, or $ARTIBUS_FMU_DIR (the test suite
-    points it at the sanitizer build to run the same tests under ASan)."""
-    return Path(os.environ.get("ARTIBUS_FMU_DIR", ROOT / "fmus"))
-
-
-def fmu_path(name):
-    """Path of a built FMU, ``<fmu_dir>/<name>.fmu``."""
-    path = fmu_dir() / f"{name}.fmu"
-    if not path.is_file():
-        import difflib
-        known = sorted(p.stem for p in fmu_dir().glob("*.fmu"))
-        close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
-        if close:
-            raise ArtibusError(f"{name}: no such FMU; did you mean {' or '.join(close)}?")
-        raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
-    return path
+__all__ = ["ROOT", "ArtibusError", "__version__", "fmu_dir", "fmu_path", "run", "Simulation", "sweep"]
 
 
 def __getattr__(name):
-    """artibus.sweep(...): a sweep of a bench on Dask (the module artibus.sweep is callable)."""
+    """artibus.run, artibus.Simulation (artibus.runner), artibus.sweep (the callable
+    module artibus.study.sweep: ``artibus.sweep(bench, ...)`` runs a sweep)."""
+    if name == "run":
+        from artibus.runner import run
+        return run
+    if name == "Simulation":
+        from artibus.runner import Simulation
+        return Simulation
     if name == "sweep":
-        import importlib
-        return importlib.import_module("artibus.sweep")
+        from artibus.study import sweep
+        return sweep
     raise AttributeError(f"module 'artibus' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | {"run", "Simulation", "sweep"})

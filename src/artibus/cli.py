@@ -25,7 +25,8 @@ import signal
 import sys
 from pathlib import Path
 
-from artibus import ArtibusError, __version__, fmu_dir, fmu_path
+from artibus.base import ArtibusError, __version__, fmu_dir, fmu_path
+from artibus.files import check_output, make_dir
 
 
 def _seconds(text):
@@ -50,50 +51,12 @@ def _on_sigterm(signum, frame):
 
 
 def _check_output(path):
-    from artibus.files import check_output
     return check_output(path, "-o")
-
-
-def _make_dir(path, what="--report"):
-    try:
-        Path(path).mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise ArtibusError(f"{what} {path}: cannot make the directory ({e.strerror})") from None
-    if not Path(path).is_dir():
-        raise ArtibusError(f"{what} {path}: not a directory")
-    return Path(path)
-
-
-def _partial(e, out):
-    """After an interrupt: the results up to then (KeyboardInterrupt.result, set by the
-    runner) saved as OUT.partial.csv; the path is remembered on the exception for main."""
-    from artibus import runner
-    result = getattr(e, "result", None)
-    if result is None or not len(result.rows) or out is None:
-        return
-    partial = runner.partial_path(out)
-    try:
-        runner.save(result, partial)
-    except (ArtibusError, OSError) as err:
-        e.partial_error = str(err)
-        return
-    e.partial = partial
-    e.partial_time = result.time[-1]
 
 
 def _fmu_arg(text):
     p = Path(text)
     return p if p.suffix == ".fmu" else fmu_path(text)
-
-
-def _parse_set(items):
-    values = {}
-    for item in items or []:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise ArtibusError(f"--set {item}: expected NAME=VALUE")
-        values[name.strip()] = value.strip()
-    return values
 
 
 def _fmu_names():
@@ -102,7 +65,7 @@ def _fmu_names():
 
 def cmd_info(args):
     from fmpy import read_model_description
-    from artibus import ssp
+    from artibus.bench import ssp
     name = str(args.fmu)
     if name.endswith(".ssp") or name in ssp.bench_names():
         return _info_ssp(name)
@@ -137,7 +100,7 @@ def cmd_info(args):
 
 
 def _info_ssp(path):
-    from artibus import ssp
+    from artibus.bench import ssp
     bench = ssp.read(ssp.ssp_path(path))
     print(f"{bench.name}: {bench.file}")
     print(f"default experiment: {bench.start_time} .. {bench.stop_time} s")
@@ -154,7 +117,7 @@ def _info_ssp(path):
 
 def cmd_list(args):
     """One line per bench and per FMU; --parameters: every bench's bound parameters too."""
-    from artibus import ssp
+    from artibus.bench import ssp
     names = ssp.bench_names()
     print(f"benches ({len(names)}; `artibus info BENCH` for one, `artibus run BENCH` to run it):"
           if names else "no benches in ssp/benches/")
@@ -187,15 +150,17 @@ def cmd_list(args):
 
 
 def cmd_pack(args):
-    from artibus import ssp
+    from artibus.bench import ssp
     for name in args.bench or ssp.bench_names():
         print(ssp.pack(name))
     return 0
 
 
 def cmd_run(args):
-    from artibus import runner, ssp
-    from artibus.parameters import read_parameters
+    """The benches run (artibus.report.runs.run_benches): their results, reports, the index."""
+    from artibus.bench import ssp
+    from artibus.bench.parameters import parse_set, read_parameters
+    from artibus.report.runs import run_benches
     if args.all == bool(args.bench):
         raise ArtibusError("give one BENCH or --all")
     if args.all and args.variant:
@@ -206,104 +171,22 @@ def cmd_run(args):
     user = {}
     for f in args.ssv or []:
         user.update(read_parameters(f))
-    user.update(_parse_set(args.set))
-    benches = ssp.bench_names() if args.all else [args.bench]
-    if args.stop_time is None and not args.all:
-        args.stop_time = ssp.variant_stop_time(args.bench, args.variant)    # None: the bench's own
-    summary = []
-    from artibus import comparison
-    kept = {}
-    for bench in benches:
-        overrides = {**ssp.variant_overrides(bench, args.variant), **user}
-        with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
-                               algorithm=args.algorithm, can=args.can, can_log=args.can_log,
-                               can_faults=args.can_fault) as sim:
-            name = sim.bench.name
-            # where the results go, checked before the run (not found unwritable after it)
-            if args.report:
-                out_dir = _make_dir(Path(args.report) / name if args.all else Path(args.report))
-                out = Path(args.output) if args.output and not args.all else out_dir / "results.csv"
-            else:
-                out_dir = None
-                out = Path(args.output or f"{name}.csv")
-            args._out = _check_output(out)
-            try:
-                result = sim.run(stop_time=args.stop_time, progress=sys.stderr.isatty())
-            except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
-                _partial(e, out)
-                raise
-            _print_warnings((u.path, u.fmu.log) for u in sim.units)
-            can_summary = None
-            if sim.can is not None:
-                can_summary = sim.can.summary(result.time[-1] - result.time[0])
-                print(can_summary)
-            runner.save(result, out)
-            span = result.time[-1] - result.time[0]
-            print(f"{name}: {out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
-                  f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
-            if out_dir is not None:
-                from artibus.benches import write_report
-                kpis = write_report(name, result, out_dir, sim.wall)
-                if can_summary is not None:
-                    from artibus.files import write_text
-                    write_text(out_dir / "can_bus.txt", can_summary + "\n")
-                print(f"{name}: report {out_dir / 'index.html'}")
-                for k in kpis:
-                    print(f"    {k.name}: {k.cell()} {k.unit}" + (f"   (paper: {k.paper})" if k.paper else ""))
-                summary.append((name, out_dir, kpis))
-                if args.all and comparison.wanted(name):    # seed 000's comparison page reuses it
-                    kept[name] = result
-                if args.can_fault:
-                    _fault_free_kpis(bench, args, overrides, out_dir, kpis)
-    if args.all and args.report:
-        from artibus.report import write_index
-        page = comparison.write(Path(args.report) / "comparison", kept)
-        pages = [("comparison/index.html", comparison.TITLE, "unsteered, guided, guided + force minimisation "
-                  "and pathMemory side by side")] if page else []
-        print(write_index(Path(args.report), summary, pages))
+    user.update(parse_set(args.set))
+    run_benches(ssp.bench_names() if args.all else [args.bench], every=args.all, variants=args.variant,
+                user=user, stop_time=args.stop_time, step=args.step, record=args.record,
+                algorithm=args.algorithm, can=args.can, can_log=args.can_log, can_faults=args.can_fault,
+                report=args.report, output=args.output, progress=sys.stderr.isatty(),
+                checked=lambda out: setattr(args, "_out", out))
     return 0
 
 
-def _print_warnings(logs):
-    """An FMU's warnings (e.g. a parameter that does not act in its
-    configuration) printed once each, naming the component."""
-    for name, log in logs:
-        seen = set()
-        for m in log:
-            if m.startswith("[Warning]") and m not in seen:
-                seen.add(m)
-                text = m[len("[Warning]"):].strip()
-                text = text.split(": ", 1)[1] if text.startswith("log") and ": " in text else text
-                print(f"warning: {name}: {text}", file=sys.stderr)
-
-
-def _fault_free_kpis(bench, args, overrides, out_dir, kpis):
-    """The same bench without the faults: its KPIs next to the faulty run's,
-    printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free)."""
-    from artibus import runner
-    from artibus.benches import write_report
-    with runner.Simulation(bench, step=args.step, overrides=overrides, record=args.record,
-                           algorithm=args.algorithm, can=args.can) as sim:
-        result = sim.run(stop_time=args.stop_time)
-        free = write_report(sim.bench.name, result, out_dir / "fault-free", sim.wall)
-    faults = "; ".join(args.can_fault)
-    print(f"{sim.bench.name}: KPIs with faults ({faults}) against the fault-free run:")
-    rows = ["kpi,unit,fault_free,with_faults,difference"]
-    for a, b in zip(free, kpis):
-        diff = (b.value - a.value) if isinstance(a.value, (int, float)) and isinstance(b.value, (int, float)) else float("nan")
-        print(f"    {b.name}: {a.cell()} -> {b.cell()} {b.unit} (difference {diff:+.4g})")
-        rows.append(f'"{b.name}",{b.unit},{a.value!r},{b.value!r},{diff!r}')
-    out = out_dir / "kpi_faults.csv"
-    from artibus.files import write_text
-    write_text(out, "\n".join(rows) + "\n")
-    print(f"{sim.bench.name}: {out}")
-
-
 def cmd_replay(args):
-    from artibus import replay, runner
+    from artibus import runner
+    from artibus.bench.parameters import parse_set
+    from artibus.can import replay
     out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"))
     rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
-                        overrides=_parse_set(args.set), steering_map_name=args.steering_map,
+                        overrides=parse_set(args.set), steering_map_name=args.steering_map,
                         variants=args.variant)
     r = rep.result
     runner.save(r, out)
@@ -324,8 +207,8 @@ def cmd_replay(args):
 
 
 def cmd_can_decode(args):
-    from artibus import ROOT, can
-    from artibus.files import check_output
+    from artibus.base import ROOT
+    from artibus import can
     if args.csv:
         check_output(args.csv, "--csv")
     rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc")
@@ -346,9 +229,10 @@ def cmd_can_decode(args):
 
 def cmd_bode(args):
     import numpy as np
-    from artibus import bode
-    from artibus import ssp
+    from artibus.bench import ssp
+    from artibus.bench.parameters import parse_set
     from artibus.files import write_text
+    from artibus.study import bode
     if not args.measure:
         hint = (f" (-o/--output is the results file now, as in every command: "
                 f"--measure {args.output} names the output to measure)"
@@ -356,18 +240,14 @@ def cmd_bode(args):
         raise ArtibusError("bode: give the output to measure, --measure COMP.VAR" + hint)
     out = _check_output(Path(args.output or "bode.csv"))
     if args.plot:
-        from artibus.files import check_output
         check_output(args.plot, "--plot")
-    overrides = {**ssp.variant_overrides(args.bench, args.variant), **_parse_set(args.set)}
+    overrides = {**ssp.variant_overrides(args.bench, args.variant), **parse_set(args.set)}
     freqs = np.geomspace(args.fmin, args.fmax, args.n) if args.n > 1 else [args.fmin]
     resp = bode.frequency_response(args.bench, args.input, args.measure, freqs, args.amplitude,
                                    periods=args.periods, settle=args.settle, overrides=overrides,
                                    step=args.step)
     units = bode.output_units(args.bench, list(args.measure) + [args.input])
-    per = lambda o: f"{units.get(o, '-')} per {units.get(args.input, '-')}"    # noqa: E731 (gain's unit)
-    rows = ["frequency [Hz]," + ",".join(f"{o} gain [{per(o)}],{o} phase [rad]" for o in args.measure)]
-    for k, f in enumerate(freqs):
-        rows.append(f"{f:.6g}," + ",".join(f"{resp[o][k].gain:.8g},{resp[o][k].phase:.8g}" for o in args.measure))
+    rows = bode.csv_rows(freqs, resp, args.measure, args.input, units)
     write_text(out, "\n".join(rows) + "\n")
     print(f"{out}: {len(freqs)} frequencies")
     for line in rows:
@@ -382,7 +262,7 @@ def cmd_bode(args):
 def cmd_calibrate(args):
     """seed 001, 5.2.2: each damping option's gain for a peak damping of 13.5 %
     on the 200 m / 100 km/h / rear-friction-0.2 lane change."""
-    from artibus import damping
+    from artibus.study import damping
     gains, reached = damping.calibrate(target=args.target)
     print(f"\n{'gain':6s} {'artibus':>10s} {'thesis':>8s} {'ratio':>7s}  peak damping on lc200_100")
     for name, value in gains.items():
@@ -397,15 +277,16 @@ def cmd_calibrate(args):
 
 
 def cmd_simulate(args):
-    from artibus.parameters import read_parameters, check_against
-    from artibus.simulation import simulate
+    from artibus.bench.parameters import check_against, parse_set, read_parameters
+    from artibus.fmu import simulate
+    from artibus.runner import save_partial
     fmu = _fmu_arg(args.fmu)
     out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"))
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
-    extra = _parse_set(args.set)
+    extra = parse_set(args.set)
     if any("[" in k for k in extra):          # mu[*], mu[1:6]: each element
         from fmpy import read_model_description
-        from artibus.names import expand_all
+        from artibus.bench.names import expand_all
         names = [v.name for v in read_model_description(str(fmu)).modelVariables]
         extra = expand_all(extra, lambda full: ("", names))
     check_against(extra, fmu, "--set")
@@ -413,7 +294,7 @@ def cmd_simulate(args):
     try:
         result = simulate(fmu, parameters=params, stop_time=args.stop_time, step=args.step)
     except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
-        _partial(e, out)
+        save_partial(e, out)
         raise
     from artibus.runner import save
     save(result, out)
@@ -423,12 +304,9 @@ def cmd_simulate(args):
 
 def cmd_demo(args):
     """Urbino 18 Electric (seed 003, Table I) pushed at 3 m/s through an
-    S-curve: 25 deg left, 25 deg right, straight; results and a plot."""
-    from artibus.parameters import read_parameters
-    import numpy as np
-    from artibus.report import birds_eye, signals
-    from artibus.simulation import simulate
-    out = _make_dir(args.report)
+    S-curve: 25 deg left, 25 deg right, straight; results and a plot (artibus.report.demo)."""
+    from artibus.report import demo
+    out = make_dir(args.report)
     csv = out / "BusKinematics_Urbino18_SCurve.csv"
     if args.output:
         if Path(args.output).is_dir() or not Path(args.output).suffix:
@@ -436,30 +314,40 @@ def cmd_demo(args):
                                f"results and plots is --report DIR")
         csv = Path(args.output)
     _check_output(csv)
-    fmu = fmu_path("BusKinematics")
-    params = read_parameters("Urbino18", fmu)
-    params["testSteerAmp"] = 0.0
-    amp, period = math.radians(25.0), 24.0
-
-    def gammaF(t):
-        return amp * math.sin(2 * math.pi * t / period) if t < period else 0.0
-
-    result = simulate(fmu, parameters=params, inputs={"gammaF": gammaF, "v": lambda t: 3.0},
-                      stop_time=40.0, step=0.05)
-    png = out / "BusKinematics_Urbino18_SCurve.png"
-    from artibus.runner import save
-    save(result, csv)
-    theta0 = result["theta[0]"]
-    front = (result["x[0]"] + params["L0"] * np.cos(theta0), result["y[0]"] + params["L0"] * np.sin(theta0))
-    birds_eye(png, {"front axle": front, "tractor rear axle P0": (result["x[0]"], result["y[0]"]),
-                    "wagon axle P1": (result["x[1]"], result["y[1]"])},
-              title="Urbino 18 pusher, S-curve at 3 m/s (seed 003 model)")
-    signals(out / "BusKinematics_Urbino18_SCurve_signals.png", result.time,
-            [("steering gammaF [deg]", {"gammaF": np.degrees([gammaF(t) for t in result.time])}),
-             ("joint angle [deg]", {"beta[1]": np.degrees(result["beta[1]"])})], title="S-curve")
-    bmax = max(abs(result["beta[1]"]))
+    png, bmax = demo.s_curve(out, csv)
     print(f"demo: {csv}\ndemo: {png}\nmax |beta[1]| = {math.degrees(bmax):.1f} deg "
           f"(Urbino 18 mechanical limit 54 deg, seed 003 Table I)")
+    return 0
+
+
+def cmd_check(args):
+    """A vehicle parameter set's consistency (artibus.bench.check)."""
+    from artibus.bench import check
+    return check.main(args.ssv, args.model)
+
+
+def cmd_sweep(args):
+    """artibus sweep: the cases of a bench on Dask (artibus.study.sweep)."""
+    from artibus.bench.parameters import parse_set
+    from artibus.study.sweep import PLOT, TABLE, WORST, parse_grid, sweep
+    variants = [v.split(",") for v in args.variant] if args.variant else None
+    if variants and any(not x.strip() for vs in variants for x in vs):
+        raise ArtibusError(f"--variant {','.join(args.variant)}: an empty variant name")
+    if args.workers is not None and args.workers < 1:
+        raise ArtibusError(f"--workers {args.workers}: at least 1")
+    out = args.out or f"sweep-{Path(args.bench).stem}"
+    res = sweep(args.bench, grid=parse_grid(args.grid) if args.grid else None, variants=variants,
+                design=args.design, out=out, stop_time=args.stop_time, step=args.step,
+                fixed=parse_set(args.set),
+                keep_series=args.keep_series, scheduler=args.scheduler, workers=args.workers, kpi=args.kpi,
+                retry_failed=args.retry_failed,
+                argv=sys.argv)
+    n = res.table.num_rows
+    print(f"sweep {Path(args.bench).stem}: {n} cases, {res.ran} run now ({res.failed} failed), "
+          f"{res.skipped} done before" + (f"; {res.rate:.1f} cases/min" if res.ran else ""))
+    for f in (TABLE, PLOT, WORST):
+        if (Path(out) / f).is_file():
+            print(f"    {Path(out) / f}")
     return 0
 
 
@@ -560,13 +448,29 @@ def build_parser():
     s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia)")
     s.add_argument("ssv", nargs="+", help="a parameter set: path of an .ssv or a name in ssp/parameters")
     s.add_argument("--model", choices=["BusDynamics", "BusKinematics"], help="default: from the names in the set")
-    s.set_defaults(func=lambda a: __import__("artibus.check").check.main(a.ssv, a.model))
+    s.set_defaults(func=cmd_check)
     s = sub.add_parser("demo", help="the main job: a demo run with results and a plot")
     s.add_argument("--report", metavar="DIR", default="out", help="directory of results and plots (default: out)")
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: DIR/BusKinematics_Urbino18_SCurve.csv)")
     s.set_defaults(func=cmd_demo)
-    from artibus import sweep as sweep_mod      # artibus sweep: its options and command in artibus/sweep.py
-    sweep_mod.add_parser(sub)
+    s = sub.add_parser("sweep", help="run many cases of a bench on Dask (grid, design file), resumable")
+    s.add_argument("bench", help="a bench name (see `artibus list`) or the path of an .ssp")
+    s.add_argument("--grid", nargs="+", action="extend", metavar="COMP.VAR=VALUES",
+                   help="an axis: COMP.VAR=V1,V2,... or COMP.VAR=START:STOP:STEP (stop included)")
+    s.add_argument("--variant", action="append", metavar="A,B,...",
+                   help="an axis of the bench's variants (repeatable: each one more axis)")
+    s.add_argument("--design", metavar="FILE", help="the cases from a .csv (a case a row) or .yaml "
+                                                    "(grid, lhs or montecarlo with a seed)")
+    s.add_argument("-o", "--out", default=None, help="output folder (default: sweep-<BENCH>)")
+    s.add_argument("--stop-time", type=float, help="every case's stop time (default: the bench's)")
+    s.add_argument("--step", type=float, help="base communication step, s")
+    s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE", help="a parameter of every case")
+    s.add_argument("--keep-series", action="store_true", help="keep each case's time series (series/<key>.parquet)")
+    s.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler (tcp://host:8786)")
+    s.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    s.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
+    s.add_argument("--kpi", help="the KPI of the study plot and the worst cases (default: the bench's first)")
+    s.set_defaults(func=cmd_sweep)
     return p
 
 

@@ -19,7 +19,7 @@ import os
 import secrets
 from pathlib import Path
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
 
 TMP_MARK = ".tmp-"          # NAME.tmp-PID-XXXX.SUFFIX
 
@@ -120,3 +120,15 @@ def check_output(path, what="-o"):
     if path.exists() and not os.access(path, os.W_OK) and os.geteuid() != 0:
         raise ArtibusError(f"{what} {path}: the file exists and is read-only")
     return path
+
+
+def make_dir(path, what="--report"):
+    """A directory for the output (a report's): made with its parents where
+    missing; ArtibusError naming ``what`` when it cannot be made or is not one."""
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ArtibusError(f"{what} {path}: cannot make the directory ({e.strerror})") from None
+    if not Path(path).is_dir():
+        raise ArtibusError(f"{what} {path}: not a directory")
+    return Path(path)

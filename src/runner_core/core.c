@@ -1,5 +1,5 @@
 /* The runner's stepping core: see core.h. Each block below names the line of
- * Simulation.run (src/artibus/runner.py) it does the same as. Compiled with
+ * Simulation.run (src/artibus/runner/simulation.py) it does the same as. Compiled with
  * -ffp-contract=off: factor * out + offset must stay a multiply and an add,
  * as in Python, never a fused multiply-add. */
 #define _POSIX_C_SOURCE 200809L

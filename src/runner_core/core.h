@@ -7,7 +7,7 @@
  * same value buffers the Python loop uses, with the same floating-point
  * operations in the same order, so the results are bit for bit those of the
  * Python loop. Plain C11, no Python headers, no heap use: every array is
- * Python's (see src/artibus/runner.py, _Core).
+ * Python's (see src/artibus/runner/core.py, _CoreStepper).
  */
 #ifndef ARTIBUS_RUNNER_CORE_H
 #define ARTIBUS_RUNNER_CORE_H
@@ -84,7 +84,7 @@ typedef struct {
     unsigned char fixed[8];         /* the signals no connection feeds, packed (cantools) */
     int n_signals;
     const ac_can_signal *signals;
-    /* state, as artibus.can._Message's */
+    /* state, as artibus.can.network._Message's */
     int counter;                    /* next counter to send */
     int last_counter;               /* the receivers' reference counter, -1: none */
     long good_tick;                 /* tick of the last accepted frame */

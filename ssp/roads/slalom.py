@@ -56,7 +56,7 @@ def end_of_slalom():
 
 
 def main():
-    from artibus import roads
+    from artibus.bench import roads
     n = int(round((end_of_slalom() + AFTER) / STEP))
     x = np.linspace(0.0, n * STEP, n + 1)
     roads.write_csv(FILE, x, path(x))

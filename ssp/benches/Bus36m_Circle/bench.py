@@ -11,9 +11,10 @@ import math
 
 import numpy as np
 
-from artibus import ArtibusError, kpi, report
-from artibus.benchkit import DEG, circle_road, outlines
+from artibus import ArtibusError, report
 from artibus.report import Kpi
+from artibus.report.benchkit import DEG, circle_road, outlines
+from artibus.study import kpi
 
 BENCH = "Bus36m_Circle"
 #: the default, run without a variant
@@ -161,7 +162,8 @@ def figures(r, out):
 
 def run_variant(variant, stop_time=None):
     """A run of the named variant with the bench's own parameters."""
-    from artibus import runner, ssp
+    from artibus import runner
+    from artibus.bench import ssp
     names = [] if variant == DEFAULT else [variant]
     return runner.run(BENCH, stop_time=stop_time, overrides=ssp.variant_overrides(BENCH, names))
 

@@ -3,9 +3,10 @@ end leads. Its KPIs (a function of the result alone), figures and text
 (artibus.benches)."""
 import numpy as np
 
-from artibus import kpi, report
-from artibus.benchkit import DEG, circle_road, outlines
+from artibus import report
 from artibus.report import Kpi
+from artibus.report.benchkit import DEG, circle_road, outlines
+from artibus.study import kpi
 
 TEXT = ("Seed 000: 'due to the symmetric vehicle structure the vehicle handling and the tracking "
         "performance is independent of the driving direction'. The forwards figures are those of "

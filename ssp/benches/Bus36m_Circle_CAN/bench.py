@@ -2,10 +2,11 @@
 KPIs (those of Bus36m_Circle's variant guidedForceMin), and what the receivers saw: each
 one's fallback state (0 normal, 1 holding, 2 ramping, 3 straight) and each
 message's longest run without a good frame (artibus.benches)."""
-from artibus import benches, report
-from artibus.benchkit import can_fallback_kpis, can_lost, can_receivers
+from artibus import report
+from artibus.bench import script
+from artibus.report.benchkit import can_fallback_kpis, can_lost, can_receivers
 
-direct = benches.load("Bus36m_Circle")
+direct = script.load("Bus36m_Circle")
 #: the direct run's counterpart: the variant of Bus36m_Circle with the same controllers
 VARIANT = "guidedForceMin"
 

@@ -3,10 +3,11 @@ end leads) with the steering on CAN: the KPIs of Bus36m_Circle_Backwards,
 what the receivers saw (each one's fallback state and each message's
 longest run without a good frame, as Bus36m_Circle_CAN) and the driving
 direction each ECU steered for (artibus.benches)."""
-from artibus import benches, report
-from artibus.benchkit import DEG, can_fallback_kpis, can_lost, can_receivers, circle_road, outlines
+from artibus import report
+from artibus.bench import script
+from artibus.report.benchkit import DEG, can_fallback_kpis, can_lost, can_receivers, circle_road, outlines
 
-direct = benches.load("Bus36m_Circle_Backwards")
+direct = script.load("Bus36m_Circle_Backwards")
 
 TEXT = direct.TEXT + (" The steering signals travel over CAN (ssp/can/Bus36m.dbc) in the paper's topology, one "
                       "SteeringECU per module: the tractor ECU (module 1) decides the driving direction from the "

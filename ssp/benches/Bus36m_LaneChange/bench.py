@@ -1,9 +1,9 @@
 """Bus36m_LaneChange: the steered 36 m bus, lane change 3.5 m over 40 m at
 50 km/h. Its KPIs (a function of the result alone), figures and text
 (artibus.benches)."""
-from artibus import kpi
-from artibus.benchkit import ROAD_TEST_TEXT, lane_change_road, road_test_figures, road_test_kpis
 from artibus.report import Kpi
+from artibus.report.benchkit import ROAD_TEST_TEXT, lane_change_road, road_test_figures, road_test_kpis
+from artibus.study import kpi
 
 LENGTH, OFFSET, LANE, WIDTH = 40.0, 3.5, 3.5, 2.55
 TEXT = ROAD_TEST_TEXT

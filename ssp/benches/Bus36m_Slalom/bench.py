@@ -1,9 +1,9 @@
 """Bus36m_Slalom: the steered 36 m bus, slalom through 6 cones 30 m apart at
 40 km/h. Its KPIs (a function of the result alone), figures and text
 (artibus.benches)."""
-from artibus import kpi
-from artibus.benchkit import ROAD_TEST_TEXT, road_test_figures, road_test_kpis, slalom_road_module
 from artibus.report import Kpi
+from artibus.report.benchkit import ROAD_TEST_TEXT, road_test_figures, road_test_kpis, slalom_road_module
+from artibus.study import kpi
 
 TEXT = ROAD_TEST_TEXT
 sl = slalom_road_module()
@@ -29,7 +29,8 @@ def kpis(r):
 
 
 def figures(r, out):
-    from artibus import ROOT, roads
+    from artibus import ROOT
+    from artibus.bench import roads
     road = roads.read_csv(ROOT / "ssp" / "roads" / "Bus36m_Slalom.csv")
     return road_test_figures(r, out, f"Steered 36 m bus, slalom: {sl.CONES} cones {sl.SPACING:g} m apart "
                              f"(path +-{sl.AMPLITUDE:g} m) at 40 km/h", (road[0], road[1]), _t_after(r), "slalom",

@@ -36,7 +36,8 @@ def _variant(u, zs):
 
 
 def study(r, out):
-    from artibus import bode, runner
+    from artibus import runner
+    from artibus.study import bode
     runs = {(u, zs): runner.run("MultiAxle_StepSteer", overrides=_variant(u, zs)) for u in SPEEDS for zs in (True, False)}
     kpis = []
     for u in SPEEDS:

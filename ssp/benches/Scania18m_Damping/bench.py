@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from artibus import damping
 from artibus.report import Kpi
+from artibus.study import damping
 
 
 def case_of(r):

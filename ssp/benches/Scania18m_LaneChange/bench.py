@@ -1,9 +1,10 @@
 """Scania18m_LaneChange: seed 001's lane change, 60 m at 100 km/h, rear
 friction 0.2. Its KPIs (a function of the result alone), figures and text
 (artibus.benches)."""
-from artibus import kpi, report
-from artibus.benchkit import DEG, lane_change_road, outlines
+from artibus import report
 from artibus.report import Kpi
+from artibus.report.benchkit import DEG, lane_change_road, outlines
+from artibus.study import kpi
 
 S_HOLD = 95.0                      # the bench's Driver.sHold: hands off after the lane change
 

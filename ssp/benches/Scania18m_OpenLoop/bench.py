@@ -2,9 +2,10 @@
 responses (artibus.kc). The KPIs of one run (a function of the result alone);
 the report is a study: seed 001's Figs. 4.1-4.3 by sine tests (the bench's own
 run, straight ahead, is not what it is for) (artibus.benches)."""
-from artibus import kc, kpi, report
-from artibus.benchkit import DEG
+from artibus import report
 from artibus.report import Kpi
+from artibus.report.benchkit import DEG
+from artibus.study import kc, kpi
 
 
 def kpis(r):

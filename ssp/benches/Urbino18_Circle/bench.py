@@ -4,9 +4,10 @@ import math
 
 import numpy as np
 
-from artibus import kpi, report
-from artibus.benchkit import DEG, circle_road, fit_radius
+from artibus import report
 from artibus.report import Kpi
+from artibus.report.benchkit import DEG, circle_road, fit_radius
+from artibus.study import kpi
 
 Lh1, L1, L0, R = 1.789, 4.211, 5.9, 17.5
 

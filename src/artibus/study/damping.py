@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ROOT, ArtibusError, runner, ssp
+from artibus.base import ROOT, ArtibusError
+from artibus import runner
+from artibus.bench import ssp
 
 BENCH = "Scania18m_Damping"
 DEG = 180 / math.pi
@@ -105,7 +107,7 @@ def kpis(r, case="lc60_100"):
 # ---- calibration (seed 001, 5.2.2) ------------------------------------------------
 
 def read_gains(path=GAINS_FILE):
-    from artibus.parameters import read_parameters
+    from artibus.bench.parameters import read_parameters
     return read_parameters(str(path))
 
 
@@ -182,9 +184,9 @@ def _overlay(path, runs, signals, title, t_window=None):
     """One panel per quantity, every damping function overlaid (as the thesis's
     Figs. 5.11-5.14 compare the options). signals: [(ylabel, f(result) -> values)]."""
     import matplotlib.pyplot as plt
-    from artibus.report import _colours
+    from artibus.report import plots
     fig, axes = plt.subplots(len(signals), 1, figsize=(10, 2.6 * len(signals)), sharex=True, squeeze=False)
-    colours = dict(zip(FUNCTIONS + ("reference",), _colours() * 2))
+    colours = dict(zip(FUNCTIONS + ("reference",), plots.colours() * 2))
     for ax, (ylabel, f) in zip(axes[:, 0], signals):
         for name, r in runs.items():
             y = f(r, name)
@@ -207,8 +209,8 @@ def _overlay(path, runs, signals, title, t_window=None):
 def _rear_path(path, runs, case, title):
     """The rear axle's lateral position against x with the lane (seed 001, Figs. 5.9-5.10)."""
     import matplotlib.pyplot as plt
-    from artibus import roads
-    from artibus.report import _colours
+    from artibus.bench import roads
+    from artibus.report import plots
     c = CASES[case]
     x, y = roads.generate(roads.LANE_CHANGE, laneLength=c.length, laneOffset=OFFSET,
                           before=ROAD_BEFORE, after=600.0)
@@ -216,7 +218,7 @@ def _rear_path(path, runs, case, title):
     for ax, zoom in zip(axes, (False, True)):
         ax.fill_between(x, y - 1.5, y + 1.5, color="0.9", label="lane (3 m)")
         ax.plot(x, y, color="0.6", lw=1, label="lane centre")
-        for (name, r), col in zip(runs.items(), _colours() * 2):
+        for (name, r), col in zip(runs.items(), plots.colours() * 2):
             ax.plot(r["Bus.xAxle[3]"], r["Bus.yAxle[3]"], lw=1.2, color=col, label=LABELS.get(name, name))
         x_end = ROAD_BEFORE + c.length
         if zoom:

@@ -3,7 +3,7 @@
 them: ``mu[1]`` .. ``mu[6]``)."""
 import re
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
 
 _RANGE = re.compile(r"^(?P<base>.+)\[(?P<sel>\*|\s*-?\d+\s*:\s*-?\d+\s*)\]$")
 _ELEMENT = re.compile(r"^(?P<base>.+)\[(?P<i>-?\d+)\]$")

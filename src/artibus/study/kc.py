@@ -13,7 +13,7 @@ speed-dependent gain, delta* = Kc(v) delta:
     Kc(v) = |G_plant(j w_lo, v)| / |G_ref(j w_lo, v)|      (friction 1)
 
 G_plant (delta[1] -> artAngle[1]) is measured here through the co-simulation
-(`artibus.bode.frequency_response`) on the bench Scania18m_OpenLoop:
+(`artibus.study.bode.frequency_response`) on the bench Scania18m_OpenLoop:
 BusDynamics with Scania18m.ssv alone, straight ahead at Bus.vx_start, Fx = 0.
 With no drive force the speed falls by the tyres' induced drag, which grows
 with the square of the steering amplitude; Kc is steep in v at high speed, so
@@ -29,8 +29,8 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from artibus import runner
-from artibus.bode import frequency_response
-from artibus.parameters import read_parameters
+from artibus.study.bode import frequency_response
+from artibus.bench.parameters import read_parameters
 
 BENCH = "Scania18m_OpenLoop"
 INPUT = "Bus.delta[1]"
@@ -137,7 +137,7 @@ def write_ssv(path, rows, command, f_lo=F_LO, f_check=F_CHECK, amplitude=AMPLITU
     ]
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
-        "<!-- GENERATED, do not edit: the source is src/artibus/kc.py (scripts/kc_table.py); how it was",
+        "<!-- GENERATED, do not edit: the source is src/artibus/study/kc.py (scripts/kc_table.py); how it was",
         "     made (command, frequency, amplitude, date) is in the annotation at the end.",
         "     The DampingController's table of the complementary gain Kc(v) (seed 001, 4.1.2). -->",
         '<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"',
@@ -191,9 +191,9 @@ def plot_kc(path, rows, f_lo=F_LO, f_check=F_CHECK):
 
 def plot_bode(path, v, points, geo, kc=1.0, title=""):
     """delta -> Lambda: the reference model (closed form, times kc) as a line,
-    the plant as measured points (artibus.bode.plot, the reference through its
+    the plant as measured points (artibus.study.bode.plot, the reference through its
     ``reference`` argument)."""
-    from artibus import bode
+    from artibus.study import bode
     f = np.array([p.frequency for p in points])
     fr = np.geomspace(f.min(), f.max(), 300)
     ref_label = "reference model, eq. 2.9" + (f", times Kc = {kc:.3f}" if kc != 1.0 else "")

@@ -30,7 +30,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
 
 GANGWAY = 1.0            # m: how far a hinge may lie beyond a body's end (the gangway between bodies)
 J_BAND = (1 / 20, 1 / 8)  # J / (m L^2)
@@ -58,7 +58,7 @@ def _model(values):
 
 def _fmu_defaults(model):
     """{name: start value} of the built FMU's parameters, or None when it is not built."""
-    from artibus import fmu_path
+    from artibus.base import fmu_path
     try:
         path = fmu_path(model)
     except ArtibusError:
@@ -266,7 +266,7 @@ def _kinematics(values, get):
 
 def check_file(path, model=None):
     """(model, [Problem]) of an .ssv file."""
-    from artibus.parameters import read_parameters
+    from artibus.bench.parameters import read_parameters
     values = read_parameters(path)
     model = model or _model(values)
     defaults = _fmu_defaults(model) if model else None

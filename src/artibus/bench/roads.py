@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ROOT, ArtibusError
+from artibus.base import ROOT, ArtibusError
 
 CSV, LANE_CHANGE, CIRCLE, ISO3888 = 0, 1, 2, 3
 SOURCE = ROOT / "src" / "models" / "RoadFollowDriver" / "roads.c"

@@ -13,20 +13,21 @@
   still takes ``kpis(result)``.
 
 A bench without a bench.py gets the generic report (the first recorded signals
-over time) and no KPIs. The bench's variants are its ``variants/*.ssv``
-(artibus.ssp)."""
+over time, artibus.report.pages.generic) and no KPIs; the report of a run is
+artibus.report.pages.write_report. The bench's variants are its ``variants/*.ssv``
+(artibus.bench.ssp)."""
 import importlib.util
 import sys
 from pathlib import Path
 
-from artibus import ArtibusError, report
+from artibus.base import ArtibusError
 
 FILE = "bench.py"
 
 
 def bench_file(bench):
     """ssp/benches/<bench>/bench.py (bench: a name, or an .ssp path named after its folder)."""
-    from artibus import ssp
+    from artibus.bench import ssp
     return ssp.BENCH_DIR / Path(str(bench)).stem / FILE
 
 
@@ -57,31 +58,3 @@ def kpis(bench, result):
     """The bench's KPIs of one run (the result alone); [] for a bench without a bench.py."""
     mod = load(bench)
     return [] if mod is None else list(mod.kpis(result))
-
-
-def generic(r, out):
-    series = {n: r[n] for n in r.names[1:]}
-    panels = [(n, {n: v}) for n, v in list(series.items())[:8]]
-    report.signals(out / "signals.png", r.time, panels, title="recorded signals")
-    return [], [("signals.png", "The first recorded signals over time.")], ""
-
-
-def _report(bench, result, out):
-    mod = load(bench)
-    if mod is None:
-        return generic(result, out)
-    if callable(getattr(mod, "study", None)):
-        return mod.study(result, out)
-    return mod.kpis(result), mod.figures(result, out), getattr(mod, "TEXT", "")
-
-
-def write_report(bench, result, out_dir, wall=None):
-    """PNGs and index.html for one bench run; returns the KPIs."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    kpis, images, notes = _report(bench, result, out)
-    images = list(images) + report.bench_animation(result, out, title=f"{bench}, bird's-eye view")
-    span = result.time[-1] - result.time[0]
-    intro = f"Bench {bench}: {span:g} s simulated" + (f" in {wall:.2f} s." if wall else ".")
-    report.write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes)
-    return kpis

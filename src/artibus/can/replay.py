@@ -38,7 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ROOT, ArtibusError
+from artibus.base import ROOT, ArtibusError
+from artibus.bench.units import declared_unit
+from artibus.can.dbc import COUNTER_SIGNAL, CRC_SIGNAL, UNITS, _conversion, load_dbc
+from artibus.can.logs import decode_log
 
 DEG = math.pi / 180
 
@@ -101,12 +104,11 @@ def read_can_log(path, dbc):
     pass the E2E check, each valid from the start of its cycle; a message's
     alive counter only as Message.AliveCounter (the counter of each accepted
     frame, what a route of it delivers)."""
-    from artibus import can
-    db = can.load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
-    rows = can.decode_log(path, db)
+    db = load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
+    rows = decode_log(path, db)
     data = {}
     for t, msg, sig, v, unit, e2e in rows:
-        if e2e != "ok" or sig == can.CRC_SIGNAL:
+        if e2e != "ok" or sig == CRC_SIGNAL:
             continue
         cycle = db.get_message_by_name(msg).cycle_time / 1000.0
         data.setdefault((msg, sig, unit, cycle), []).append((math.floor(t / cycle + 1e-6) * cycle, v))
@@ -115,7 +117,7 @@ def read_can_log(path, dbc):
         a = np.array(samples, dtype=float)
         s = Series(f"{msg}.{sig}", a[:, 0], a[:, 1], unit, cycle)
         out[f"{msg}.{sig}"] = s
-        if sig != can.COUNTER_SIGNAL:
+        if sig != COUNTER_SIGNAL:
             out.setdefault(sig, s)
     return out
 
@@ -134,7 +136,7 @@ def read_log(path, dbc=None):
 
 def steering_map(name_or_path):
     """The coefficients c[0..3] (deg) of a seed 003 Appendix A steering map."""
-    from artibus.parameters import find_ssv, read_parameters
+    from artibus.bench.parameters import find_ssv, read_parameters
     f = find_ssv(name_or_path)
     p = read_parameters(f)
     try:
@@ -241,14 +243,13 @@ def _route_profile(b):
     """A CAN log into a bench that routes connections over CAN: every routed
     input from its route's Message.Signal (unit: the DBC's); every routed data
     signal compared with the output that sent it."""
-    from artibus import can as can_mod
     drive, compare, seen = {}, [], set()
     for c in b.connections:
         if c.can is None:
             continue
         sig = f"{c.can['message']}.{c.can['signal']}"
         drive[f"{c.end[0]}.{c.end[1]}"] = (sig, None)
-        if c.can["signal"] != can_mod.COUNTER_SIGNAL and sig not in seen:
+        if c.can["signal"] != COUNTER_SIGNAL and sig not in seen:
             seen.add(sig)
             compare.append((f"{sig} ({c.start[0]}.{c.start[1]})", sig, None, f"{c.start[0]}.{c.start[1]}"))
     return drive, compare
@@ -260,8 +261,8 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
     variants: the bench's variants (as ``artibus run --variant``); record:
     more outputs to record; offsets: {input: constant} added to a driven
     input, in the input's unit (sensitivity to a sensor offset)."""
-    from artibus import can as can_mod, ssp
-    from artibus.runner import Simulation, _unit_of
+    from artibus.bench import ssp
+    from artibus.runner import Simulation
     log_path = Path(log_path)
     bench_ssp = ssp.ssp_path(bench)
     b = ssp.read(bench_ssp)
@@ -326,7 +327,7 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
             values = s.value
             if cmap is not None and inp == profile.steering[0]:
                 values, su = map_steering(values, cmap), "deg"       # seed 003, App. A
-            k = can_mod._conversion(su, _unit_of(units[comp].fmu.md, v) or "", f"{log_path}: signal {sig} -> {inp}")
+            k = _conversion(su, declared_unit(v) or "", f"{log_path}: signal {sig} -> {inp}")
             stimuli[inp] = Series(sig, s.time, k * values + float((offsets or {}).get(inp, 0.0))).hold()
             if any(c.end == (comp, var) for c in b.connections):
                 cut.append(inp)
@@ -372,8 +373,7 @@ def _bench_dbc(bench_ssp, b):
 
 def _to_si(unit):
     """factor from a log's unit to the FMUs' SI unit (rad, m/s, ...)."""
-    from artibus import can as can_mod
-    return can_mod.UNITS.get(unit or "", ("", 1.0))[1]
+    return UNITS.get(unit or "", ("", 1.0))[1]
 
 
 def compare(result, log, profile):

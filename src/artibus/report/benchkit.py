@@ -1,24 +1,25 @@
 """What several benches' KPIs and figures share (roads, outlines, the steered
 36 m bus's road tests). A bench's own KPIs, figures and text are in its folder,
-``ssp/benches/<Bench>/bench.py`` (see artibus.benches)."""
+``ssp/benches/<Bench>/bench.py`` (see artibus.bench.script)."""
 import math
 
 import numpy as np
 
-from artibus import kpi, report
-from artibus.report import Kpi
+from artibus.report import plots
+from artibus.report.pages import Kpi
+from artibus.study import kpi
 
 DEG = 180 / math.pi
 
 
 def circle_road(R=17.5, before=25.0, after=50.0):
-    from artibus import roads
+    from artibus.bench import roads
     x, y = roads.generate(roads.CIRCLE, R=R, before=before, after=after)
     return x, y
 
 
 def lane_change_road(length, offset, before=25.0, after=50.0):
-    from artibus import roads
+    from artibus.bench import roads
     x, y = roads.generate(roads.LANE_CHANGE, laneLength=length, laneOffset=offset, before=before, after=after)
     return x, y
 
@@ -39,7 +40,7 @@ def outlines(r, n_modules):
 def slalom_road_module():
     """ssp/roads/slalom.py, which wrote the Bus36m_Slalom road (its geometry, one source)."""
     import importlib.util
-    from artibus import ROOT
+    from artibus.base import ROOT
     spec = importlib.util.spec_from_file_location("artibus_slalom_road", ROOT / "ssp" / "roads" / "slalom.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
@@ -49,12 +50,12 @@ def slalom_road_module():
 def lateral_path(path, traces, road, cones, title, outlines=None):
     """Axle traces against x with y stretched (a bird's-eye view at equal scale
     would be a thin line for a 300 m long manoeuvre); with outlines, the
-    swept-path envelope (report.swept_area)."""
+    swept-path envelope (plots.swept_area)."""
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(9, 3.6))
     ax.plot(road[0], road[1], color="0.75", lw=6, solid_capstyle="round", label="road", zorder=0)
     if outlines is not None:
-        report._draw_swept_area(ax, report.swept_area(outlines, resolution=0.03))   # y is stretched: finer
+        plots._draw_swept_area(ax, plots.swept_area(outlines, resolution=0.03))   # y is stretched: finer
     for label, (x, y) in traces.items():
         ax.plot(x, y, lw=1.2, label=label)
     if cones is not None:
@@ -67,7 +68,7 @@ def lateral_path(path, traces, road, cones, title, outlines=None):
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    report.save_figure(fig, path, dpi=110)
+    plots.save_figure(fig, path, dpi=110)
 
 
 # ---- issue 6: the steered 36 m bus's road tests (Bus36m_LaneChange, Bus36m_Slalom) ----
@@ -112,7 +113,7 @@ def road_test_figures(r, out, title, road, t_after, what, cones=None):
     images.append(("path.png", "Lateral position of the axles against x (y stretched): the road (grey, followed "
                                "by the front axle A1), the swept-path envelope (red, dashed)"
                                + (", the cones (black)." if cones is not None else ".")))
-    report.signals(out / "signals.png", t, [
+    plots.signals(out / "signals.png", t, [
         ("lateral position [m]", {f"A{a}": ax[a][1] for a in (1, 2, 4, 6)}),
         ("articulation [deg]", {"hinge 1": r["Bus.artAngle[1]"] * DEG, "hinge 2": r["Bus.artAngle[2]"] * DEG}),
         ("steering [deg]", {"A1 (driver)": r["Driver.delta"] * DEG, "A3": r["ForceMin.gamma3"] * DEG,

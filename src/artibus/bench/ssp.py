@@ -28,7 +28,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from artibus import ROOT, ArtibusError, fmu_dir
+from artibus.base import ROOT, ArtibusError, fmu_dir
 
 BENCH_DIR = ROOT / "ssp" / "benches"
 NS = {
@@ -161,7 +161,7 @@ def variant_overrides(ssp, names):
     name or an .ssp), later names winning; an unknown name is an error that
     lists the bench's variants."""
     from fmpy.ssp.ssd import read_ssv
-    from artibus.parameters import typed
+    from artibus.bench.parameters import typed
     if not names:
         return {}
     ssp = ssp_path(ssp)
@@ -328,7 +328,7 @@ def read(ssp):
     """A .ssp as components (with their bound parameters) and connections
     resolved through nested systems to component variables."""
     from fmpy.ssp.ssd import Component as SsdComponent, System, read_ssd
-    from artibus.parameters import typed
+    from artibus.bench.parameters import typed
 
     ssp = str(ssp)
     where = f"{ssp}/SystemStructure.ssd"

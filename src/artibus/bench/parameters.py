@@ -1,4 +1,5 @@
-"""Parameter sets as SSP 1.0 parameter-value files (.ssv).
+"""Parameter sets as SSP 1.0 parameter-value files (.ssv), and the values the
+user sets on the command line (``--set NAME=VALUE``, ``parse_set``).
 
 FMPy reads and validates them against the SSP XSD it ships; here they are
 checked against an FMU's model description, so a misspelt name or a value out
@@ -9,7 +10,7 @@ import math
 from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssv
 
-from artibus import ArtibusError, ROOT
+from artibus.base import ArtibusError, ROOT
 
 PARAMETER_DIR = ROOT / "ssp" / "parameters"
 
@@ -44,6 +45,19 @@ def read_parameters(ssv, fmu=None):
                                f"{p.value!r} is not a {p.type}") from None
     if fmu is not None:
         check_against(values, fmu, str(path))
+    return values
+
+
+def parse_set(items):
+    """``--set NAME=VALUE`` items -> {NAME: VALUE} (text, stripped; later ones win);
+    an item without "=" is an error naming it. The values are typed later, against
+    the variables they set (check_against)."""
+    values = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise ArtibusError(f"--set {item}: expected NAME=VALUE")
+        values[name.strip()] = value.strip()
     return values
 
 

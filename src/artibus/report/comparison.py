@@ -15,8 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import files, kpi, report
-from artibus.report import FAIL, PASS
+from artibus import files
+from artibus.report import plots
+from artibus.report.animation import result_outlines
+from artibus.report.pages import FAIL, PASS, STYLE
+from artibus.study import kpi
 
 BENCH = "Bus36m_Circle"
 #: the page's cases: label -> (variants of BENCH, further overrides); the first, the bench's
@@ -49,8 +52,8 @@ def _figures(r):
         d, inside = kpi.lateral_distance(*ax[2], *ax[a])
         dev[a] = np.where(inside, np.abs(d), np.nan)
     F1 = r["Bus.FjointY[1]"][::5] / 1e3
-    outl = report.result_outlines(r)
-    swept = report.swept(outl).max_width if outl is not None else float("nan")
+    outl = result_outlines(r)
+    swept = plots.swept(outl).max_width if outl is not None else float("nan")
     return {"traces": ax, "s": s5, "dev": dev, "F1": F1,
             "peak": {"A4": float(np.nanmax(dev[4])), "A6": float(np.nanmax(dev[6])),
                      "F1": kpi.peak_while_moving(r["Bus.FjointY[1]"], r["Bus.v"]) / 1e3,   # as the benches
@@ -66,7 +69,7 @@ def write(out_dir, results, run_extra=_run_extra):
     """out_dir/index.html with the figures and a table; results: {bench: Result}
     of the run, BENCH's its default (the variants are run here, run_extra(bench,
     overrides)). Returns the page's path, or None when BENCH is missing from results."""
-    from artibus import ssp
+    from artibus.bench import ssp
     out = Path(out_dir)
     if not BENCHES <= set(results):
         return None
@@ -79,9 +82,9 @@ def write(out_dir, results, run_extra=_run_extra):
             r = run_extra(BENCH, {**ssp.variant_overrides(BENCH, list(variants)), **(overrides or {})})
         data[label] = _figures(r)
     import matplotlib.pyplot as plt
-    from artibus.benchkit import circle_road
+    from artibus.report.benchkit import circle_road
     road = circle_road()
-    colours = dict(zip(CASES, report._colours()))
+    colours = dict(zip(CASES, plots.colours()))
     # Fig. 8: the traces, one panel per case, the same axes
     fig, axes = plt.subplots(2, 2, figsize=(10, 5.6), sharex=True, sharey=True)
     for a, (label, d) in zip(axes.ravel(), data.items()):
@@ -98,7 +101,7 @@ def write(out_dir, results, run_extra=_run_extra):
         a.set_ylabel("y [m]")
     fig.suptitle("Traces of A2, A4 and A6 (seed 000, Fig. 8)", fontsize=10)
     fig.tight_layout()
-    report.save_figure(fig, out / "traces.png", dpi=100)
+    plots.save_figure(fig, out / "traces.png", dpi=100)
     # Figs. 9 and 10 over the same axis
     fig, axes = plt.subplots(3, 1, figsize=(10, 8.4), sharex=True)
     for label, d in data.items():
@@ -120,7 +123,7 @@ def write(out_dir, results, run_extra=_run_extra):
     for a in axes:
         a.grid(True, alpha=0.3)
     fig.tight_layout()
-    report.save_figure(fig, out / "deviation_force.png", dpi=100)
+    plots.save_figure(fig, out / "deviation_force.png", dpi=100)
     # the table
     rows = []
     for label, d in data.items():
@@ -137,7 +140,7 @@ def write(out_dir, results, run_extra=_run_extra):
                     f"{td(p['F1'], f_ok, 'kN')}<td class=n>{p['swept']:.3g} m</td></tr>")
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(TITLE)}</title>
-<style>{report.STYLE}</style></head><body>
+<style>{STYLE}</style></head><body>
 <p><a href="../index.html">all benches</a></p>
 <h1>{html.escape(TITLE)}</h1>
 <p>The paper's central result (seed 000, sec. III, Figs. 8-10): without steering A4 and A6 leave the trace of

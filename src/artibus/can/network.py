@@ -41,7 +41,7 @@ bit for bit (tests/test_can_core.py), where it can (``Network.core_support``:
 no faults, no tamper function, the virtual bus, integer signals): its own codec
 (cantools' scaling and rounding, checked against cantools on every signal),
 CRC, counter, the receivers' check and the counts, and the initialisation's
-``settle`` too (runner._CanCore.settle); the frames go to the log
+``settle`` too (artibus.runner.can_core._CanCore.settle); the frames go to the log
 after the run (``log_frames``), the bus carries none. Faults, a tamper function
 or a real interface tick here (``Network.tick``), as the run's
 ``Simulation.stepping`` says.
@@ -59,318 +59,19 @@ worst-case frame length C = (34 + 8 s + 13 + floor((34 + 8 s - 1) / 4)) bit
 times for s data bytes (11-bit identifiers), no queuing jitter (the frames
 are queued exactly at the tick), deadline = period.
 """
-import functools
 import itertools
 import math
 import os
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from artibus import ArtibusError
+from artibus.base import ArtibusError
+from artibus.bench.units import declared_unit
+from artibus.can.codec import e2e_crc, frame_bits, response_times, worst_case_bits
+from artibus.can.dbc import COUNTER_SIGNAL, CRC_SIGNAL, DEFAULT_BITRATE, _conversion, load_dbc
+from artibus.can.faults import _FaultInjection
 
-#: units a signal or a connected variable may carry: (SI unit, factor to it)
-UNITS = {
-    "": ("", 1.0), "1": ("", 1.0),
-    "rad": ("rad", 1.0), "deg": ("rad", math.pi / 180),
-    "rad/s": ("rad/s", 1.0), "deg/s": ("rad/s", math.pi / 180),
-    "m": ("m", 1.0), "mm": ("m", 1e-3),
-    "m/s": ("m/s", 1.0), "km/h": ("m/s", 1 / 3.6),
-    "m/s2": ("m/s2", 1.0),
-    "N": ("N", 1.0), "kN": ("N", 1e3), "N.m": ("N.m", 1.0),
-}
-CRC_SIGNAL, COUNTER_SIGNAL = "CRC", "AliveCounter"
-DEFAULT_BITRATE = 500_000
 _channels = itertools.count()
-
-
-def _conversion(unit_from, unit_to, where):
-    """factor k with value_to = k * value_from."""
-    a, b = UNITS.get(unit_from or ""), UNITS.get(unit_to or "")
-    if a is None or b is None or a[0] != b[0]:
-        raise ArtibusError(f"{where}: cannot convert '{unit_from or ''}' to '{unit_to or ''}' "
-                           f"(units known to the CAN path: {', '.join(u for u in UNITS if u)})")
-    return a[1] / b[1]
-
-
-def load_dbc(path, label=None):
-    """The DBC as a cantools database, checked for what the network needs
-    (see the module's docstring); errors name the file, message and signal."""
-    import cantools
-    label = label or str(path)
-    try:
-        db = cantools.database.load_file(str(path), database_format="dbc", strict=True)
-    except FileNotFoundError:
-        raise ArtibusError(f"{label}: no such file") from None
-    except Exception as e:      # cantools' parse and consistency errors
-        raise ArtibusError(f"{label}: not a valid DBC: {e}") from None
-    if not db.messages:
-        raise ArtibusError(f"{label}: the DBC defines no message")
-    for m in db.messages:
-        head = f"{label}: message {m.name} (0x{m.frame_id:03X})"
-        if m.is_extended_frame or m.is_fd:
-            raise ArtibusError(f"{head}: only classic CAN frames with 11-bit identifiers are supported")
-        if m.is_multiplexed():
-            raise ArtibusError(f"{head}: multiplexed messages are not supported")
-        sig = {s.name: s for s in m.signals}
-        for name, start, length in ((CRC_SIGNAL, 0, 8), (COUNTER_SIGNAL, 8, 4)):
-            s = sig.get(name)
-            if s is None or s.start != start or s.length != length or s.is_signed or s.byte_order != "little_endian":
-                raise ArtibusError(f"{head}: signal {name}: every frame needs an unsigned {length}-bit "
-                                   f"{name} at bit {start} (E2E profile 2 layout)")
-        if m.length < 2:
-            raise ArtibusError(f"{head}: DLC {m.length}: CRC and counter need 2 bytes")
-        attr = m.dbc.attributes.get("E2EDataID") if m.dbc else None
-        if attr is None:
-            raise ArtibusError(f"{head}: no E2EDataID attribute (the data ID of its CRC)")
-        if not m.cycle_time:
-            raise ArtibusError(f"{head}: no GenMsgCycleTime (the network sends cyclically)")
-    return db
-
-
-def _crc8h2f_table():
-    table = []
-    for i in range(256):
-        c = i
-        for _ in range(8):
-            c = ((c << 1) ^ 0x2F) & 0xFF if c & 0x80 else (c << 1) & 0xFF
-        table.append(c)
-    return table
-
-
-_CRC8H2F = _crc8h2f_table()
-
-
-def e2e_crc(data, data_id):
-    """AUTOSAR E2E profile 2's CRC of a frame: CRC-8H2F (polynomial 0x2F,
-    start and final XOR 0xFF) over bytes 1.. and the data ID; the same number
-    as cantools.autosar.end_to_end.compute_profile2_crc(data, data_id), with a
-    table (the tests compare them), 10 x faster."""
-    crc = 0xFF
-    for b in data[1:]:
-        crc = _CRC8H2F[crc ^ b]
-    return _CRC8H2F[crc ^ data_id] ^ 0xFF
-
-
-@functools.lru_cache(maxsize=1 << 16)
-def frame_bits(can_id, data):
-    """Bits a classic data frame with an 11-bit identifier takes on the wire:
-    SOF to CRC with its stuff bits counted exactly (a complement bit after
-    five equal bits), CRC delimiter, ACK, EOF, 3 bits of interframe space.
-    data: bytes."""
-    head = (can_id << 7) | len(data)            # SOF 0, ID, RTR 0, IDE 0, r0 0, DLC
-    n = 19 + 8 * len(data)
-    v = (head << (8 * len(data))) | int.from_bytes(data, "big")
-    crc = 0
-    for i in range(n - 1, -1, -1):              # CRC-15, polynomial 0x4599 (ISO 11898-1)
-        if ((v >> i) & 1) ^ (crc >> 14):
-            crc = ((crc << 1) & 0x7FFF) ^ 0x4599
-        else:
-            crc = (crc << 1) & 0x7FFF
-    bits = format((v << 15) | crc, f"0{n + 15}b")
-    stuff, run, prev = 0, 0, ""
-    for b in bits:
-        if b == prev:
-            run += 1
-            if run == 5:                            # a complement bit; it starts the next run
-                stuff += 1
-                prev, run = ("1" if b == "0" else "0"), 1
-        else:
-            prev, run = b, 1
-    return n + 15 + stuff + 10 + 3
-
-
-def worst_case_bits(dlc):
-    """Davis et al. 2007, eq. (1) with g = 34 (11-bit identifiers): the longest
-    frame of dlc data bytes, worst-case stuffing, interframe space included."""
-    return 34 + 8 * dlc + 13 + (34 + 8 * dlc - 1) // 4
-
-
-def response_times(messages, bitrate):
-    """Worst-case response times (s) of periodic messages on CAN, Davis et al.
-    2007, section 4: messages = [(identifier, dlc, period s)], priority by
-    identifier, no jitter, deadline = period. Returns {identifier: R} (inf
-    when the busy period does not end)."""
-    tau = 1.0 / bitrate
-    msgs = sorted((i, worst_case_bits(d) * tau, T) for i, d, T in messages)
-    out = {}
-    for n, (mid, C, T) in enumerate(msgs):
-        hp = msgs[:n]
-        B = max((c for _, c, _ in msgs[n + 1:]), default=0.0)
-        if sum(Ck / Tk for _, Ck, Tk in msgs[:n + 1]) >= 1.0:   # the busy period never ends
-            out[mid] = math.inf
-            continue
-        t = C                                       # busy period, eq. (8)
-        for _ in range(10000):
-            t_new = B + sum(math.ceil(t / Tk) * Ck for _, Ck, Tk in msgs[:n + 1])
-            if t_new == t:
-                break
-            t = t_new
-        else:
-            out[mid] = math.inf
-            continue
-        R = 0.0
-        for q in range(math.ceil(t / T)):           # every instance in the busy period, eqs. (9)-(11)
-            w = B + q * C
-            for _ in range(10000):
-                w_new = B + q * C + sum(math.ceil((w + tau) / Tk) * Ck for _, Ck, Tk in hp)
-                if w_new == w:
-                    break
-                w = w_new
-            R = max(R, w - q * T + C)
-        out[mid] = R
-    return out
-
-
-# --- faults -----------------------------------------------------------------------
-
-#: kinds of fault: the positional value each takes, the options it accepts
-FAULT_KINDS = {
-    "loss": ("rate", {"seed"}),                       # frames not sent, with probability rate
-    "latency": ("delay", {"jitter", "seed"}),         # frames queued delay + U(0, jitter) s late
-    "corrupt": ("mode", {"rate", "seed"}),            # crc | repeat | skip
-    "silent": (None, set()),                          # the node sends nothing
-    "busoff": (None, {"recover"}),                    # error burst, bus-off, optional recovery
-}
-CORRUPT_MODES = ("crc", "repeat", "skip")
-FAULT_SYNTAX = ("KIND:TARGET[:VALUE][:KEY=VALUE...][@T0[-T1]] with KIND loss (VALUE rate 0..1, seed=), "
-                "latency (VALUE delay s, jitter= s, seed=), corrupt (VALUE crc|repeat|skip, rate=, seed=), "
-                "silent, busoff (recover or recover=DELAY s); TARGET a message or a node of the DBC "
-                "(silent/busoff: a node); @T0-T1 the window in simulated s (default: the whole run)")
-BUSOFF_ATTEMPTS = 32          # TEC +8 per failed transmission: 32 of them reach 256 (ISO 11898-1)
-ERROR_FRAME_BITS = 17         # error flag 6, error delimiter 8, interframe space 3
-RECOVERY_BITS = 128 * 11      # 128 occurrences of 11 recessive bits (ISO 11898-1, bus-off recovery)
-_FLOAT = r"[0-9]+(?:\.[0-9]*)?(?:[eE][+-]?[0-9]+)?"
-
-
-@dataclass
-class Fault:
-    """A fault injected into the CAN network (see ``parse_fault`` for the text form).
-
-    kind: loss, latency, corrupt, silent, busoff; target: a message or a node
-    (the sender of messages) of the DBC; rate (loss, corrupt): probability per
-    frame; delay, jitter (latency, s): a frame is queued delay + U(0, jitter)
-    late; mode (corrupt): crc, repeat or skip; start, end: the window of
-    production times [start, end) in simulated s; seed: of the fault's own
-    numpy Generator; recover (busoff): None (stays off) or the application's
-    restart delay after the minimum recovery time (s)."""
-    kind: str
-    target: str
-    rate: float = 1.0
-    delay: float = 0.0
-    jitter: float = 0.0
-    mode: str = "crc"
-    start: float = -math.inf
-    end: float = math.inf
-    seed: int = 0
-    recover: float | None = None
-    text: str = ""
-
-    def __str__(self):
-        return self.text or f"{self.kind}:{self.target}"
-
-
-def parse_fault(text):
-    """A fault from its text form, e.g. ``loss:SensorG2_Angle:0.1:seed=7``,
-    ``latency:Module2ECU_Cmd:0.02:jitter=0.005:seed=3``,
-    ``corrupt:TractorECU_State:crc@20.0-20.5``, ``silent:Module3ECU@20``,
-    ``busoff:Module2ECU@30:recover``. The target's name is checked against the
-    DBC when the network is built."""
-    import re
-    head = f"--can-fault {text}"
-    body, at, window = text.strip().partition("@")
-    # options may also follow the window: busoff:Module2ECU@30:recover
-    if at:
-        window, _, tail = window.partition(":")
-        body = body + (":" + tail if tail else "")
-    parts = [p.strip() for p in body.split(":")]
-    if len(parts) < 2 or not parts[0] or not parts[1]:
-        raise ArtibusError(f"{head}: expected {FAULT_SYNTAX}")
-    kind, target, rest = parts[0].lower(), parts[1], parts[2:]
-    if kind not in FAULT_KINDS:
-        raise ArtibusError(f"{head}: unknown fault '{parts[0]}' (faults: {', '.join(FAULT_KINDS)})")
-    positional, keys = FAULT_KINDS[kind]
-    f = Fault(kind, target, text=text.strip())
-    values = {}
-    for i, p in enumerate(rest):
-        key, eq, value = p.partition("=")
-        if not eq:
-            if key == "recover" and "recover" in keys:
-                values["recover"] = "0"
-            elif i == 0 and positional:
-                values[positional] = key
-            else:
-                raise ArtibusError(f"{head}: unexpected '{p}' (expected {FAULT_SYNTAX})")
-        elif key not in keys:
-            raise ArtibusError(f"{head}: {kind} takes no option '{key}'"
-                               + (f" (options: {', '.join(sorted(keys))})" if keys else ""))
-        else:
-            values[key] = value
-    if positional and positional not in values and kind != "corrupt":
-        raise ArtibusError(f"{head}: {kind} needs its {positional}, e.g. "
-                           + ("loss:SensorG2_Angle:0.1" if kind == "loss" else "latency:Module2ECU_Cmd:0.02"))
-
-    def number(key, lo, hi, unit=""):
-        try:
-            v = float(values[key])
-        except ValueError:
-            v = float("nan")
-        if not (math.isfinite(v) and lo <= v <= hi):
-            raise ArtibusError(f"{head}: {key} = {values[key]!r}: expected a number in [{lo:g}, {hi:g}]{unit}")
-        return v
-
-    if "rate" in values:
-        f.rate = number("rate", 0.0, 1.0)
-    if "delay" in values:
-        f.delay = number("delay", 0.0, 3600.0, " s")
-    if "jitter" in values:
-        f.jitter = number("jitter", 0.0, 3600.0, " s")
-    if "recover" in values:
-        f.recover = number("recover", 0.0, 3600.0, " s")
-    if "seed" in values:
-        try:
-            f.seed = int(values["seed"])
-            if f.seed < 0:
-                raise ValueError
-        except ValueError:
-            raise ArtibusError(f"{head}: seed = {values['seed']!r}: expected an integer >= 0") from None
-    if kind == "corrupt":
-        f.mode = values.get("mode", "crc").lower()
-        if f.mode not in CORRUPT_MODES:
-            raise ArtibusError(f"{head}: corrupt mode '{values['mode']}': expected {', '.join(CORRUPT_MODES)}")
-    if at:
-        m = re.fullmatch(rf"\s*({_FLOAT})\s*(?:-\s*({_FLOAT})\s*)?", window)
-        if m is None:
-            raise ArtibusError(f"{head}: window '@{window}': expected @T0 or @T0-T1 in s")
-        f.start = float(m.group(1))
-        if m.group(2) is not None:
-            f.end = float(m.group(2))
-            if not f.end > f.start:
-                raise ArtibusError(f"{head}: window '@{window}': the end must be after the start")
-    return f
-
-
-class _FaultState:
-    """A fault bound to the network: its messages and its own random numbers."""
-
-    def __init__(self, fault, messages):
-        import numpy as np
-        self.fault = fault
-        self.messages = messages          # the _Messages it acts on
-        self.rng = np.random.default_rng(fault.seed)
-
-    def active(self, t):
-        f = self.fault
-        return f.start - 1e-9 <= t < f.end - 1e-9
-
-
-@dataclass
-class _Node:
-    """A sending node's state under silent/busoff faults."""
-    name: str
-    off_until: float = -math.inf       # sends nothing before this time (bus-off)
-    burst_pending: bool = False
-    burst_at: float = math.nan         # time its error burst started
 
 
 @dataclass
@@ -421,7 +122,7 @@ class _Message:
     node: str = ""       # its sender
 
 
-class Network:
+class Network(_FaultInjection):
     """The CAN path of one run (see the module's docstring)."""
 
     def __init__(self, bench, dbc_file, links, interface="virtual", log=None, faults=None):
@@ -471,12 +172,12 @@ class Network:
                 # the alive counter is the network's (E2E): the receivers get it, the source's value is not sent
                 route = routes[key] = _Route(sig, link.src, link.src_index,
                                              1.0 if sig.name == COUNTER_SIGNAL else
-                                             _conversion(_unit(link.src, src_var), sig.unit, label),
+                                             _conversion(declared_unit(src_var), sig.unit, label),
                                              f"{c.start[0]}.{c.start[1]}")
             elif route.source != f"{c.start[0]}.{c.start[1]}":
                 raise ArtibusError(f"{label}: signal {msg.name}.{sig.name} is already sent from {route.source}")
             route.receivers.append(_Receiver(link.dst, link.dst_index,
-                                             _conversion(sig.unit, _unit(link.dst, dst_var), label), link.name))
+                                             _conversion(sig.unit, declared_unit(dst_var), label), link.name))
         self.messages = []
         for m in sorted(self.db.messages, key=lambda m: m.frame_id):
             ratio = m.cycle_time / 1000 / self.period
@@ -504,46 +205,6 @@ class Network:
         self._mid = {}         # tick -> delayed frames queued after it, before the next: [(time, seq, m, data)]
         self._mailbox = {}     # identifier -> frames received since the receivers last read (newest last)
         self._open(interface, log)
-
-    def _bind_faults(self, faults):
-        """Each fault's messages (a message, or every message a node sends)."""
-        names = {m.msg.name: m for m in self.messages}
-        nodes = {}
-        for m in self.messages:
-            nodes.setdefault(m.node, []).append(m)
-        known_nodes = [n.name for n in self.db.nodes]
-        self.faults = []
-        self.nodes = {}
-        for f in faults:
-            f = parse_fault(f) if isinstance(f, str) else f
-            head = f"--can-fault {f}"
-            if f.kind in ("silent", "busoff"):
-                if f.target not in known_nodes:
-                    hint = (f" ({f.target} is a message; its sender is {names[f.target].node})"
-                            if f.target in names else "")
-                    raise ArtibusError(f"{head}: {self.dbc_label} has no node '{f.target}'{hint} "
-                                       f"(nodes: {', '.join(known_nodes)})")
-                msgs = nodes.get(f.target, [])
-                if not msgs:
-                    raise ArtibusError(f"{head}: node {f.target} sends no message in {self.dbc_label} "
-                                       f"(senders: {', '.join(nodes)})")
-                if f.kind == "busoff":
-                    if f.target in self.nodes:
-                        raise ArtibusError(f"{head}: node {f.target} already has a busoff fault")
-                    self.nodes[f.target] = _Node(f.target)
-            elif f.target in names:
-                msgs = [names[f.target]]
-            elif f.target in nodes:
-                msgs = nodes[f.target]
-            else:
-                raise ArtibusError(f"{head}: {self.dbc_label} has no message or sending node '{f.target}' "
-                                   f"(messages: {', '.join(names)}; nodes: {', '.join(nodes)})")
-            if f.kind == "latency" and f.delay + f.jitter <= 0:
-                raise ArtibusError(f"{head}: a latency of 0 s changes nothing")
-            state = _FaultState(f, msgs)
-            self.faults.append(state)
-            for m in msgs:
-                m.faults.append(state)
 
     def _open(self, interface, log):
         import can
@@ -704,66 +365,6 @@ class Network:
         if self.writer is not None:
             self.writer.log_event(f"artibus: simulated time in s from t = {t0:g} s (the run's start)", t0)
 
-    def _produce(self, m, k, t):
-        """The frame message m's sender makes at tick k, with the faults acting
-        on it: None when it is not on the wire at this tick (lost, suppressed,
-        or delayed: then filed for later), else (seq, m, data, burst)."""
-        m.produced += 1
-        seq = self._seq
-        self._seq += 1
-        lost = suppressed = burst = False
-        corrupt, delay = None, 0.0
-        for fs in m.faults:
-            f = fs.fault
-            if not fs.active(t):
-                continue
-            if f.kind == "loss":
-                lost |= bool(fs.rng.random() < f.rate)
-            elif f.kind == "latency":
-                delay = max(delay, f.delay + (float(fs.rng.uniform(0.0, f.jitter)) if f.jitter > 0 else 0.0))
-            elif f.kind == "corrupt":
-                if f.rate >= 1.0 or fs.rng.random() < f.rate:
-                    corrupt = f.mode
-            elif f.kind == "silent":
-                suppressed = True
-            elif f.kind == "busoff":
-                node = self.nodes[f.target]
-                if not node.burst_pending and node.off_until == -math.inf:
-                    node.burst_pending, node.off_until = True, math.inf    # this frame starts the burst
-                    burst = True
-                elif t < node.off_until - 1e-9:
-                    suppressed = True
-        counter = m.counter
-        if corrupt == "repeat":          # the previous frame's counter again; the counter does not advance
-            counter = (m.counter - 1) % 16
-        elif corrupt == "skip":          # the counter jumps over one value
-            counter = (m.counter + 1) % 16
-            m.counter = (m.counter + 2) % 16
-        else:
-            m.counter = (m.counter + 1) % 16
-        data = self._encode(m, t, counter)
-        if corrupt is not None:
-            m.corrupted += 1
-            if corrupt == "crc":         # a payload bit flipped after the sender's CRC
-                data[-1] ^= 0x01
-        if burst:
-            return seq, m, bytes(data), True
-        if lost:
-            m.lost += 1
-            return None
-        if suppressed:
-            m.suppressed += 1
-            return None
-        if delay > 0.0:
-            m.delayed += 1
-            kq = k + delay / self.period
-            if abs(kq - round(kq)) < 1e-6:
-                self._at_tick.setdefault(int(round(kq)), []).append((seq, m, bytes(data), False))
-            else:
-                self._mid.setdefault(int(math.floor(kq)), []).append((t + delay, seq, m, bytes(data)))
-            return None
-        return seq, m, bytes(data), False
-
     def _transmit(self, m, data, stamp, bits):
         """One frame on the bus at simulated time `stamp` (end of its EOF),
         received back into the receivers' buffer and logged."""
@@ -785,27 +386,6 @@ class Network:
         self._mailbox.setdefault(rx.arbitration_id, []).append(rx)
         if self.writer is not None:
             self.writer.on_message_received(rx)
-
-    def _burst(self, m, data, t, busy):
-        """Bus-off: the node's frame fails BUSOFF_ATTEMPTS times in a row (each
-        attempt the frame up to its ACK slot, then an error frame); its
-        transmit error counter reaches 256 and it leaves the bus. Returns the
-        bits the burst took."""
-        import can
-        tau = 1.0 / self.bitrate
-        bits = BUSOFF_ATTEMPTS * (frame_bits(m.msg.frame_id, data) - 10 + ERROR_FRAME_BITS)
-        node = self.nodes[m.node]
-        end = t + (busy + bits) * tau
-        fault = next(fs.fault for fs in m.faults if fs.fault.kind == "busoff")
-        node.burst_pending = False
-        node.off_until = math.inf if fault.recover is None else end + RECOVERY_BITS * tau + fault.recover
-        node.burst_at = t + busy * tau
-        self.error_frames += BUSOFF_ATTEMPTS
-        m.suppressed += 1
-        if self.writer is not None:
-            self.writer.on_message_received(can.Message(timestamp=node.burst_at, arbitration_id=m.msg.frame_id,
-                                                        is_error_frame=True, is_extended_id=False, dlc=0))
-        return bits
 
     def tick(self, k, t):
         """The network's k-th tick at simulated time t: the frames queued at t
@@ -929,69 +509,3 @@ class Network:
         bus, self.bus = getattr(self, "bus", None), None
         if bus is not None:
             bus.shutdown()
-
-
-def _unit(unit, var):
-    from artibus.runner import _unit_of
-    return _unit_of(unit.fmu.md, var)
-
-
-def dbc_in(ssp_dir, spec):
-    return Path(ssp_dir) / (spec.get("source") or "")
-
-
-# --- logs ---------------------------------------------------------------------------
-
-def read_log(path):
-    """The CAN frames of a .blf or .asc log (python-can's readers)."""
-    import can
-    path = Path(path)
-    if not path.is_file():
-        raise ArtibusError(f"{path}: no such file")
-    suffix = path.suffix.lower()
-    if suffix not in (".blf", ".asc"):
-        raise ArtibusError(f"{path}: a CAN log is .blf or .asc")
-    reader = can.BLFReader(str(path)) if suffix == ".blf" else can.ASCReader(str(path))
-    try:
-        return [m for m in reader if not m.is_error_frame and not m.is_remote_frame]
-    except Exception as e:
-        raise ArtibusError(f"{path}: cannot read the log: {e}") from None
-
-
-def decode_log(path, dbc):
-    """Rows (time s, message, signal, value, unit, e2e) of every frame of a log
-    that the DBC knows; e2e is 'ok', or why a receiver checking every frame of
-    the log would reject it (never use it): 'crc', 'repeated' (counter equal
-    to the last), 'sequence' (counter ahead by more than the cycles elapsed
-    since the last good frame, from the timestamps and the cycle time) -- the
-    check of ``Network._deliver``."""
-    from cantools.autosar.end_to_end import compute_profile2_crc
-    db = load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
-    rows, last, good = [], {}, {}
-    for frame in read_log(path):
-        try:
-            m = db.get_message_by_frame_id(frame.arbitration_id)
-        except KeyError:
-            continue
-        data = bytes(frame.data)
-        if len(data) != m.length:
-            raise ArtibusError(f"{path}: frame 0x{frame.arbitration_id:03X} at t = {frame.timestamp:g} s: "
-                               f"{len(data)} bytes, message {m.name} has {m.length}")
-        data_id = int(m.dbc.attributes["E2EDataID"].value)
-        counter = data[1] & 0x0F
-        e2e = "ok"
-        if compute_profile2_crc(data, data_id) != data[0]:
-            e2e = "crc"
-        elif m.frame_id in last:
-            delta = (counter - last[m.frame_id]) % 16
-            cycles = round((frame.timestamp - good[m.frame_id]) / (m.cycle_time / 1000.0))
-            if delta == 0:
-                e2e = "repeated"
-            elif delta > min(max(cycles, 1), 15):
-                e2e = "sequence"
-                last[m.frame_id] = counter
-        if e2e == "ok":
-            last[m.frame_id], good[m.frame_id] = counter, frame.timestamp
-        for name, v in m.decode(data, scaling=True, decode_choices=False).items():
-            rows.append((frame.timestamp, m.name, name, v, m.get_signal_by_name(name).unit or "", e2e))
-    return rows

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import ArtibusError, runner
+from artibus.base import ArtibusError
+from artibus import runner
 
 
 @dataclass
@@ -109,7 +110,7 @@ def output_units(bench, names):
     """{"comp.var": unit} of outputs of a bench, from its FMUs' model descriptions."""
     import zipfile
     from fmpy import read_model_description
-    from artibus import ssp
+    from artibus.bench import ssp
     b = ssp.read(ssp.ssp_path(bench))
     units = {}
     with zipfile.ZipFile(ssp.ssp_path(bench)) as z:
@@ -127,3 +128,14 @@ def output_units(bench, names):
                     u = v.unit or (getattr(v.declaredType, "unit", None) if v.declaredType is not None else None)
                     units[name] = u or "-"
     return units
+
+
+def csv_rows(frequencies, responses, outputs, input, units):
+    """The lines of ``artibus bode``'s CSV: a header (each output's gain in its
+    unit per the input's, its phase in rad), then a row per frequency."""
+    per = lambda o: f"{units.get(o, '-')} per {units.get(input, '-')}"    # noqa: E731 (gain's unit)
+    rows = ["frequency [Hz]," + ",".join(f"{o} gain [{per(o)}],{o} phase [rad]" for o in outputs)]
+    for k, f in enumerate(frequencies):
+        rows.append(f"{f:.6g}," + ",".join(f"{responses[o][k].gain:.8g},{responses[o][k].phase:.8g}"
+                                           for o in outputs))
+    return rows

@@ -1,0 +1,18 @@
+"""The co-simulation master: runs an SSP bench of FMI 2.0 co-simulation FMUs.
+
+- ``simulation``: ``Simulation`` (a bench set up and ready to run; its
+  algorithm, Gauss-Seidel or Jacobi, multi-rate) and ``run``;
+- ``setup``: what ``Simulation.__init__`` does (units, parameters, connections,
+  the CAN network, recording, stimuli);
+- ``unit``: a component while it runs and its calls into the FMU;
+- ``plan``: the components' order and the multi-rate step plan;
+- ``core``, ``can_core``: the stepping core in C and its ctypes binding;
+- ``results``, ``tables``: result files (``save``, units, partial results) and
+  the pool of result tables.
+"""
+from artibus.fmu import Result, SimulationError                                     # noqa: F401 (a run's)
+from artibus.runner.can_core import can_signal                                      # noqa: F401
+from artibus.runner.core import core_library_path                                   # noqa: F401
+from artibus.runner.results import partial_path, read_units, save, save_partial, units_path   # noqa: F401
+from artibus.runner.setup import resolve_resources                                  # noqa: F401
+from artibus.runner.simulation import Simulation, run                               # noqa: F401

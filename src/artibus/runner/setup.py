@@ -1,0 +1,270 @@
+"""A Simulation's set-up (``Simulation.__init__``'s work, ``_Setup``): the
+units and their steps, the parameters (the bench's bindings, then the user's
+overrides, resolved and checked), the connections (with SSP's transformations
+or the units' conversion; Integer, Boolean, String and Enumeration ones
+exactly), the CAN network of a bench that routes connections over CAN, the
+order, the recording and the stimuli."""
+from pathlib import Path
+
+import numpy as np
+
+from artibus.base import ArtibusError
+from artibus.bench.parameters import check_against, suggest
+from artibus.bench.units import declared_unit, unit_conversion
+from artibus.fmu import Fmu
+from artibus.runner.plan import _order
+from artibus.runner.unit import Link, Unit, _RawCalls, _TypedCalls, _typed_convert
+
+
+def resolve_resources(tmp, where, values, origins=None):
+    """A String parameter "resources/<file>" names a file inside the .ssp: its
+    value in ``values`` becomes that file's path in the unpacked copy ``tmp``.
+    An error names the bench (``where``) and where the value is from
+    (``origins[var]``: the parameter file and its element, or --set) where given."""
+    for var, value in values.items():
+        if isinstance(value, str) and value.startswith("resources/"):
+            f = Path(tmp) / value
+            if not f.is_file():
+                origin = (origins or {}).get(var)
+                raise ArtibusError(f"{where}: parameter '{var}' = {value!r}"
+                                   + (f" (from {origin})" if origin else "") + ": no such file in the .ssp")
+            values[var] = str(f)
+
+
+class _Setup:
+    """The set-up of a Simulation (see the module's docstring); Simulation
+    (artibus.runner.simulation) runs what it set up."""
+
+    def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None, can_faults=None,
+               cut=frozenset()):
+        units = {}
+        for path, c in self.bench.components.items():
+            try:
+                fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
+            except ArtibusError as e:    # a corrupt or missing FMU: named as the bench names it
+                raise ArtibusError(f"{where}:{c.line}: Component '{path}' source=\"{c.source}\": "
+                                   + str(e).replace(f"{Path(self._tmp) / c.source}: ", "")) from None
+            de = fmu.md.defaultExperiment
+            h = c.step or (step if step is not None else
+                           float(de.stepSize) if de is not None and de.stepSize else None)
+            units[path] = Unit(path=path, fmu=fmu, step=h)
+            self.units = list(units.values())     # (closed by close() if a later one fails)
+        # a component without a step (its FMU's default experiment has no stepSize, FMI 2.0
+        # allows it; no annotation, no --step): the others' shortest, else the bench's
+        # span / DEFAULT_STEPS
+        from artibus.fmu import DEFAULT_STEPS
+        known = [u.step for u in units.values() if u.step is not None]
+        for u in units.values():
+            if u.step is None:
+                if known:
+                    u.step = min(known)
+                elif self.bench.stop_time is not None and self.bench.stop_time > self.bench.start_time:
+                    u.step = (self.bench.stop_time - self.bench.start_time) / DEFAULT_STEPS
+                else:
+                    c = self.bench.components[u.path]
+                    raise ArtibusError(f"{where}:{c.line}: Component '{u.path}': no communication step "
+                                       f"(give --step or a stepSize annotation)")
+        self.units = list(units.values())
+        self.base_step = step if step is not None else min(u.step for u in self.units)
+        for u in self.units:
+            r = u.step / self.base_step
+            if abs(r - round(r)) > 1e-9 or round(r) < 1:
+                raise ArtibusError(f"{where}: Component '{u.path}': step {u.step} s is not a "
+                                   f"multiple of the base step {self.base_step} s")
+            u.ratio = int(round(r))
+
+        # parameters: bindings, then the user's overrides ("comp.var" -> value)
+        self.parameters = {p: dict(c.parameters) for p, c in self.bench.components.items()}
+        origins = {p: dict(c.origins) for p, c in self.bench.components.items()}
+        from artibus.bench.names import expand_all      # Bus.mu[*], Bus.mu[1:6]: each element
+
+        def variables_of(full):
+            comp = full.split("[", 1)[0].rpartition(".")[0]
+            return (comp + ".", list(units[comp].fmu.vars)) if comp in units else None
+        overrides = expand_all(overrides, variables_of)
+        for full, value in overrides.items():
+            comp, _, var = full.rpartition(".")
+            if comp not in self.parameters:
+                raise ArtibusError(f"--set {full}={value}: no component '{comp}' in {where}"
+                                   f"{suggest(comp, self.parameters)} (components: {', '.join(self.parameters)})")
+            self.parameters[comp][var] = value
+            origins.setdefault(comp, {})[var] = "--set/--ssv/--variant"
+        for path, values in self.parameters.items():
+            resolve_resources(self._tmp, where, values, origins.get(path))
+        for path, values in self.parameters.items():
+            check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
+
+        # connections (those into a cut input left out)
+        connected = {f"{c.end[0]}.{c.end[1]}" for c in self.bench.connections}
+        for name in sorted(cut):
+            comp, _, var = name.rpartition(".")
+            v = units[comp].fmu.vars.get(var) if comp in units else None
+            if v is None or v.causality != "input":
+                raise ArtibusError(f"cut {name}: not an input of a component of {where}")
+            if name not in connected:
+                raise ArtibusError(f"cut {name}: the input is not connected in {where}")
+        self.cut = sorted(cut)
+        routed_before = any(c.can is not None for c in self.bench.connections)
+        self.links = []
+        for c in self.bench.connections:
+            if f"{c.end[0]}.{c.end[1]}" in cut:
+                continue
+            label = f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}"
+            a, b = units[c.start[0]], units[c.end[0]]
+            va, vb = a.fmu.vars.get(c.start[1]), b.fmu.vars.get(c.end[1])
+            if va is None or vb is None:
+                from artibus.bench.parameters import no_variable
+                u, var = (a, c.start[1]) if va is None else (b, c.end[1])
+                raise ArtibusError(f"{label}: no variable '{u.path}.{var}' ({no_variable(u.fmu.md, var)})")
+            if va.type != vb.type:
+                raise ArtibusError(f"{label}: types {va.type} -> {vb.type} ({c.start[0]}.{c.start[1]} is "
+                                   f"{va.type}, {c.end[0]}.{c.end[1]} is {vb.type}): a connection joins "
+                                   f"variables of one type")
+            if va.causality not in ("output", "parameter", "calculatedParameter") or vb.causality != "input":
+                raise ArtibusError(f"{label}: connects a {va.causality} to a {vb.causality} "
+                                   f"(expected output -> input)")
+            if va.type != "Real" or vb.type != "Real":
+                self._typed_link(c, label, a, va, b, vb)
+                continue
+            if c.mapping is not None:
+                raise ArtibusError(f"{label}: a {c.mapping[0]}MappingTransformation on Real variables "
+                                   f"(a LinearTransformation applies to them)")
+            if c.factor != 1.0 or c.offset != 0.0:
+                f, o = c.factor, c.offset
+            else:
+                f, o = unit_conversion(a.fmu.md, va, b.fmu.md, vb, label)
+            if c.start[1] not in a.out_names:
+                a.out_names.append(c.start[1])
+                a.out_vrs.append(va.valueReference)
+            if c.end[1] in b.in_names:
+                raise ArtibusError(f"{label}: input {c.end[0]}.{c.end[1]} is connected twice")
+            b.in_names.append(c.end[1])
+            b.in_vrs.append(vb.valueReference)
+            self.links.append(Link(a, a.out_names.index(c.start[1]), b, len(b.in_names) - 1,
+                                   f, o, f"{c.end[0]}.{c.end[1]}", c))
+            if c.can is None:                 # a connection routed over CAN goes through self.can
+                b.links_in.append(self.links[-1])
+        self._setup_can(where, can_interface, can_log, can_faults, routed_before)
+        # direct feedthrough from the model descriptions
+        for u in self.units:
+            inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
+            for o in u.fmu.md.outputs:
+                deps = o.dependencies if o.dependencies is not None else inputs
+                for d in deps:
+                    if d.causality == "input":
+                        u.feeds.add((d.name, o.variable.name))
+        self.order = _order(self.units, [(l.src, l.src.out_names[l.src_index], l.dst, l.dst.in_names[l.dst_index])
+                                         for l in self.links if l.connection.can is None]
+                            + [(src, src.tout[j][0], u, u.tin[i][0])
+                               for u in self.units for i, src, j, _ in u.typed_sources], where)
+
+        # recording: every connection's source, plus what was asked for
+        self.record = []
+        for name in record or []:
+            comp, _, var = name.rpartition(".")
+            if comp not in units:
+                raise ArtibusError(f"--record {name}: no component '{comp}' in {where}"
+                                   f"{suggest(comp, units)} (components: {', '.join(units)})")
+            if var not in units[comp].fmu.vars:
+                from artibus.bench.parameters import no_variable
+                raise ArtibusError(f"--record {name}: {comp}: {no_variable(units[comp].fmu.md, var)}")
+            self.record.append((units[comp], var))
+        if not record:   # every output connector the bench declares, and every connected output
+            for u in self.units:
+                for n in dict.fromkeys(self.bench.components[u.path].outputs + u.out_names
+                                       + [n for n, _, _ in u.tout]):
+                    if n not in u.fmu.vars:
+                        raise ArtibusError(f"{where}: Component '{u.path}': connector '{n}' is "
+                                           f"not a variable of {u.fmu.md.modelName}")
+                    self.record.append((u, n))
+        for u, n in self.record:
+            v = u.fmu.var(n)
+            if v.type != "Real":
+                if n not in [m for m, _, _ in u.tout]:
+                    u.tout.append((n, v.type, v.valueReference))
+            elif n not in u.out_names:
+                u.out_names.append(n)
+                u.out_vrs.append(v.valueReference)
+        for name, f in stimuli.items():       # added to the input: f(t) + its connection or base value
+            comp, _, var = name.rpartition(".")
+            v = units[comp].fmu.vars.get(var) if comp in units else None
+            if v is None or v.causality != "input" or v.type != "Real":
+                raise ArtibusError(f"stimulus {name}: not a Real input of a component of {where}")
+            u = units[comp]
+            if self.can is not None and any(l.dst is u and l.name == name for l in self.can_links):
+                raise ArtibusError(f"stimulus {name}: the input is routed over CAN in {where}")
+            if var in u.in_names:
+                u.stimuli.append((u.in_names.index(var), f, None))
+            else:
+                u.in_names.append(var)
+                u.in_vrs.append(v.valueReference)
+                base = float(self.parameters[comp].get(var, v.start))
+                u.stimuli.append((len(u.in_names) - 1, f, base))
+        for u in self.units:
+            u.raw = (_TypedCalls if u.tout or u.tin else _RawCalls)(u)
+            u.out_values = u.raw.out      # read and written in place
+            u.in_values = u.raw.inp
+        for u in self.units:
+            u.sources = [(l.dst_index, l.src.raw.out, l.src_index, l.factor, l.offset) for l in u.links_in]
+        if self.can is not None:
+            self.can.bind()
+        self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
+        self._col_units = {"time": "s", **{f"{u.path}.{n}": declared_unit(u.fmu.vars[n]) or ""
+                                           for u, n in self.record}}
+        # recording: per component, which of its outputs go to which columns
+        self._rec = []
+        for u in self.units:
+            cols = [k + 1 for k, (v, _) in enumerate(self.record) if v is u]
+            idx = [u.column(n) for v, n in self.record if v is u]
+            if cols:
+                self._rec.append((u, np.array(idx), np.array(cols)))
+        # String columns: the recorded numbers turned into their texts (_with_texts)
+        self._text_cols = {f"{u.path}.{n}": u for u, n in self.record if u.fmu.vars[n].type == "String"}
+
+    def _typed_link(self, c, label, a, va, b, vb):
+        """A connection of Integer, Boolean, String or Enumeration variables (see
+        _typed_convert): read and set in Python (_TypedCalls), exact values."""
+        convert = _typed_convert(label, a, va, b, vb, c.mapping)
+        if c.factor != 1.0 or c.offset != 0.0:
+            raise ArtibusError(f"{label}: a LinearTransformation on {va.type} variables "
+                               f"(SSP 1.0: it applies to Real ones)")
+        if c.can is not None:
+            raise ArtibusError(f"{label}: routed over CAN: the runner routes Real variables only")
+        if c.end[1] in [n for n, _, _ in b.tin] or c.end[1] in b.in_names:
+            raise ArtibusError(f"{label}: input {c.end[0]}.{c.end[1]} is connected twice")
+        names = [n for n, _, _ in a.tout]
+        if c.start[1] not in names:
+            a.tout.append((c.start[1], va.type, va.valueReference))
+            names.append(c.start[1])
+        b.tin.append((c.end[1], vb.type, vb.valueReference))
+        b.typed_sources.append((len(b.tin) - 1, a, names.index(c.start[1]), convert))
+
+    def _setup_can(self, where, interface, log, faults=None, routed=True):
+        """The CAN network of a bench that routes connections over CAN (see artibus.can);
+        none when every route was cut (routed: the bench routes some)."""
+        self.can_links = [l for l in self.links if l.connection.can is not None]
+        spec = self.bench.can
+        if spec is not None and routed and not self.can_links:
+            if interface is not None or log is not None or faults:
+                raise ArtibusError(f"--can/--can-log/--can-fault: every connection {where} routes over CAN "
+                                   f"is cut: the run has no network")
+            return
+        if spec is None:
+            if self.can_links:
+                c = self.can_links[0].connection
+                raise ArtibusError(f"{where}:{c.can['line']}: Connection {c.start[0]}.{c.start[1]} -> "
+                                   f"{c.end[0]}.{c.end[1]} is routed over CAN but the System has no "
+                                   f"org.artibus.can annotation naming the DBC")
+            if interface is not None or log is not None or faults:
+                raise ArtibusError(f"--can/--can-log/--can-fault: {where} routes no connection over CAN")
+            return
+        from artibus import can as can_mod
+        self.can = can_mod.Network(self.bench, can_mod.dbc_in(self._tmp, spec), self.can_links,
+                                   interface or "virtual", log, faults)
+        r = self.can.period / self.base_step
+        if abs(r - round(r)) > 1e-9 or round(r) < 1:
+            raise ArtibusError(f"{where}:{spec['line']}: the CAN tick {self.can.period} s is not a "
+                               f"multiple of the base step {self.base_step} s")
+        self.can_ratio = int(round(r))
+
+    # --- the algorithm ---------------------------------------------------------------

@@ -1,0 +1,347 @@
+"""The co-simulation master: runs an SSP bench of FMI 2.0 co-simulation FMUs.
+
+- parameters from the bench's bindings (.ssv inside the .ssp), then from
+  ``--ssv`` files and ``--set comp.var=value`` given by the user;
+- every value checked against the FMU's declared type (artibus.bench.parameters.coerce);
+- connections between component variables, through nested systems, with SSP
+  linear transformations; without one, values are converted between the
+  connected variables' units (FMI unit definitions, base units and factor/offset);
+  Integer, Boolean, String and Enumeration connections join variables of one
+  type, exactly, with SSP's mapping transformations (_TypedCalls, _typed_convert);
+- initialisation: every FMU in initialization mode, connected inputs set from
+  the outputs they are connected to, repeated to a fixed point (bounded);
+- stepping: Gauss-Seidel in an order derived from the connection graph (an
+  algebraic loop of direct feedthrough is an error naming it), or Jacobi;
+  multi-rate: each component has its own communication step, a multiple of the
+  base step; slower components hold their inputs;
+- one batched getReal/setReal per component per step;
+- recording of every connection (or a chosen list) at every base step, of any
+  type (a Boolean as 0/1, a String's text in Result.strings);
+- on a failure midway, the results so far are kept with the failing time and
+  the FMU's log.
+"""
+import math
+import shutil
+import sys
+import tempfile
+import time as _time
+import zipfile
+
+import numpy as np
+from fmpy.fmi1 import FMICallException
+
+from artibus.base import ArtibusError
+from artibus.bench import ssp as ssp_mod
+from artibus.fmu import Result, SimulationError
+from artibus.runner.core import _core_stepper
+from artibus.runner.plan import _Plan
+from artibus.runner.results import _check_room
+from artibus.runner.setup import _Setup
+from artibus.runner.unit import _last_message
+
+MAX_INIT_ITERATIONS = 50
+
+
+def _settled(before, now, tol=1e-12):
+    """np.allclose(before, now, rtol=tol, atol=tol), without NumPy's cost on a few
+    values: |b - x| <= tol + tol * |x| for each pair, NaN never settled, an infinity
+    settled only on itself."""
+    return len(before) == len(now) and all(
+        b == x or (math.isfinite(x) and abs(b - x) <= tol + tol * abs(x)) for b, x in zip(before, now))
+
+
+class Simulation(_Setup):
+    """A bench, set up and ready to run (the set-up: artibus.runner.setup)."""
+
+    def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
+                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None):
+        """stimuli: {"comp.input": f(t)} added to the input (to its connection's
+        value, or to its start value when it is not connected), sampled at
+        the start of each of the component's steps. cut: inputs ("comp.input")
+        whose connection the run leaves out, a direct one or a route over
+        CAN (for a replay: a stimulus then feeds them alone, on their start
+        value or an override); when every route over CAN is cut, the run has
+        no network. can: the interface of a
+        bench that routes connections over CAN ("virtual", the default, or
+        "INTERFACE:CHANNEL"), can_log: a .blf or .asc file for its traffic,
+        can_faults: faults injected into it (artibus.can.Fault or their text
+        forms, see artibus.can.parse_fault). A CAN bench's result has a column
+        ``can.<message>.sinceGood`` per message: the cycles since the
+        receivers last accepted a frame of it, as of the inputs in the same
+        row."""
+        self.can = None
+        if algorithm not in ("gauss-seidel", "jacobi"):
+            raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
+        self.algorithm = algorithm
+        self.ssp = ssp_mod.ssp_path(ssp)
+        self.bench = ssp_mod.read(self.ssp)
+        where = self.bench.file
+        if step is not None and not step > 0:
+            raise ArtibusError(f"--step {step}: the communication step must be > 0")
+        self._tmp = tempfile.mkdtemp(prefix="artibus-")
+        try:
+            with zipfile.ZipFile(self.ssp) as z:
+                z.extractall(self._tmp)
+            self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
+                        set(cut or ()))
+        except BaseException:
+            self.close()
+            raise
+
+    def _with_texts(self, result):
+        """A String column's numbers (see _TypedCalls) as Result.strings; the
+        columns' units (Result.units: the recorded variables' units from their
+        model descriptions, "s" for time, "" for none and the CAN columns)."""
+        if result is None:
+            return result
+        result.units = {n: self._col_units.get(n, "") for n in result.names}
+        if not self._text_cols:
+            return result
+        table = result.array()
+        for name, u in self._text_cols.items():
+            j = result.names.index(name)
+            result.strings[name] = [u.raw.text(int(x)) if np.isfinite(x) else "" for x in table[:, j]]
+            table[:, j] = np.nan
+        return result
+
+    def _step(self, u, t0):
+        w = _time.perf_counter()
+        raw = u.raw
+        raw.step(t0, u.step)
+        raw.read()
+        u.wall += _time.perf_counter() - w
+
+    def _propagate(self, to=None, t=0.0):
+        if to is None:
+            for u in self.units:
+                self._propagate(u, t)
+            return
+        inp = to.in_values
+        for i, out, j, factor, offset in to.sources:
+            inp[i] = factor * out[j] + offset
+        for i, src, j, convert in to.typed_sources:
+            x = src.raw.tout_values[j]
+            to.raw.tin_values[i] = x if convert is None else convert(x)
+        for i, f, base in to.stimuli:
+            inp[i] = (inp[i] if base is None else base) + f(t)
+
+    def _initialize(self, start):
+        for u in self.units:
+            self._busy = u            # the unit being called: a failure names it
+            s = u.fmu.slave
+            s.setupExperiment(startTime=start)
+            s.enterInitializationMode()
+            u.fmu.set_values(self.parameters[u.path])
+            u.raw.written = None      # every connected input is set at least once
+        settle, self._settle_core = getattr(self, "_settle_core", None), None   # (no cycle: it refers to self)
+        if settle is not None:           # the C core does the rounds, the same, bit for bit (_CoreStepper.settle),
+            exited = settle.settle(MAX_INIT_ITERATIONS)      # and the exits below unless FMPy logs the calls
+        else:
+            self._settle(start)
+            exited = False
+        for u in () if exited else self.units:
+            self._busy = u
+            u.fmu.slave.exitInitializationMode()
+            u.raw.read()
+        self._busy = None
+
+    def _settle(self, start):
+        """The initialisation's rounds to the fixed point of the connected inputs:
+        the inputs of the units that have some (the others are settled as they are);
+        _propagate leaves a unit without sources or stimuli as it is."""
+        watched = [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
+        fed = [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
+               for u in self.order]
+        gauss_seidel = self.algorithm == "gauss-seidel"
+        for _ in range(MAX_INIT_ITERATIONS):
+            before = [(list(u.in_values), list(getattr(u.raw, "tin_values", ()))) for u in watched]
+            for u, f, _ in fed:
+                self._busy = u
+                u.raw.read()
+                if not gauss_seidel:
+                    self._propagate(None, start)
+                elif f:
+                    self._propagate(u, start)
+            if self.can is not None:     # the core's codec when the core ticks the network (_CanCore.settle)
+                (getattr(self, "_core_can", None) or self.can).settle()
+            for u, f, w in fed:
+                self._busy = u
+                if f:
+                    self._propagate(u, start)
+                if w:                    # (without inputs, write sets nothing)
+                    u.raw.write()
+            for u in self.units:
+                self._busy = u
+                u.raw.read()
+            if all(_settled(b, u.in_values)
+                   and tb == list(getattr(u.raw, "tin_values", ()))
+                   for (b, tb), u in zip(before, watched)):
+                return
+        raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
+                           f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
+
+    class _Recorder:
+        """At every base step a copy of each recorded component's output buffer
+        (one memcpy), sorted into the result's columns when it is asked for."""
+
+        def __init__(self, names, rec):
+            self.names, self.rec, self.times = names, rec, []
+            self.buffers = [(u.raw.out, []) for u, _, _ in rec]
+
+        def take(self, t):
+            self.times.append(t)
+            for out, copies in self.buffers:
+                copies.append(bytes(out))
+
+        def result(self):
+            # rows taken whole (an interrupt may have stopped take() midway)
+            n = min([len(self.times)] + [len(copies) for _, copies in self.buffers])
+            table = np.empty((n, len(self.names)))
+            table[:, 0] = self.times[:n]
+            for (u, idx, cols), (_, copies) in zip(self.rec, self.buffers):
+                values = np.frombuffer(b"".join(copies[:n]), dtype=np.float64).reshape(n, u.raw.n_out)
+                table[:, cols] = values[:, idx]
+            return Result.from_array(self.names, table)
+
+    def run(self, stop_time=None, start_time=None, progress=False, core=None):
+        """Run from the start to the stop time (the bench's DefaultExperiment's
+        unless given): the Result, with String columns in Result.strings; the
+        results up to a failure or an interrupt go with the exception (its
+        ``result``). See _run."""
+        from artibus.fmu import check_times, claim_logger_proxy
+        claim_logger_proxy()
+        start = self.bench.start_time if start_time is None else start_time
+        stop = stop_time if stop_time is not None else self.bench.stop_time
+        if stop is not None:
+            check_times(start, stop, None, self.bench.file)
+        try:
+            return self._with_texts(self._run(stop_time, start_time, progress, core))
+        except (SimulationError, KeyboardInterrupt) as e:
+            if getattr(e, "result", None) is not None:
+                e.result = self._with_texts(e.result)
+            raise
+
+    def _run(self, stop_time=None, start_time=None, progress=False, core=None):
+        """core: the stepping core in C where it applies (None, the default, unless
+        ARTIBUS_CORE=0), True (it must), False (the Python loop below); see
+        _core_stepper. self.stepping says which ran."""
+        start = self.bench.start_time if start_time is None else start_time
+        stop = stop_time if stop_time is not None else self.bench.stop_time
+        if stop is None:
+            raise ArtibusError(f"{self.bench.file}: no DefaultExperiment stopTime; give --stop-time")
+        if not stop > start:
+            raise ArtibusError(f"stop time {stop} must be after the start time {start}")
+        rec = self._Recorder(self.names, self._rec)
+        h = self.base_step
+        n = int(round((stop - start) / h))
+        _check_room(n + 1, len(self.names), self.bench.file)
+        t = start
+        current = None
+        plan = _Plan(self.order, n)
+        stepper = _core_stepper(self, plan, None, core)
+        if stepper is not None:
+            stepper.allocate(n)      # (the recorder's, as rec above)
+        self._core_can = stepper.can if stepper is not None else None
+        self._settle_core = stepper
+        wall0 = _time.perf_counter()
+        try:
+            self._initialize(start)
+            if self.can is not None:
+                self.can.start(start)
+            if stepper is not None:      # the C core does the loop below, the same, bit for bit
+                result = stepper.run(start, h, n, progress)
+                self.wall = _time.perf_counter() - wall0
+                if self.can is not None:
+                    self.can.finish()
+                    return self._with_can_columns(result, stepper.table)
+                return result
+            rec.take(t)
+            for k in range(n):
+                t = start + k * h
+                if self.can is not None and k % self.can_ratio == 0:
+                    self.can.tick(k // self.can_ratio, t)
+                starting, ending, gs = plan[k]
+                if self.algorithm == "jacobi":
+                    for u in starting:
+                        self._propagate(u, t)
+                    for u in starting:
+                        current = u
+                        u.raw.write()
+                    for u in ending:
+                        current = u
+                        self._step(u, t + h - u.step)
+                else:
+                    for u, starts, ends in gs:
+                        if starts:
+                            self._propagate(u, t)
+                            current = u
+                            u.raw.write()
+                        if ends:
+                            current = u
+                            self._step(u, t + h - u.step)
+                current = None
+                t = start + (k + 1) * h
+                rec.take(t)
+                if progress and k % max(1, n // 50) == 0:
+                    sys.stderr.write(f"\r{self.bench.name}: t = {t:8.2f} s  [{'#' * (50 * (k + 1) // n):50s}]")
+            if progress:
+                sys.stderr.write("\n")
+        except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the results so far go with it
+            if progress:
+                sys.stderr.write("\n")
+            if stepper is None:          # (the core attached its own)
+                e.result = rec.result()
+            raise
+        except FMICallException:
+            current = current or getattr(self, "_busy", None)    # (in the initialisation)
+            who = current.path if current else "?"
+            log = current.fmu.log if current else [m for u in self.units for m in u.fmu.log]
+            raise SimulationError(f"{self.ssp}: component '{who}' failed at t = {t:g} s: "
+                                  f"{_last_message(log)}", rec.result(), list(log)) from None
+        self.wall = _time.perf_counter() - wall0
+        if self.can is not None:
+            self.can.finish()
+            return self._with_can_columns(rec.result())
+        return rec.result()
+
+    def _with_can_columns(self, result, wide=None):
+        """can.<message>.sinceGood: row i > 0 holds the value after the last tick
+        before it (the one whose frames the inputs recorded in row i got).
+        wide: the stepping core's table, the result's columns and then one
+        per message, filled here in place (no copy of the table)."""
+        table = result.array()
+        n = len(table)
+        tick = np.maximum(np.arange(n) - 1, 0) // self.can_ratio
+        cols, names = [], []
+        for name, series in self.can.since_series().items():
+            col = series[np.minimum(tick, len(series) - 1)] if len(series) else np.zeros(n)
+            col[0] = 0.0
+            cols.append(col)
+            names.append(f"can.{name}.sinceGood")
+        m = table.shape[1]
+        if wide is not None and wide.shape == (n, m + len(cols)):
+            for j, col in enumerate(cols):
+                wide[:, m + j] = col
+            return Result.from_array(result.names + names, wide)
+        return Result.from_array(result.names + names, np.column_stack([table] + cols))
+
+    def close(self):
+        if getattr(self, "can", None) is not None:
+            self.can.close()
+        for u in getattr(self, "units", []):
+            u.fmu.close()
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def run(ssp, stop_time=None, step=None, overrides=None, record=None,
+        algorithm="gauss-seidel", progress=False, stimuli=None):
+    """Run a bench (name or .ssp path); returns the Result."""
+    with Simulation(ssp, step=step, overrides=overrides, record=record, algorithm=algorithm,
+                    stimuli=stimuli) as sim:
+        return sim.run(stop_time=stop_time, progress=progress)

@@ -1,0 +1,212 @@
+"""A component while it runs (``Unit``), the connections into it (``Link``),
+and its calls into the FMU: fmi2GetReal/SetReal/DoStep through ctypes on
+buffers allocated once (``_RawCalls``), Integer, Boolean, String and
+Enumeration variables through FMPy's calls (``_TypedCalls``, the conversion of
+such a connection: ``_typed_convert``)."""
+from ctypes import CDLL, c_double, c_int, c_size_t, c_uint, c_void_p
+from dataclasses import dataclass, field
+
+from fmpy.fmi1 import FMICallException
+
+from artibus.base import ArtibusError
+from artibus.fmu import Fmu
+
+
+@dataclass
+class Link:
+    """One connection, resolved to value references."""
+    src: "Unit"
+    src_index: int          # index into src.out_vrs
+    dst: "Unit"
+    dst_index: int          # index into dst.in_vrs
+    factor: float
+    offset: float
+    name: str
+    connection: object = None   # the bench's Connection (ssp.Connection)
+
+
+@dataclass(eq=False)        # a unit is itself: compared by identity
+class Unit:
+    """A component while it runs."""
+    path: str
+    fmu: Fmu
+    step: float
+    ratio: int = 1                               # step / base step
+    in_vrs: list = field(default_factory=list)   # Real inputs that are connected
+    in_names: list = field(default_factory=list)
+    out_vrs: list = field(default_factory=list)  # Real outputs that are read
+    out_names: list = field(default_factory=list)
+    out_values: list = field(default_factory=list)
+    in_values: list = field(default_factory=list)
+    feeds: set = field(default_factory=set)      # (input name, output name) direct feedthrough
+    links_in: list = field(default_factory=list)  # the Links into its inputs
+    sources: list = field(default_factory=list)   # the same Links as (input index, source
+                                                  # output buffer, output index, factor, offset)
+    stimuli: list = field(default_factory=list)   # (input index, f(t), base value or None)
+    wall: float = 0.0
+    raw: object = None                           # _RawCalls, once the variables are known
+    # Integer, Boolean, String and Enumeration variables (_TypedCalls):
+    tout: list = field(default_factory=list)     # outputs read: (name, type, value reference)
+    tin: list = field(default_factory=list)      # connected inputs: (name, type, value reference)
+    typed_sources: list = field(default_factory=list)  # (input index, source unit, output index, convert)
+
+    def column(self, name):
+        """The place of an output in raw.out (Real ones first, then the typed ones)."""
+        if name in self.out_names:
+            return self.out_names.index(name)
+        return len(self.out_names) + [n for n, _, _ in self.tout].index(name)
+
+
+class _RawCalls:
+    """fmi2GetReal/SetReal/DoStep called through ctypes directly, with the value
+    references and value buffers allocated once: one call per component and
+    step, without FMPy's per-call wrapper (it logs and converts lists). The
+    functions come from a handle of our own on the FMU's library (FMPy's are
+    left as they are) and get ctypes objects made once, not Python values to
+    convert at every call."""
+
+    def __init__(self, unit):
+        dll = CDLL(unit.fmu.slave.dll._name)      # the library FMPy loaded: the same instance
+        self._get, self._set, self._do = dll.fmi2GetReal, dll.fmi2SetReal, dll.fmi2DoStep
+        for f in (self._get, self._set, self._do):
+            f.restype = c_int
+        self.comp = c_void_p(unit.fmu.slave.component)
+        self.n_out, self.n_in = len(unit.out_vrs), len(unit.in_vrs)
+        self._n_out, self._n_in = c_size_t(self.n_out), c_size_t(self.n_in)
+        self.out_vrs = (c_uint * self.n_out)(*unit.out_vrs)
+        self.out = (c_double * self.n_out)()
+        self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
+        self.inp = (c_double * self.n_in)()
+        self.written = None       # the input values last set (bytes): unchanged ones are not set again
+        self._true = c_int(1)     # noSetFMUStatePriorToCurrentPoint
+
+    def read(self):
+        if self.n_out:
+            status = self._get(self.comp, self.out_vrs, self._n_out, self.out)
+            if status > 1:  # fmi2Discard or worse
+                raise FMICallException(function="fmi2GetReal", status=status)
+
+    def write(self):
+        if self.n_in:
+            values = bytes(self.inp)
+            if values == self.written:    # the FMU holds them already (FMI 2.0: inputs keep their values)
+                return
+            status = self._set(self.comp, self.in_vrs, self._n_in, self.inp)
+            if status > 1:
+                raise FMICallException(function="fmi2SetReal", status=status)
+            self.written = values
+
+    def step(self, t, h):
+        status = self._do(self.comp, c_double(t), c_double(h), self._true)
+        if status > 1:  # fmi2Discard or worse
+            raise FMICallException(function="fmi2DoStep", status=status)
+
+
+class _TypedCalls(_RawCalls):
+    """_RawCalls of a unit with Integer, Boolean, String or Enumeration
+    variables connected or recorded: those go through FMPy's calls (one per
+    type), after the Real ones. Their values as read are in ``tout_values``
+    (Python values) and, for the recording, as numbers after the Real outputs
+    in ``out``: a Boolean as 0/1, an Integer or Enumeration as its value, a
+    String as the number of its text in ``texts`` (the order in which each
+    text was first seen). The inputs to set are in ``tin_values``; unchanged
+    ones are not set again. The C stepping core does not run such a bench
+    (Simulation.stepping says so)."""
+
+    def __init__(self, unit):
+        super().__init__(unit)
+        self.slave = unit.fmu.slave
+        n_real = self.n_out
+        self.n_real, self.n_out = n_real, n_real + len(unit.tout)
+        self.out = (c_double * self.n_out)()
+        self.tout_values = [None] * len(unit.tout)
+        self.tin_values = [None] * len(unit.tin)
+        self.tin_written = None
+        self.texts = {}
+        self._get_groups = self._groups(unit.tout)
+        self._set_groups = self._groups(unit.tin)
+        self._string_out = [i for i, (_, t, _) in enumerate(unit.tout) if t == "String"]
+
+    @staticmethod
+    def _groups(variables):
+        """[(FMI type of the call, [indices], [value references])] per type."""
+        groups = {}
+        for i, (_, t, vr) in enumerate(variables):
+            g = groups.setdefault("Integer" if t == "Enumeration" else t, ([], []))
+            g[0].append(i)
+            g[1].append(vr)
+        return [(t, idx, vrs) for t, (idx, vrs) in groups.items()]
+
+    def read(self):
+        if self.n_real:
+            status = self._get(self.comp, self.out_vrs, self._n_out, self.out)
+            if status > 1:  # fmi2Discard or worse
+                raise FMICallException(function="fmi2GetReal", status=status)
+        for t, idx, vrs in self._get_groups:
+            values = getattr(self.slave, f"get{t}")(vrs)
+            for i, x in zip(idx, values):
+                if t == "String":
+                    x = x.decode("utf-8", errors="replace") if x is not None else ""
+                    self.out[self.n_real + i] = self.texts.setdefault(x, len(self.texts))
+                else:
+                    x = bool(x) if t == "Boolean" else int(x)
+                    self.out[self.n_real + i] = x
+                self.tout_values[i] = x
+
+    def write(self):
+        super().write()
+        if self.tin_values and self.tin_values != self.tin_written:
+            for t, idx, vrs in self._set_groups:
+                getattr(self.slave, f"set{t}")(vrs, [self.tin_values[i] for i in idx])
+            self.tin_written = list(self.tin_values)
+
+    def text(self, number):
+        """The String whose number (see above) a recorded column holds."""
+        if not hasattr(self, "_by_number") or len(self._by_number) != len(self.texts):
+            self._by_number = {k: x for x, k in self.texts.items()}
+        return self._by_number.get(number, "")
+
+
+def _typed_convert(label, a, va, b, vb, mapping):
+    """The conversion of a connection's value from the Integer, Boolean,
+    String or Enumeration output va to the input vb: the types must be the
+    same (an error naming both ends otherwise); an Enumeration to one of other
+    items needs a mapping (SSP 1.0's EnumerationMappingTransformation by item
+    names, or IntegerMappingTransformation by values); a mapping (SSP 1.0's
+    Boolean-, Integer- or EnumerationMappingTransformation) maps the values
+    it lists, the others pass unchanged."""
+    ends = (f"{a.path}.{va.name} is {va.type}{' ' + va.declaredType.name if va.declaredType else ''}, "
+            f"{b.path}.{vb.name} is {vb.type}{' ' + vb.declaredType.name if vb.declaredType else ''}")
+    if va.type != vb.type:
+        raise ArtibusError(f"{label}: the types differ ({ends}): a connection joins variables of one type")
+    kind, table = mapping if mapping else (None, None)
+    expect = {"Boolean": ("Boolean",), "Integer": ("Integer",), "Enumeration": ("Integer", "Enumeration")}
+    if kind is not None and kind not in expect.get(va.type, ()):
+        raise ArtibusError(f"{label}: a {kind}MappingTransformation does not apply to {ends}")
+    if va.type == "Enumeration":
+        items_a = {i.name: int(i.value) for i in va.declaredType.items}
+        items_b = {i.name: int(i.value) for i in vb.declaredType.items}
+        if kind == "Enumeration":
+            for src, dst in table.items():
+                if src not in items_a or dst not in items_b:
+                    raise ArtibusError(f"{label}: EnumerationMappingTransformation {src} -> {dst}: "
+                                       f"items of {va.declaredType.name}: {', '.join(items_a)}; "
+                                       f"of {vb.declaredType.name}: {', '.join(items_b)}")
+            names_a = {k: n for n, k in items_a.items()}
+            table = {k: items_b[table.get(name, name)] for k, name in names_a.items()
+                     if table.get(name, name) in items_b}
+            kind = "Integer"
+        elif kind is None and items_a != items_b:
+            raise ArtibusError(f"{label}: the enumerations differ ({ends}: items "
+                               f"{', '.join(f'{n}={k}' for n, k in items_a.items())} against "
+                               f"{', '.join(f'{n}={k}' for n, k in items_b.items())}); "
+                               f"an EnumerationMappingTransformation maps them")
+    if kind is None:
+        return None
+    return lambda x: table.get(x, x)
+
+
+def _last_message(log):
+    """The FMU's last error message, else its last message."""
+    errors = [m for m in log if m.startswith(("[Error]", "[Fatal]"))]
+    return errors[-1] if errors else log[-1] if log else "no message"

@@ -1,0 +1,150 @@
+"""A sweep's study plot and its worst cases, each with the command that runs it
+alone (``study``: study.png, worst.txt)."""
+import json
+import math
+import shlex
+from pathlib import Path
+
+import numpy as np
+
+from artibus.base import ArtibusError
+from artibus.study.sweep.designs import _variant_list
+from artibus.study.sweep.store import MANIFEST, PLOT, STATUS_OK, TABLE, WORST, _write_text
+
+
+def kpi_columns(table):
+    return [n for n in table.column_names if n.endswith("]") and " [" in n]
+
+
+def _pick_kpi(table, kpi):
+    cols = kpi_columns(table)
+    if not cols:
+        return None
+    if kpi is None:
+        return cols[0]
+    hits = [c for c in cols if c == kpi] or [c for c in cols if kpi.lower() in c.lower()]
+    if not hits:
+        raise ArtibusError(f"--kpi {kpi}: no such KPI (known: {'; '.join(cols)})")
+    return hits[0]
+
+
+def rerun_command(manifest, row):
+    """The command that runs one case alone, with its report."""
+    parts = ["artibus", "run", manifest.get("run", manifest["bench"])]
+    for v in _variant_list(row.get("variant")):
+        parts += ["--variant", v]
+    def text(v):
+        return str(v).lower() if isinstance(v, bool) else repr(v) if isinstance(v, float) else str(v)
+    for name, val in (manifest.get("fixed") or {}).items():
+        if name not in row:
+            parts += ["--set", f"{name}={text(val)}"]
+    for name in manifest["parameters"]:
+        if name != "variant" and row.get(name) is not None:
+            parts += ["--set", f"{name}={text(row[name])}"]
+    if manifest.get("stop_time") is not None:
+        parts += ["--stop-time", f"{manifest['stop_time']:g}"]
+    if manifest.get("step") is not None:
+        parts += ["--step", f"{manifest['step']:g}"]
+    parts += ["--report", f"case-{row['key']}"]
+    return " ".join(shlex.quote(p) for p in parts)
+
+
+def study(out, kpi=None, worst=10, largest=True):
+    """study.png (a KPI over two swept parameters, a panel per value of a
+    third; or its distribution for Latin hypercube / Monte Carlo) and
+    worst.txt (the cases with the largest KPI, and every failed case, each
+    with the command that re-runs it alone). Returns the files written."""
+    import pyarrow.parquet as pq
+    out = Path(out)
+    manifest = json.loads((out / MANIFEST).read_text())
+    table = pq.read_table(out / TABLE)
+    rows = table.to_pylist()
+    col = _pick_kpi(table, kpi)
+    written = []
+    lines = [f"Sweep of {manifest['bench']}: {len(rows)} cases, "
+             f"{sum(r['status'] != STATUS_OK for r in rows)} failed ({out / TABLE})", ""]
+    if col is not None:
+        ok = [r for r in rows if r["status"] == STATUS_OK and r.get(col) is not None and math.isfinite(r[col])]
+        ok.sort(key=lambda r: r[col], reverse=largest)
+        lines.append(f"The {min(worst, len(ok))} cases with the {'largest' if largest else 'smallest'} {col}:")
+        for r in ok[:worst]:
+            lines.append(f"  {col} = {r[col]:.6g}   {rerun_command(manifest, r)}")
+        lines.append("")
+        if _plot(out / PLOT, manifest, rows, col):
+            written.append(out / PLOT)
+    bad = [r for r in rows if r["status"] != STATUS_OK]
+    if bad:
+        lines.append(f"Failed cases ({len(bad)}):")
+        for r in bad:
+            lines.append(f"  {r['error']}\n    {rerun_command(manifest, r)}")
+    _write_text(out / WORST, "\n".join(lines) + "\n")
+    written.append(out / WORST)
+    return written
+
+
+def _plot(path, manifest, rows, col):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ok = [r for r in rows if r["status"] == STATUS_OK and r.get(col) is not None]
+    if not ok:
+        return False
+    axes = [(n, vs) for n, vs in manifest["axes"] if len(vs) > 1]
+    if manifest["method"] == "grid" and len(axes) >= 2:
+        (xn, _), (yn, _) = axes[0], axes[1]
+        third = axes[2][0] if len(axes) > 2 else None
+        panels = sorted({str(r.get(third)) for r in ok}, key=_num_key) if third else [None]
+        fig, axs = plt.subplots(1, len(panels), figsize=(4.6 * len(panels) + 1, 4.2), squeeze=False)
+        xs = sorted({r[xn] for r in ok}, key=_num_key)
+        ys = sorted({r[yn] for r in ok}, key=_num_key)
+        vals = [r[col] for r in ok if math.isfinite(r[col])]
+        vmin, vmax = (min(vals), max(vals)) if vals else (0, 1)
+        im = None
+        for ax, pv in zip(axs[0], panels):
+            z = np.full((len(ys), len(xs)), np.nan)
+            for r in ok:
+                if third is None or str(r.get(third)) == pv:
+                    z[ys.index(r[yn]), xs.index(r[xn])] = r[col]
+            im = ax.imshow(z, origin="lower", aspect="auto", cmap="viridis", vmin=vmin, vmax=vmax,
+                           extent=None)
+            ax.set_xticks(range(len(xs)), [f"{x:g}" if isinstance(x, float) else str(x) for x in xs],
+                          rotation=90 if len(xs) > 8 else 0, fontsize=7)
+            ax.set_yticks(range(len(ys)), [f"{y:g}" if isinstance(y, float) else str(y) for y in ys], fontsize=7)
+            ax.set_xlabel(xn)
+            ax.set_ylabel(yn)
+            ax.set_title(f"{third} = {pv}" if third else manifest["bench"], fontsize=9)
+        fig.colorbar(im, ax=axs[0].tolist(), label=col)
+        fig.suptitle(f"{manifest['bench']}: {col}", fontsize=10)
+    elif manifest["method"] == "grid" and len(axes) == 1:
+        n = axes[0][0]
+        pts = sorted(((r[n], r[col]) for r in ok), key=lambda p: _num_key(p[0]))
+        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        ax.plot([str(p[0]) if not isinstance(p[0], (int, float)) else p[0] for p in pts], [p[1] for p in pts], "o-")
+        ax.set_xlabel(n)
+        ax.set_ylabel(col)
+        ax.grid(True, alpha=0.3)
+        ax.set_title(manifest["bench"])
+    else:
+        v = np.array([r[col] for r in ok], dtype=float)
+        v = v[np.isfinite(v)]
+        fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        ax.hist(v, bins=max(5, min(50, int(math.sqrt(len(v))) + 1)), color="#4477aa", edgecolor="white")
+        if len(v):
+            for q, ls in ((0.5, "-"), (0.95, "--")):
+                x = float(np.quantile(v, q))
+                ax.axvline(x, color="k", ls=ls, lw=1, label=f"{int(q * 100)} % quantile {x:.4g}")
+            ax.legend(fontsize=8)
+        ax.set_xlabel(col)
+        ax.set_ylabel("cases")
+        ax.set_title(f"{manifest['bench']}: {manifest['method']}, {len(v)} cases"
+                     + (f", seed {manifest['seed']}" if manifest.get("seed") is not None else ""), fontsize=9)
+    fig.savefig(path, dpi=100, bbox_inches="tight")
+    plt.close(fig)
+    return True
+
+
+def _num_key(x):
+    try:
+        return (0, float(x), "")
+    except (TypeError, ValueError):
+        return (1, 0.0, str(x))
