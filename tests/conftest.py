@@ -1,3 +1,4 @@
+import ctypes
 import math
 from pathlib import Path
 
@@ -13,6 +14,46 @@ import fmpy.fmi2 as _fmi2                     # noqa: E402
 from artibus.fmu import memory as _memory         # noqa: E402
 _fmi2.defaultCallbacks.allocateMemory = _fmi2.fmi2CallbackAllocateMemoryTYPE(_memory.calloc)
 _fmi2.defaultCallbacks.freeMemory = _fmi2.fmi2CallbackFreeMemoryTYPE(_memory.free)
+
+# FMPy's logger proxy (fmpy.logging.addLoggerProxy: a C function that formats the
+# FMU's variadic message) keeps ONE global pointer to the Python logger it calls.
+# simulate_fmu(logger=f) points it at f's ctypes thunk, local to that call; the
+# default callbacks (fmpy.fmi2.defaultCallbacks, every FMU instantiated without
+# callbacks of its own) go through the same proxy, so after that call their
+# messages jump into the freed thunk: a crash once its memory is reused (seen as
+# test_model_exchange's jack-knife test, then any FMU that logs in FMPy). Each
+# logger given to the proxy is kept alive, and after every test the proxy points
+# at FMPy's own printLogMessage again.
+import fmpy.logging as _fmpy_logging          # noqa: E402
+from fmpy.fmi1 import printLogMessage as _print_log_message   # noqa: E402
+_add_logger_proxy = _fmpy_logging.addLoggerProxy
+_proxied = []                                # the callback structs the proxy was given (their thunks)
+_fmpy_print_logger = _fmi2.fmi2CallbackLoggerTYPE(_print_log_message)
+
+
+def _add_logger_proxy_kept(functions):
+    _proxied.append(getattr(functions, "_obj", functions))
+    _add_logger_proxy(functions)
+
+
+_fmpy_logging.addLoggerProxy = _add_logger_proxy_kept
+
+
+def restore_fmpy_logger():
+    """FMPy's logger proxy pointed at FMPy's own printLogMessage again."""
+    fresh = _fmi2.fmi2CallbackFunctions()
+    fresh.logger = _fmpy_print_logger
+    _proxied.append(fresh)
+    _add_logger_proxy(ctypes.byref(fresh))
+
+
+@pytest.fixture(autouse=True)
+def _fmpy_logger_proxy_restored():
+    n = len(_proxied)
+    yield
+    if len(_proxied) > n:                    # a test gave FMPy a logger: FMPy's own again
+        restore_fmpy_logger()
+
 
 ROOT = Path(__file__).resolve().parents[1]
 #: every FMU the repository declares (one modelDescription/<Name>.xml each)

@@ -11,6 +11,7 @@ structured array with a step at each sample instant (input events in Model
 Exchange). Both integrate the same ODE with the same inputs, so every output
 must agree within 1e-6 of its peak. The jack-knife of a reversing bus is an
 event in Model Exchange and ends the co-simulation step, at the same time."""
+import gc
 import math
 
 import numpy as np
@@ -19,7 +20,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from conftest import fmu_file
+from conftest import fmu_file, restore_fmpy_logger
 from artibus.fmu import Fmu
 
 TS = 0.02           # the benches' driver samples at 50 Hz
@@ -161,6 +162,23 @@ def test_jackknife_is_an_event_at_the_co_simulation_time():
     assert t_me == pytest.approx(t_cs, abs=1e-6)
     # there the joint angle is at its bound (|delta_1| = 90 deg)
     assert abs(res["beta[1]"][-1]) == pytest.approx(res["betaMax[1]"][-1], rel=1e-3)
+
+
+def test_fmpy_prints_the_fmus_messages_again_after_a_run_with_a_logger(capsys):
+    """After the jack-knife run above gave FMPy a logger of its own, an FMU run
+    with FMPy's default callbacks prints its messages through FMPy's own
+    printLogMessage (conftest restores FMPy's logger proxy after each test that
+    gave it a logger: left pointing at the freed logger, this run crashed in
+    SteeringActuator's first warning when test_model_exchange ran before
+    test_hardening in one process)."""
+    simulate_fmu(str(fmu_file("BusKinematics")), stop_time=0.1,
+                 logger=lambda *a: None)                    # as the jack-knife test does
+    gc.collect()
+    restore_fmpy_logger()                   # what conftest does after every such test
+    capsys.readouterr()
+    simulate_fmu(str(fmu_file("SteeringActuator")), stop_time=0.1)   # warns: no command message
+    out = capsys.readouterr().out
+    assert "[WARNING]" in out and "command message stale" in out, out
 
 
 @pytest.mark.parametrize("name", PLANTS)
