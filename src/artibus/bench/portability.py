@@ -148,11 +148,16 @@ def artibus_specific(ssp, bench=None):
     from artibus.bench import ssp as ssp_mod
     bench = bench or ssp_mod.read(ssp)
     out = []
-    steps = {p: c.step for p, c in bench.components.items() if c.step is not None}
+    steps = {}
+    for p, c in bench.components.items():     # the annotation's step, else the FMU's default experiment's
+        de = ssp_mod._model_description(ssp, c.source).defaultExperiment
+        h = c.step or (float(de.stepSize) if de is not None and de.stepSize else None)
+        if h is not None:
+            steps[p] = h
     if len(set(steps.values())) > 1:
         h = min(steps.values())
         rates = ", ".join(f"{p} {s:g} s" for p, s in steps.items())
-        out.append((f"multi-rate steps (org.artibus.simulation stepSize): {rates}",
+        out.append((f"multi-rate steps (org.artibus.simulation stepSize, else the FMU's default experiment): {rates}",
                     f"another master (ecos, libcosim, FMPy) steps every component at its one step, e.g. "
                     f"{h:g} s: the slower components then step {max(steps.values()) / h:g} times as often "
                     f"(artibus run BENCH --single-rate runs it so)"))

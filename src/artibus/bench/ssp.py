@@ -16,6 +16,12 @@ bench's own bindings and before the user's ``--ssv``/``--set``. A variant may
 give its own stop time (``<Variant stopTime="42"/>`` in an
 ``org.artibus.variant`` annotation) and rebind a parameter set (``Rebind``).
 
+Parameter bindings are applied as SSP 1.0 (5.3.5) says: on components and on
+systems at every level (names hierarchical, ``prefix`` put in front before the
+mapping, a system connector's value to the variables it is connected to), a
+later binding over an earlier one, a higher level over a lower one; a Real
+value with a unit is converted to the FMU variable's unit (artibus.bench.units).
+
 Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships);
 what it leaves out (default experiment, per-component step sizes in our
 annotation, connector units) is read here with lxml from the same file.
@@ -199,12 +205,12 @@ def variant_overrides(ssp, names):
             else:
                 given.pop(p.name, None)
     if given:      # a value with a unit: in the unit of the variable it sets
-        bench = read(ssp)
+        sources = _component_sources(ssp)
         for full, (unit, defs, where) in given.items():
             comp, _, var = full.rpartition(".")
-            if comp not in bench.components:
+            if comp not in sources:
                 continue                   # the runner names the unknown component
-            md = _model_description(ssp, bench.components[comp].source)
+            md = _model_description(ssp, sources[comp])
             v = next((v for v in md.modelVariables if v.name == var), None)
             if v is not None and v.type == "Real":
                 values[full] = to_unit(values[full], unit, defs, declared_unit(v), fmu_units(md),
@@ -620,6 +626,23 @@ def _depth(prefix):
 
 
 _MD_CACHE = {}
+
+
+def _component_sources(ssp):
+    """{component path: its source in the .ssp} from the .ssd alone."""
+    with zipfile.ZipFile(ssp) as z:
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+    out = {}
+
+    def walk(system, prefix):
+        for el in system.findall("ssd:Elements/*", NS):
+            path = f"{prefix}.{el.get('name')}" if prefix else el.get("name")
+            if etree.QName(el).localname == "Component":
+                out[path] = el.get("source")
+            elif etree.QName(el).localname == "System":
+                walk(el, path)
+    walk(root.find("ssd:System", NS), "")
+    return out
 
 
 def _model_description(ssp, source):

@@ -9,7 +9,8 @@ from pathlib import Path
 from artibus import runner
 from artibus.bench import ssp
 from artibus.files import check_output, make_dir, write_text
-from artibus.report import comparison, single_rate
+from artibus.report import comparison
+from artibus.report import single_rate as single_rate_report
 from artibus.report.pages import write_index, write_report
 
 
@@ -63,7 +64,7 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
                 f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
             if out_dir is not None:
                 # the page says how far a master without multi-rate steps is: one more run, single-rate
-                sr = single_rate.measure(sim, result, lambda: single_rate.run_single_rate(
+                sr = single_rate_report.measure(sim, result, lambda: single_rate_report.run_single_rate(
                     bench, overrides, stop_time, step=step, record=record, algorithm=algorithm, can=can))
                 if sr.multi_rate:
                     log(f"{name}: single-rate at {sr.step:g} s: KPIs within {sr.deviation:.3g} % "
