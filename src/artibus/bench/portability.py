@@ -89,7 +89,7 @@ def _scan(root, file, out):
             t = el.get("type")
             if t not in ANNOTATIONS:
                 out.append(Notice(file, el.sourceline, f'Annotation type="{t}"',
-                                  "an annotation type artibus does not read: its content is not applied"))
+                                  "an annotation type the runner does not read: its content is not applied"))
             continue
         if name not in APPLIED:
             out.append(Notice(file, el.sourceline, name, f"the runner does not implement <{name}>: not applied"))
@@ -132,6 +132,12 @@ _WARNED = set()
 
 def warn(ssp, stream=None):
     """Print each of ``not_applied(ssp)`` as a warning, once a process."""
+    from pathlib import Path
+    st = Path(ssp).stat()
+    seen = (str(ssp), st.st_mtime_ns, st.st_size)
+    if seen in _WARNED:
+        return                           # this pack, scanned already
+    _WARNED.add(seen)
     for n in not_applied(ssp):
         key = (str(ssp), n)
         if key in _WARNED:
@@ -158,24 +164,24 @@ def artibus_specific(ssp, bench=None):
         h = min(steps.values())
         rates = ", ".join(f"{p} {s:g} s" for p, s in steps.items())
         out.append((f"multi-rate steps (org.artibus.simulation stepSize, else the FMU's default experiment): {rates}",
-                    f"another master (ecos, libcosim, FMPy) steps every component at its one step, e.g. "
-                    f"{h:g} s: the slower components then step {max(steps.values()) / h:g} times as often "
-                    f"(artibus run BENCH --single-rate runs it so)"))
+                    f"steps every component at its one step (ecos, libcosim, FMPy), e.g. {h:g} s: the "
+                    f"slower components then step {max(steps.values()) / h:g} times as often (`artibus run "
+                    f"BENCH --single-rate` runs it so; the bench's report page gives the KPI deviation)"))
     elif steps:
         out.append((f"communication step (org.artibus.simulation stepSize): {min(steps.values()):g} s",
-                    "another master takes its own step size: give it this one"))
+                    "takes its own step size: give it this one"))
     names = variants(ssp)
     if names:
         out.append((f"variants ({VARIANT_DIR}/ in the .ssp, not referenced by the .ssd): {', '.join(names)}",
-                    "another master runs the bench's own bindings only, i.e. no variant: "
-                    "`artibus pack --portable` resolves a chosen one into the bench"))
+                    "runs the bench's own bindings only, i.e. none of the variants: a variant's values must "
+                    "be made the bench's own bindings for it"))
     with zipfile.ZipFile(ssp) as z:
         for n in names:
             for r in etree.fromstring(z.read(f"{VARIANT_DIR}/{n}.ssv")).iterfind(f".//artibus:{REBIND}", NS):
                 out.append((f"variant {n} rebinds {r.get('from')} to {r.get('to')}",
-                            "another master binds the parameter set the .ssd names"))
+                            "binds the parameter set the .ssd names"))
     if bench.can is not None or any(c.can for c in bench.connections):
         routed = sum(1 for c in bench.connections if c.can)
         out.append((f"{routed} connections routed over CAN (org.artibus.can, {bench.can and bench.can.get('source')})",
-                    "another master passes them directly, without the bus's quantisation, period and delays"))
+                    "passes them directly, without the bus's quantisation, period and delays"))
     return out
