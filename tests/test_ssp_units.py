@@ -151,3 +151,44 @@ def test_our_benches_read_with_their_units():
     for name in ssp.bench_names():
         b = ssp.read(ssp.ssp_path(name))
         assert all(not c.converted for c in b.components.values()), name
+
+
+def _follow_bench(tmp_path, binding="", units=""):
+    elements = (component("Lead", [("beta[1]", "output")])
+                + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")], binding))
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="f">'
+           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements><ssd:Connections>'
+           f'{connection("Lead", "beta[1]", "Follow", "gammaF")}</ssd:Connections></ssd:System>{units}'
+           f'<ssd:DefaultExperiment startTime="0" stopTime="5"/></ssd:SystemStructureDescription>')
+    path = tmp_path / "f.ssp"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        z.write(fmu_path("BusKinematics"), "resources/BusKinematics.fmu")
+    return path
+
+
+def test_an_inline_ssd_value_with_a_unit_of_the_ssds_units(tmp_path):
+    inline = ('<ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues>'
+              '<ssv:ParameterSet version="1.0" name="inline"><ssv:Parameters><ssv:Parameter name="L0">'
+              '<ssv:Real value="4000" unit="mm"/></ssv:Parameter></ssv:Parameters></ssv:ParameterSet>'
+              '</ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings>')
+    units = '<ssd:Units><ssc:Unit name="mm"><ssc:BaseUnit m="1" factor="0.001"/></ssc:Unit></ssd:Units>'
+    b = ssp.read(_follow_bench(tmp_path, inline, units))
+    assert b.components["Follow"].parameters["L0"] == 4.0
+    assert b.components["Follow"].converted["L0"] == (4000.0, "mm", 4.0, "m")
+
+
+def test_run_ssv_values_with_a_unit(tmp_path):
+    """`artibus run --ssv FILE` (names Component.variable): converted where the runner knows the variable."""
+    f = tmp_path / "user.ssv"
+    f.write_text(f'<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet {NS} version="1.0" name="u">'
+                 '<ssv:Parameters><ssv:Parameter name="Follow.L0"><ssv:Real value="400" unit="cm"/></ssv:Parameter>'
+                 '</ssv:Parameters><ssv:Units><ssc:Unit name="cm"><ssc:BaseUnit m="1" factor="0.01"/></ssc:Unit>'
+                 '</ssv:Units></ssv:ParameterSet>')
+    user = read_parameters(f, keep_units=True)
+    r = run(_follow_bench(tmp_path), step=0.05, overrides={**QUIET, **user})
+    np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(r["Lead.beta[1]"]) / 4.0, rtol=1e-12)
+    bad = f.read_text().replace('name="cm"><ssc:BaseUnit m="1"', 'name="cm"><ssc:BaseUnit kg="1"')
+    f.write_text(bad)
+    with pytest.raises(ArtibusError, match=r"user\.ssv: Parameter 'Follow\.L0' = 400\.0 cm: unit 'cm' .*'m'"):
+        run(_follow_bench(tmp_path), step=0.05, overrides=read_parameters(f, keep_units=True))
