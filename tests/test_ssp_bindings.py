@@ -137,14 +137,17 @@ UNKNOWN_ELEMENT = ('<ssd:SignalDictionaries><ssd:SignalDictionary name="bus">'
                    'version="1.0"/></ssd:SignalDictionary></ssd:SignalDictionaries>')
 
 
-@pytest.mark.parametrize("what", ["annotation", "element"])
+@pytest.mark.parametrize("what", ["annotation", "element", "attribute"])
 def test_what_is_not_applied_is_one_warning_naming_file_and_element(tmp_path, capsys, what):
     elements = LEAD + (follow(UNKNOWN_ANNOTATION) if what == "annotation" else follow())
-    p = bench(tmp_path, what, elements, LINK, files=FILES, after=UNKNOWN_ELEMENT if what == "element" else "")
+    link = LINK.replace("<ssd:Connection ", '<ssd:Connection suppressUnitConversion="true" ') \
+        if what == "attribute" else LINK
+    p = bench(tmp_path, what, elements, link, files=FILES, after=UNKNOWN_ELEMENT if what == "element" else "")
     run(p, step=0.05, stop_time=0.2)
     run(p, step=0.05, stop_time=0.2)          # again, in the same process: no second warning
     err = capsys.readouterr().err
-    key = 'Annotation type="com.example.solver"' if what == "annotation" else "<SignalDictionaries>"
+    key = {"annotation": 'Annotation type="com.example.solver"', "element": "<SignalDictionaries>",
+           "attribute": '<Connection suppressUnitConversion="true">'}[what]
     lines = [ln for ln in err.splitlines() if key in ln]
     assert len(lines) == 1, err
     assert lines[0].startswith("warning: ") and f"{p}/SystemStructure.ssd:" in lines[0], lines[0]
@@ -165,3 +168,12 @@ def test_check_lists_multi_rate_steps_and_variants_of_the_damping_bench():
     assert "multi-rate steps" in text and "0.02 s" in text and "0.01 s" in text, text
     assert "variants" in text and "heavyRear" in text, text
     assert "another master" in text and "rebinds" in text, text
+
+
+def test_a_parameter_source_inside_the_fmu_is_a_named_error(tmp_path):
+    p = bench(tmp_path, "inside", LEAD + follow('<ssd:ParameterBindings><ssd:ParameterBinding '
+                                                'source="resources/params.ssv" sourceBase="component"/>'
+                                                '</ssd:ParameterBindings>'), LINK, files=FILES)
+    with pytest.raises(ArtibusError, match=r'SystemStructure\.ssd:1: <ParameterBinding source="resources/params\.ssv" '
+                                           r'sourceBase="component">: a source inside the component'):
+        run(p, step=0.05)

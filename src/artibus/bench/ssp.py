@@ -350,6 +350,7 @@ def read(ssp):
     try:
         ssd = read_ssd(ssp, validate=True)
     except Exception as e:
+        _sources_inside_components(ssp, where)   # the reason, where it is that
         raise ArtibusError(f"{where}: not a valid SSP 1.0 system structure: {e}") from None
     with zipfile.ZipFile(ssp) as z:
         names = set(z.namelist())
@@ -619,6 +620,21 @@ def read(ssp):
                 x = then[0] * x + then[1]
             c.parameters[var] = x
     return bench
+
+
+def _sources_inside_components(ssp, where):
+    """An error naming a ParameterBinding or ParameterMapping whose source lies
+    inside the component's FMU (sourceBase="component"): not read by the runner."""
+    try:
+        with zipfile.ZipFile(ssp) as z:
+            root = etree.fromstring(z.read("SystemStructure.ssd"))
+    except Exception:
+        return
+    for el in root.iter(tag=etree.Element):
+        if el.get("sourceBase") == "component":
+            raise ArtibusError(f"{where}:{el.sourceline}: <{etree.QName(el).localname} source=\"{el.get('source')}\" "
+                               f"sourceBase=\"component\">: a source inside the component's FMU is not read by "
+                               f"the artibus runner (pack it into the .ssp and give its path there)")
 
 
 def _depth(prefix):
