@@ -156,7 +156,7 @@ def artibus_specific(ssp, bench=None):
     out = []
     steps = {}
     for p, c in bench.components.items():     # the annotation's step, else the FMU's default experiment's
-        de = ssp_mod._model_description(ssp, c.source).defaultExperiment
+        de = ssp_mod.model_description(ssp, c.source).defaultExperiment
         h = c.step or (float(de.stepSize) if de is not None and de.stepSize else None)
         if h is not None:
             steps[p] = h

@@ -210,7 +210,7 @@ def variant_overrides(ssp, names):
             comp, _, var = full.rpartition(".")
             if comp not in sources:
                 continue                   # the runner names the unknown component
-            md = _model_description(ssp, sources[comp])
+            md = model_description(ssp, sources[comp])
             v = next((v for v in md.modelVariables if v.name == var), None)
             if v is not None and v.type == "Real":
                 values[full] = to_unit(values[full], unit, defs, declared_unit(v), fmu_units(md),
@@ -605,7 +605,7 @@ def read(ssp):
         c = bench.components[path]
         if not given:
             continue
-        md = _model_description(ssp, c.source)
+        md = model_description(ssp, c.source)
         fmu_defs = fmu_units(md)
         variables = {v.name: v for v in md.modelVariables}
         for var, (unit, defs, then, origin) in given.items():
@@ -661,7 +661,7 @@ def _component_sources(ssp):
     return out
 
 
-def _model_description(ssp, source):
+def model_description(ssp, source):
     """The model description of the FMU ``source`` inside the .ssp (FMPy's, read once a pack)."""
     from fmpy import read_model_description
     st = Path(ssp).stat()
