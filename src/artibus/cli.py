@@ -170,12 +170,12 @@ def cmd_run(args):
                            "or DIR/<bench>/results.csv with --report DIR")
     user = {}
     for f in args.ssv or []:
-        user.update(read_parameters(f))
+        user.update(read_parameters(f, keep_units=True))
     user.update(parse_set(args.set))
     run_benches(ssp.bench_names() if args.all else [args.bench], every=args.all, variants=args.variant,
                 user=user, stop_time=args.stop_time, step=args.step, record=args.record,
                 algorithm=args.algorithm, can=args.can, can_log=args.can_log, can_faults=args.can_fault,
-                report=args.report, output=args.output, progress=sys.stderr.isatty(),
+                report=args.report, output=args.output, progress=sys.stderr.isatty(), single_rate=args.single_rate,
                 checked=lambda out: setattr(args, "_out", out))
     return 0
 
@@ -362,6 +362,8 @@ def build_parser():
     s.add_argument("--report", metavar="DIR", help="write plots and an HTML page with the KPIs to DIR")
     s.add_argument("--stop-time", type=_seconds, help="default: the bench's DefaultExperiment")
     s.add_argument("--step", type=_seconds, help="base communication step, s")
+    s.add_argument("--single-rate", action="store_true",
+                   help="every component at the one (base) step, as a master without multi-rate steps runs it")
     s.add_argument("--ssv", action="append", help="parameter file with names COMPONENT.VARIABLE")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE", help="set a parameter")
     s.add_argument("--variant", action="append", metavar="NAME",
@@ -445,8 +447,10 @@ def build_parser():
     s.add_argument("--step", type=_seconds)
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: <FMU>.csv)")
     s.set_defaults(func=cmd_simulate)
-    s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia)")
-    s.add_argument("ssv", nargs="+", help="a parameter set: path of an .ssv or a name in ssp/parameters")
+    s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia), "
+                                     "or what of a bench other SSP masters run differently")
+    s.add_argument("ssv", nargs="+", help="a parameter set (path of an .ssv or a name in ssp/parameters) "
+                                          "or a bench (a name or an .ssp)")
     s.add_argument("--model", choices=["BusDynamics", "BusKinematics"], help="default: from the names in the set")
     s.set_defaults(func=cmd_check)
     s = sub.add_parser("demo", help="the main job: a demo run with results and a plot")

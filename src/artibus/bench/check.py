@@ -1,4 +1,6 @@
 """`artibus check VEHICLE.ssv`: is a vehicle's parameter set consistent?
+(`artibus check BENCH`: what of a bench the runner does not apply and what is
+artibus-specific, see check_bench.)
 
 For a BusDynamics set (nModules, nAxles, m[i], Jz[i], lHf/lHr, axleModule,
 xA, C, mu, lFront/lRear, width; see ssp/parameters/Template.ssv and
@@ -264,21 +266,86 @@ def _kinematics(values, get):
     return probs
 
 
-def check_file(path, model=None):
-    """(model, [Problem]) of an .ssv file."""
+def check_file(path, model=None, converted=None):
+    """(model, [Problem]) of an .ssv file. A value given with a unit is checked
+    in the unit of the FMU's variable (artibus.bench.units; ``converted``:
+    filled with {name: (value, unit, converted value, the variable's unit)})."""
     from artibus.bench.parameters import read_parameters
-    values = read_parameters(path)
-    model = model or _model(values)
+    from artibus.bench.units import Quantity
+    values = read_parameters(path, keep_units=True)
+    model = model or _model({k: getattr(v, "value", v) for k, v in values.items()})
+    if any(isinstance(v, Quantity) for v in values.values()):
+        md = _fmu_md(model) if model else None
+        if md is not None:
+            from artibus.bench.units import convert
+            variables = {v.name: v for v in md.modelVariables}
+            for k, v in values.items():
+                if isinstance(v, Quantity) and k in variables and variables[k].type == "Real":
+                    values[k] = convert(v, variables[k], md, k)
+                    if converted is not None and values[k] is not v.value:
+                        from artibus.bench.units import declared_unit
+                        converted[k] = (v.value, v.unit, values[k], declared_unit(variables[k]))
+        values = {k: getattr(v, "value", v) for k, v in values.items()}
     defaults = _fmu_defaults(model) if model else None
     return model, check_values(values, model, defaults)
 
 
+def _fmu_md(model):
+    from artibus.base import fmu_path
+    try:
+        path = fmu_path(model)
+    except ArtibusError:
+        return None
+    from fmpy import read_model_description
+    return read_model_description(str(path))
+
+
+def check_bench(bench, out=print):
+    """``artibus check BENCH``: what of the bench the runner does not apply, what
+    is artibus-specific (with what another master does instead), and the
+    values converted from the unit their file gives to the FMU's. 0: the bench
+    reads (its values convert, its bindings resolve), else an ArtibusError."""
+    from artibus.bench import ssp as ssp_mod
+    from artibus.bench.portability import artibus_specific, not_applied
+    path = ssp_mod.ssp_path(bench)
+    b = ssp_mod.read(path)
+    notices = not_applied(path)
+    out(f"{b.name}: {path}")
+    out(f"  not applied by the artibus runner ({len(notices)}):" if notices else
+        "  everything in it is applied by the artibus runner")
+    for n in notices:
+        out(f"    {n.text()}")
+    specific = artibus_specific(path, b)
+    out(f"  artibus-specific ({len(specific)}):" if specific else "  nothing artibus-specific")
+    for what, other in specific:
+        out(f"    {what}")
+        out(f"      another master: {other}")
+    conv = [(p, k, v) for p, c in b.components.items() for k, v in c.converted.items()]
+    if conv:
+        out(f"  values converted to the FMU's units ({len(conv)}):")
+        for p, k, (raw, unit, x, target) in conv:
+            out(f"    {p}.{k} = {raw:g} {unit} -> {x:.10g} {target} (from {b.components[p].origins.get(k, '?')})")
+    return 0
+
+
+def _is_bench(name):
+    from artibus.bench import ssp as ssp_mod
+    return str(name).endswith(".ssp") or str(name) in ssp_mod.bench_names()
+
+
 def main(paths, model=None, out=print):
-    """Check each file; print what is wrong; 1 when anything is, else 0."""
+    """Check each file (a parameter set, or a bench: check_bench); print what
+    is wrong; 1 when anything is, else 0."""
     bad = 0
     for p in paths:
-        m, probs = check_file(p, model)
+        if _is_bench(p):
+            bad += check_bench(p, out)
+            continue
+        converted = {}
+        m, probs = check_file(p, model, converted)
         name = Path(p)
+        for k, (raw, unit, x, target) in converted.items():
+            out(f"{name}: {k} = {raw:g} {unit}: converted to {x:.10g} {target}")
         for pr in probs:
             out(pr.text(name))
         if probs:

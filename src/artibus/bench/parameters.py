@@ -28,23 +28,50 @@ def find_ssv(name_or_path):
     raise ArtibusError(f"{name_or_path}: no such parameter set (known: {known})")
 
 
-def read_parameters(ssv, fmu=None):
+def read_parameters(ssv, fmu=None, converted=None, keep_units=False):
     """{name: value} from an .ssv file; with ``fmu``, each name and value is
-    checked against that FMU's model description."""
+    checked against that FMU's model description, a value given with a unit
+    (``<ssv:Real value="5128" unit="mm"/>``) converted to its variable's unit
+    (the file's own <ssv:Units>, else the FMU's UnitDefinitions: see
+    artibus.bench.units.to_unit; ``converted``: filled with {name: (value,
+    unit, converted value, the variable's unit)} of those converted). Without
+    an FMU a value with a unit is the number given (``keep_units``: a
+    Quantity, converted where the variable is known, as ``artibus run --ssv``)."""
+    from lxml import etree
+    from artibus.bench.units import Quantity, declared_unit, fmu_units, ssp_units, to_unit
     path = find_ssv(ssv)
     try:
         pset = read_ssv(str(path), validate=True)
+        defs = ssp_units(etree.parse(str(path)).getroot(), str(path))
+    except ArtibusError:
+        raise
     except Exception as e:  # lxml / XSD errors carry the line
         raise ArtibusError(f"{path}: not a valid SSP parameter-value file: {e}") from None
-    values = {}
+    values, units = {}, {}
     for p in pset.parameters:
         try:
             values[p.name] = typed(p.type, p.value)
         except ValueError:
             raise ArtibusError(f"{path}: Parameter '{p.name}': {p.type} value "
                                f"{p.value!r} is not a {p.type}") from None
+        if p.type == "Real" and p.unit:
+            units[p.name] = p.unit
     if fmu is not None:
-        check_against(values, fmu, str(path))
+        md = fmu if hasattr(fmu, "modelVariables") else _model_description(fmu)
+        variables, fmu_defs = {v.name: v for v in md.modelVariables}, fmu_units(md)
+        for name, unit in units.items():
+            v = variables.get(name)
+            if v is None or v.type != "Real":
+                continue                    # check_against names what is wrong with it
+            x = to_unit(values[name], unit, defs, declared_unit(v), fmu_defs,
+                        f"{path}: Parameter '{name}' = {values[name]!r} {unit}")
+            if converted is not None and x is not values[name]:
+                converted[name] = (values[name], unit, x, declared_unit(v))
+            values[name] = x
+        check_against(values, md, str(path))
+    elif keep_units:
+        for name, unit in units.items():
+            values[name] = Quantity(values[name], unit, defs, str(path))
     return values
 
 

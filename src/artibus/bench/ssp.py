@@ -16,6 +16,12 @@ bench's own bindings and before the user's ``--ssv``/``--set``. A variant may
 give its own stop time (``<Variant stopTime="42"/>`` in an
 ``org.artibus.variant`` annotation) and rebind a parameter set (``Rebind``).
 
+Parameter bindings are applied as SSP 1.0 (5.3.5) says: on components and on
+systems at every level (names hierarchical, ``prefix`` put in front before the
+mapping, a system connector's value to the variables it is connected to), a
+later binding over an earlier one, a higher level over a lower one; a Real
+value with a unit is converted to the FMU variable's unit (artibus.bench.units).
+
 Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships);
 what it leaves out (default experiment, per-component step sizes in our
 annotation, connector units) is read here with lxml from the same file.
@@ -29,6 +35,7 @@ from pathlib import Path
 from lxml import etree
 
 from artibus.base import ROOT, ArtibusError, fmu_dir
+from artibus.bench.units import declared_unit, fmu_units, ssp_units, to_unit
 
 BENCH_DIR = ROOT / "ssp" / "benches"
 NS = {
@@ -166,7 +173,7 @@ def variant_overrides(ssp, names):
         return {}
     ssp = ssp_path(ssp)
     known = variants(ssp)
-    values = {}
+    values, given = {}, {}
     for name in names:
         if name not in known:
             raise ArtibusError(f"--variant {name}: {ssp} has no such variant "
@@ -183,6 +190,8 @@ def variant_overrides(ssp, names):
             rebinds = etree.fromstring(z.read(f"{VARIANT_DIR}/{name}.ssv")).findall(f".//artibus:{REBIND}", NS)
         for rebind in rebinds:
             values.update(_rebound(ssp, rebind.get("from", ""), rebind.get("to", ""), f"{where}:{rebind.sourceline}"))
+        with zipfile.ZipFile(ssp) as z:
+            defs = ssp_units(etree.fromstring(z.read(f"{VARIANT_DIR}/{name}.ssv")), where)
         for p in pset.parameters:
             if "." not in p.name:
                 raise ArtibusError(f"{where}: parameter '{p.name}': a variant names "
@@ -191,6 +200,21 @@ def variant_overrides(ssp, names):
                 values[p.name] = typed(p.type, p.value)
             except ValueError:
                 raise ArtibusError(f"{where}: parameter '{p.name}' = {p.value!r} is not a {p.type}") from None
+            if p.type == "Real" and p.unit:
+                given[p.name] = (p.unit, defs, where)
+            else:
+                given.pop(p.name, None)
+    if given:      # a value with a unit: in the unit of the variable it sets
+        sources = _component_sources(ssp)
+        for full, (unit, defs, where) in given.items():
+            comp, _, var = full.rpartition(".")
+            if comp not in sources:
+                continue                   # the runner names the unknown component
+            md = model_description(ssp, sources[comp])
+            v = next((v for v in md.modelVariables if v.name == var), None)
+            if v is not None and v.type == "Real":
+                values[full] = to_unit(values[full], unit, defs, declared_unit(v), fmu_units(md),
+                                       f"{where}: Parameter '{full}' = {values[full]!r} {unit}")
     return values
 
 
@@ -235,17 +259,7 @@ def _rebound(ssp, old, new, where):
                 for n in names:
                     out.writestr(n, etree.tostring(ssd) if n == "SystemStructure.ssd" else z.read(n))
             bench = read(copy)
-    paths = []
-    for b in bindings:
-        c = b.getparent().getparent()           # ParameterBindings, then its element
-        if etree.QName(c).localname != "Component":
-            continue                            # a system-level binding: its names say their component
-        names = [c.get("name")]
-        system = c.getparent().getparent()      # Elements, then the System holding it
-        while etree.QName(system.getparent()).localname == "Elements":
-            names.insert(0, system.get("name"))
-            system = system.getparent().getparent()
-        paths.append(".".join(names))
+    paths = list(bench.components)                # every component: system-level bindings too
     before = read(ssp)
     return {f"{path}.{k}": v for path in paths for k, v in bench.components[path].parameters.items()
             if before.components[path].parameters.get(k) != v}     # what the other set changes, only
@@ -299,6 +313,7 @@ class Component:
     origins: dict = field(default_factory=dict)     # name -> the file (and mapping) its value is from
     outputs: list = field(default_factory=list)     # names of its declared output connectors
     connectors: list = field(default_factory=list)  # names of all its declared connectors
+    converted: dict = field(default_factory=dict)   # name -> (value, its unit, converted, the FMU's unit)
 
 
 @dataclass
@@ -335,6 +350,7 @@ def read(ssp):
     try:
         ssd = read_ssd(ssp, validate=True)
     except Exception as e:
+        _sources_inside_components(ssp, where)   # the reason, where it is that
         raise ArtibusError(f"{where}: not a valid SSP 1.0 system structure: {e}") from None
     with zipfile.ZipFile(ssp) as z:
         names = set(z.namelist())
@@ -358,36 +374,60 @@ def read(ssp):
     if can is not None:
         bench.can = {"source": can.get("source"), "period": can.get("period"), "line": can.sourceline}
 
-    def bound_values(element, xml_element, what, origins=None):
-        """origins: filled with {name: where its value comes from (file, element)}."""
+    ssd_units = ssp_units(root, where)
+
+    def bound_values(element, xml_element, what, origins=None, units=None):
+        """origins: filled with {name: where its value comes from (file, element)};
+        units: with {name: (unit, the file's unit definitions, a mapping's
+        LinearTransformation to apply after the conversion or None, origin)} of
+        the values given with a unit (converted to the FMU's unit at the end)."""
         values = {}
         xml_bindings = xml_element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS)
         for b, xb in zip(element.parameterBindings, xml_bindings):
             prefix = b.prefix or ""
-            source = {}
+            source, given = {}, {}
             origin = (f"{ssp}/{xb.get('source')}" if xb.get("source") else f"{where}:{xb.sourceline}")
+            if xb.get("source"):
+                with zipfile.ZipFile(ssp) as z:
+                    pset_xml = [etree.fromstring(z.read(xb.get("source")))]
+            else:
+                pset_xml = xb.findall("ssd:ParameterValues/ssv:ParameterSet", NS)
             if xb.find("ssd:ParameterMapping", NS) is not None:
                 m = xb.find("ssd:ParameterMapping", NS)
                 origin += f" mapped by {ssp}/{m.get('source')}" if m.get("source") else f" mapped at {where}:{m.sourceline}"
-            for pset in b.parameterValues:
+            for pset, px in zip(b.parameterValues, pset_xml):
+                defs = {**ssd_units, **ssp_units(px, origin)}
                 for p in pset.parameters:
                     try:
                         source[prefix + p.name] = typed(p.type, p.value)
                     except ValueError:
                         raise ArtibusError(f"{where}: {what}: parameter '{p.name}' = {p.value!r} "
                                            f"is not a {p.type}") from None
+                    if p.type == "Real" and p.unit:
+                        given[prefix + p.name] = (p.unit, defs)
             mapping = xb.find("ssd:ParameterMapping", NS)
-            got = source if mapping is None else mapped(source, mapping, what)
+            got, then = (source, {}) if mapping is None else mapped(source, mapping, what, given)
             values.update(got)
             if origins is not None:
                 origins.update(dict.fromkeys(got, origin))
+            if units is not None:
+                for name in got:
+                    src = name if mapping is None else then[name][0]
+                    if src in given and (mapping is None or not then[name][2]):
+                        units[name] = (*given[src], None if mapping is None else then[name][1], origin)
+                    else:
+                        units.pop(name, None)
         return values
 
-    def mapped(source, mapping, what):
+    def mapped(source, mapping, what, given=()):
         """SSP's parameter mapping (SSP 1.0, ssd:ParameterMapping, SSM): only
         the mapped values are applied, under their target names, after the
         entry's linear transformation; the others are not applied. The mapping
-        is inline or a .ssm file in the .ssp."""
+        is inline or a .ssm file in the .ssp. A value with a unit (in
+        ``given``) is converted to the target's unit first and transformed
+        after (SSP 1.0, 7.1.1), unless the entry says suppressUnitConversion:
+        returns ({target: value}, {target: (source, its LinearTransformation
+        (factor, offset) still to apply or None, unit conversion suppressed)})."""
         ref = mapping.get("source")
         if ref is None:
             file, root_m = where, mapping.find("ssm:ParameterMapping", NS)
@@ -396,7 +436,7 @@ def read(ssp):
             file = f"{ssp}/{ref}"    # there: FMPy's reader has read and validated it
             with zipfile.ZipFile(ssp) as z:
                 entries = etree.fromstring(z.read(ref)).findall("ssm:MappingEntry", NS)
-        out = {}
+        out, then = {}, {}
         for e in entries:
             src, dst = e.get("source"), e.get("target")
             head = f"{file}:{e.sourceline}: {what}: MappingEntry source=\"{src}\" target=\"{dst}\""
@@ -405,12 +445,18 @@ def read(ssp):
             if dst in out:
                 raise ArtibusError(f"{head}: '{dst}' is mapped to twice")
             value = source[src]
+            suppress = e.get("suppressUnitConversion") in ("true", "1")
+            later = None
             for tr in e:
                 kind = etree.QName(tr).localname if isinstance(tr.tag, str) else None
                 if kind == "LinearTransformation":
                     if not isinstance(value, float):
                         raise ArtibusError(f"{head}: a LinearTransformation needs a Real, got {value!r}")
-                    value = float(tr.get("factor", 1.0)) * value + float(tr.get("offset", 0.0))
+                    factor, offset = float(tr.get("factor", 1.0)), float(tr.get("offset", 0.0))
+                    if src in given and not suppress:
+                        later = (factor, offset)         # after the unit's conversion
+                    else:
+                        value = factor * value + offset
                 elif kind in MAPPINGS:
                     mkind, table = map_transformation(e, head)
                     ok = {"Boolean": isinstance(value, bool),
@@ -423,14 +469,19 @@ def read(ssp):
                     raise ArtibusError(f"{head}: {kind} is not supported (LinearTransformation and "
                                        f"the Boolean-, Integer- and EnumerationMappingTransformation are)")
             out[dst] = value
-        return out
+            then[dst] = (src, later, suppress)
+        return out, then
 
-    # system-level bindings, with names relative to that system: "Comp.var"
+    # system-level bindings, with names relative to that system: "Comp.var", "Sub.Comp.var",
+    # or a system connector's ("Sub.connector", "connector"): applied after the components' own
     inherited = []
+    given_units = {}
 
     def walk(system, prefix):
         xml = xml_systems[prefix]
-        inherited.append((prefix, bound_values(system, xml, f"System '{system.name}'")))
+        sys_origins, sys_units = {}, {}
+        inherited.append((prefix, bound_values(system, xml, f"System '{system.name}'", sys_origins, sys_units),
+                          sys_origins, sys_units, xml))
         for el in system.elements:
             path = f"{prefix}.{el.name}" if prefix else el.name
             if isinstance(el, SsdComponent):
@@ -439,7 +490,8 @@ def read(ssp):
                     raise ArtibusError(f"{where}:{xml_el.sourceline}: Component '{path}': source "
                                        f"\"{el.source}\" is not in the .ssp")
                 c = Component(path=path, source=el.source, element=el, line=xml_el.sourceline)
-                c.parameters = bound_values(el, xml_el, f"Component '{path}'", c.origins)
+                given_units[path] = {}
+                c.parameters = bound_values(el, xml_el, f"Component '{path}'", c.origins, given_units[path])
                 c.outputs = [k.name for k in el.connectors if k.kind == "output"]
                 c.connectors = [k.name for k in el.connectors]
                 ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
@@ -453,15 +505,6 @@ def read(ssp):
                 walk(el, path)
 
     walk(ssd.system, "")
-
-    for prefix, values in inherited:
-        for name, value in values.items():
-            full = f"{prefix}.{name}" if prefix else name
-            comp_path, _, var = full.rpartition(".")
-            if comp_path not in bench.components:
-                raise ArtibusError(f"{where}: parameter '{name}' = {value!r} bound at system "
-                                   f"'{prefix or ssd.system.name}': no component '{comp_path}'")
-            bench.components[comp_path].parameters.setdefault(var, value)
 
     # connections: resolve system connectors so each ends at a component variable
     raw = []  # (system prefix, Connection element, xml line)
@@ -529,4 +572,104 @@ def read(ssp):
         for end, f2, o2, l2, r2, mp2 in ends(b, f, o, line, route, mp, frozenset()):
             bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
                                                 factor=f2, offset=o2, line=l2, can=r2, mapping=mp2))
+
+    # system-level bindings (SSP 1.0, 5.3.5): a higher level takes precedence over a lower one
+    # (the deepest sub-system's applied first, the root's last), a later binding over an earlier
+    # one at the same level; a name is a component's variable by its hierarchical name or a
+    # system connector, which applies to the component variables it is connected to
+    for prefix, values, sys_origins, sys_units, xml in sorted(inherited, key=lambda i: -_depth(i[0])):
+        for name, value in values.items():
+            full = f"{prefix}.{name}" if prefix else name
+            targets = [(p, full[len(p) + 1:]) for p in bench.components if full.startswith(p + ".")]
+            sys_path, _, conn = full.rpartition(".")
+            if sys_path in xml_systems and conn in [k.get("name") for k in
+                                                    xml_systems[sys_path].findall("ssd:Connectors/ssd:Connector", NS)]:
+                node_ = ("sys", sys_path, conn)
+                targets += [(n[1], n[2]) for n, *_ in ends(node_, 1.0, 0.0, 0, None, None, frozenset())]
+                targets += [(a[1], a[2]) for a, b, *_ in edges if b == node_ and a[0] == "comp"]
+            if not targets:
+                raise ArtibusError(f"{sys_origins.get(name, where)}: parameter '{name}' = {value!r} bound at "
+                                   f"system '{prefix or ssd.system.name}': no component variable or system "
+                                   f"connector of that name (components: {', '.join(bench.components)})")
+            for comp_path, var in dict.fromkeys(targets):
+                c = bench.components[comp_path]
+                c.parameters[var] = value
+                c.origins[var] = sys_origins.get(name, where)
+                if name in sys_units:
+                    given_units[comp_path][var] = sys_units[name]
+                else:
+                    given_units[comp_path].pop(var, None)
+
+    # values given with a unit, in the unit of the FMU's variable (SSP 1.0: ssv:Real unit=)
+    for path, given in given_units.items():
+        c = bench.components[path]
+        if not given:
+            continue
+        md = model_description(ssp, c.source)
+        fmu_defs = fmu_units(md)
+        variables = {v.name: v for v in md.modelVariables}
+        for var, (unit, defs, then, origin) in given.items():
+            v, raw = variables.get(var), c.parameters[var]
+            if v is None or v.type != "Real" or not isinstance(raw, float):
+                continue                     # the runner's check names what is wrong with it
+            target = declared_unit(v)
+            x = to_unit(raw, unit, defs, target, fmu_defs, f"{origin}: Parameter '{path}.{var}' = {raw!r} {unit}")
+            if x is not raw:
+                c.converted[var] = (raw, unit, x, target)
+            if then is not None:
+                x = then[0] * x + then[1]
+            c.parameters[var] = x
     return bench
+
+
+def _sources_inside_components(ssp, where):
+    """An error naming a ParameterBinding or ParameterMapping whose source lies
+    inside the component's FMU (sourceBase="component"): not read by the runner."""
+    try:
+        with zipfile.ZipFile(ssp) as z:
+            root = etree.fromstring(z.read("SystemStructure.ssd"))
+    except Exception:
+        return
+    for el in root.iter(tag=etree.Element):
+        if el.get("sourceBase") == "component":
+            raise ArtibusError(f"{where}:{el.sourceline}: <{etree.QName(el).localname} source=\"{el.get('source')}\" "
+                               f"sourceBase=\"component\">: a source inside the component's FMU is not read by "
+                               f"the artibus runner (pack it into the .ssp and give its path there)")
+
+
+def _depth(prefix):
+    return 0 if not prefix else prefix.count(".") + 1
+
+
+_MD_CACHE = {}
+
+
+def _component_sources(ssp):
+    """{component path: its source in the .ssp} from the .ssd alone."""
+    with zipfile.ZipFile(ssp) as z:
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+    out = {}
+
+    def walk(system, prefix):
+        for el in system.findall("ssd:Elements/*", NS):
+            path = f"{prefix}.{el.get('name')}" if prefix else el.get("name")
+            if etree.QName(el).localname == "Component":
+                out[path] = el.get("source")
+            elif etree.QName(el).localname == "System":
+                walk(el, path)
+    walk(root.find("ssd:System", NS), "")
+    return out
+
+
+def model_description(ssp, source):
+    """The model description of the FMU ``source`` inside the .ssp (FMPy's, read once a pack)."""
+    from fmpy import read_model_description
+    st = Path(ssp).stat()
+    key = (str(ssp), st.st_mtime_ns, st.st_size, source)
+    if key not in _MD_CACHE:
+        with zipfile.ZipFile(ssp) as z, zipfile.ZipFile(z.open(source)) as fmu, \
+                tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
+            xml = Path(tmp) / "modelDescription.xml"
+            xml.write_bytes(fmu.read("modelDescription.xml"))
+            _MD_CACHE[key] = read_model_description(str(xml), validate=False)
+    return _MD_CACHE[key]

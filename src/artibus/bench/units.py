@@ -3,6 +3,8 @@ declaredType's) and the factor and offset from one variable's unit to
 another's, by the model descriptions' unit definitions (base units, factor and
 offset). The runner converts connected values with them; the CAN path
 (artibus.can) has its own table of the units a signal may carry."""
+from dataclasses import dataclass
+
 from artibus.base import ArtibusError
 
 
@@ -39,3 +41,114 @@ def unit_conversion(md_a, var_a, md_b, var_b, where):
     fb, ob = db.baseUnit.factor, db.baseUnit.offset
     # base = fa*x + oa ; y = (base - ob) / fb
     return fa / fb, (oa - ob) / fb
+
+
+# ---- units on parameter values (SSP 1.0: an .ssv's or .ssd's Real value="5128" unit="mm") -----------
+
+#: SSP's and FMI's base units, in the order of their BaseUnit exponents
+DIMS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+
+
+@dataclass(frozen=True)
+class UnitDef:
+    """A unit as SSP 1.0 (ssc:Unit/ssc:BaseUnit) and FMI 2.0 (Unit/BaseUnit)
+    define it: exponents of the base units, and a value in it is
+    factor * value + offset in those base units."""
+    name: str
+    exponents: tuple
+    factor: float = 1.0
+    offset: float = 0.0
+
+    def dimension(self):
+        return ".".join(f"{d}^{e}" if e != 1 else d for d, e in zip(DIMS, self.exponents) if e) or "1"
+
+
+def ssp_units(element, where=""):
+    """{name: UnitDef} of the ssc:Unit elements in ``element``'s Units child
+    (an ssv:ParameterSet or the ssd:SystemStructureDescription)."""
+    out = {}
+    for child in element:
+        if not isinstance(child.tag, str) or child.tag.rpartition("}")[2] != "Units":
+            continue
+        for u in child:
+            if not isinstance(u.tag, str) or u.tag.rpartition("}")[2] != "Unit":
+                continue
+            bu = next((b for b in u if isinstance(b.tag, str) and b.tag.rpartition("}")[2] == "BaseUnit"), None)
+            a = {} if bu is None else bu.attrib
+            try:
+                out[u.get("name")] = UnitDef(u.get("name"), tuple(int(a.get(d, 0)) for d in DIMS),
+                                             float(a.get("factor", 1.0)), float(a.get("offset", 0.0)))
+            except ValueError:
+                raise ArtibusError(f"{where}:{u.sourceline}: <Unit name=\"{u.get('name')}\">: "
+                                   f"its BaseUnit's exponents, factor and offset must be numbers") from None
+    return out
+
+
+def fmu_units(md):
+    """{name: UnitDef} of a model description's UnitDefinitions (FMPy's), their
+    DisplayUnits too (FMI 2.0: display value = factor * value + offset); a unit
+    without a BaseUnit is left out (it converts to nothing but itself)."""
+    out = {}
+    for u in getattr(md, "unitDefinitions", None) or []:
+        b = u.baseUnit
+        if b is None:
+            continue
+        base = UnitDef(u.name, tuple(int(getattr(b, d, 0) or 0) for d in DIMS), float(b.factor), float(b.offset))
+        out[u.name] = base
+        for d in getattr(u, "displayUnits", None) or []:
+            f, o = float(d.factor), float(d.offset)
+            # x [display] = f * y [unit] + o  ->  y = (x - o) / f, in base: base.factor * y + base.offset
+            out.setdefault(d.name, UnitDef(d.name, base.exponents, base.factor / f,
+                                           base.offset - base.factor * o / f))
+    return out
+
+
+def to_unit(value, unit, definitions, target, target_definitions, label):
+    """``value`` given in ``unit`` as a value in ``target`` (the FMU variable's
+    unit): unchanged where the two are the same unit, else through their
+    definitions (``definitions``: the parameter file's own Units, then
+    ``target_definitions``: the FMU's UnitDefinitions). ``label`` names the
+    file and the parameter for the error of an unknown unit or one of another
+    dimension."""
+    src = definitions.get(unit) or target_definitions.get(unit)
+    if unit == target and (src is None or src == target_definitions.get(target, src)):
+        return value
+    if target is None:
+        if src is not None and not any(src.exponents) and (src.factor, src.offset) == (1.0, 0.0) or unit == "1":
+            return value
+        raise ArtibusError(f"{label}: unit '{unit}': the FMU's variable declares no unit to convert it to")
+    if src is None:
+        raise ArtibusError(f"{label}: unknown unit '{unit}' (the variable's unit is '{target}'): define it in the "
+                           f"parameter file's <Units> (<ssc:Unit name=\"{unit}\"><ssc:BaseUnit ... factor=\"...\"/>"
+                           f"</ssc:Unit>) or give the value in '{target}'")
+    dst = target_definitions.get(target)
+    if dst is None:
+        raise ArtibusError(f"{label}: unit '{unit}' cannot be converted to '{target}': the FMU defines no base "
+                           f"units for '{target}'")
+    if src.exponents != dst.exponents:
+        raise ArtibusError(f"{label}: unit '{unit}' ({src.dimension()}) cannot be converted to the variable's "
+                           f"unit '{target}' ({dst.dimension()}): another dimension")
+    return (src.factor * value + src.offset - dst.offset) / dst.factor
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A Real value with the unit a parameter file gives it, not yet in the
+    unit of the variable it sets (``artibus run --ssv FILE``: the runner
+    converts it, ``convert``)."""
+    value: float
+    unit: str
+    definitions: dict
+    origin: str
+
+    def __str__(self):
+        return f"{self.value!r} {self.unit}"
+
+    def __hash__(self):
+        return hash((self.value, self.unit, self.origin))
+
+
+def convert(q, var, md, name):
+    """A Quantity as a value of the model variable ``var`` of ``md``, in its unit."""
+    return to_unit(q.value, q.unit, q.definitions, declared_unit(var), fmu_units(md),
+                   f"{q.origin}: Parameter '{name}' = {q.value!r} {q.unit}")

@@ -99,7 +99,7 @@ def _verdict_td(k):
     return f'<td class="{"pass" if bool(k.passed) else "fail"}">{k.verdict}</td>'
 
 
-def write_html(out_dir, title, intro, kpis, images, notes=""):
+def write_html(out_dir, title, intro, kpis, images, notes="", sections=""):
     """One self-contained page (images next to it) with the KPI table, the KPIs
     as kpis.csv (with units) and thumb.png (the first image, small) for the index.
     A KPI without a value shows why (Kpi.why); one without a value and a reason
@@ -140,6 +140,7 @@ def write_html(out_dir, title, intro, kpis, images, notes=""):
 {drop}
 <p class=meta>The table as CSV, with units: <a href="kpis.csv">kpis.csv</a>.</p>
 <p>{html.escape(notes)}</p>
+{sections}
 {''.join(figs)}
 </body></html>
 """
@@ -262,13 +263,14 @@ def _report(bench, result, out):
     return mod.kpis(result), mod.figures(result, out), getattr(mod, "TEXT", "")
 
 
-def write_report(bench, result, out_dir, wall=None):
-    """PNGs and index.html for one bench run; returns the KPIs."""
+def write_report(bench, result, out_dir, wall=None, sections=""):
+    """PNGs and index.html for one bench run (``sections``: more of the page,
+    HTML, after the KPI table); returns the KPIs."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     kpis, images, notes = _report(bench, result, out)
     images = list(images) + bench_animation(result, out, title=f"{bench}, bird's-eye view")
     span = result.time[-1] - result.time[0]
     intro = f"Bench {bench}: {span:g} s simulated" + (f" in {wall:.2f} s." if wall else ".")
-    write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes)
+    write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes, sections)
     return kpis

@@ -10,12 +10,13 @@ from artibus import runner
 from artibus.bench import ssp
 from artibus.files import check_output, make_dir, write_text
 from artibus.report import comparison
+from artibus.report import single_rate as single_rate_report
 from artibus.report.pages import write_index, write_report
 
 
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
                 algorithm="gauss-seidel", can=None, can_log=None, can_faults=None, report=None, output=None,
-                progress=False, checked=None, log=print):
+                progress=False, checked=None, log=print, single_rate=False):
     """Run each bench (names or .ssp paths) with its variants (``variants``: names, as
     ``--variant``), then the user's values (``user``: {"comp.var": value}, from
     --ssv and --set); ``every``: the benches are all of ssp/benches/ (``--all``:
@@ -24,8 +25,10 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     checked before the run (``checked(path)`` is told each, for the partial
     results after a failure); an interrupt leaves OUT.partial.csv
     (runner.save_partial). ``log``: print, for what the command line prints (an
-    FMU's warnings go to sys.stderr). Returns [(bench, report directory, KPIs)]
-    of the benches with a report."""
+    FMU's warnings go to sys.stderr). ``single_rate``: every component at one
+    step (--single-rate). With ``report`` each multi-rate bench is run once
+    more single-rate for its page (artibus.report.single_rate). Returns
+    [(bench, report directory, KPIs)] of the benches with a report."""
     if stop_time is None and not every:
         stop_time = ssp.variant_stop_time(benches[0], variants)    # None: the bench's own
     summary = []
@@ -33,7 +36,7 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, variants), **(user or {})}
         with runner.Simulation(bench, step=step, overrides=overrides, record=record, algorithm=algorithm,
-                               can=can, can_log=can_log, can_faults=can_faults) as sim:
+                               can=can, can_log=can_log, can_faults=can_faults, single_rate=single_rate) as sim:
             name = sim.bench.name
             # where the results go, checked before the run (not found unwritable after it)
             if report:
@@ -60,7 +63,13 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
             log(f"{name}: {out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
                 f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
             if out_dir is not None:
-                kpis = write_report(name, result, out_dir, sim.wall)
+                # the page says how far a master without multi-rate steps is: one more run, single-rate
+                sr = single_rate_report.measure(sim, result, lambda: single_rate_report.run_single_rate(
+                    bench, overrides, stop_time, step=step, record=record, algorithm=algorithm, can=can))
+                if sr.multi_rate:
+                    log(f"{name}: single-rate at {sr.step:g} s: KPIs within {sr.deviation:.3g} % "
+                        f"({sr.worst}); the extra run took {sr.wall:.2f} s")
+                kpis = write_report(name, result, out_dir, sim.wall, sections=sr.html())
                 if can_summary is not None:
                     write_text(out_dir / "can_bus.txt", can_summary + "\n")
                 log(f"{name}: report {out_dir / 'index.html'}")

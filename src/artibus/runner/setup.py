@@ -10,7 +10,7 @@ import numpy as np
 
 from artibus.base import ArtibusError
 from artibus.bench.parameters import check_against, suggest
-from artibus.bench.units import declared_unit, unit_conversion
+from artibus.bench.units import Quantity, convert, declared_unit, unit_conversion
 from artibus.fmu import Fmu
 from artibus.runner.plan import _order
 from artibus.runner.unit import Link, Unit, _RawCalls, _TypedCalls, _typed_convert
@@ -66,6 +66,9 @@ class _Setup:
                                        f"(give --step or a stepSize annotation)")
         self.units = list(units.values())
         self.base_step = step if step is not None else min(u.step for u in self.units)
+        if getattr(self, "single_rate", False):      # every component at the one step
+            for u in self.units:
+                u.step = self.base_step
         for u in self.units:
             r = u.step / self.base_step
             if abs(r - round(r)) > 1e-9 or round(r) < 1:
@@ -91,6 +94,10 @@ class _Setup:
             origins.setdefault(comp, {})[var] = "--set/--ssv/--variant"
         for path, values in self.parameters.items():
             resolve_resources(self._tmp, where, values, origins.get(path))
+            for var, value in values.items():     # --ssv FILE's values with a unit: in the variable's
+                v = units[path].fmu.vars.get(var)
+                if isinstance(value, Quantity) and v is not None and v.type == "Real":
+                    values[var] = convert(value, v, units[path].fmu.md, f"{path}.{var}")
         for path, values in self.parameters.items():
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
 

@@ -54,7 +54,7 @@ class Simulation(_Setup):
     """A bench, set up and ready to run (the set-up: artibus.runner.setup)."""
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
-                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None):
+                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
         the start of each of the component's steps. cut: inputs ("comp.input")
@@ -68,13 +68,19 @@ class Simulation(_Setup):
         forms, see artibus.can.parse_fault). A CAN bench's result has a column
         ``can.<message>.sinceGood`` per message: the cycles since the
         receivers last accepted a frame of it, as of the inputs in the same
-        row."""
+        row. single_rate: every component at the one step (--step, else the
+        shortest of the bench's), as a master without multi-rate steps runs
+        the bench. What the bench holds that the runner does not apply is
+        printed as warnings, once (artibus.bench.portability)."""
         self.can = None
+        self.single_rate = single_rate
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
         self.algorithm = algorithm
         self.ssp = ssp_mod.ssp_path(ssp)
         self.bench = ssp_mod.read(self.ssp)
+        from artibus.bench.portability import warn
+        warn(self.ssp)
         where = self.bench.file
         if step is not None and not step > 0:
             raise ArtibusError(f"--step {step}: the communication step must be > 0")
