@@ -140,14 +140,15 @@ def includes(path):
         return INCLUDE_RE.findall(f.read())
 
 
-def closure(root, name, sources):
-    """The model's C files and every local header they include (transitively), as
-    repository-relative paths, and the system headers named."""
+def closure(root, name, sources, fmi_version="2"):
+    """The model's C files and every local header they include (transitively), with the FMI
+    layer of that FMI version (src/fmi/fmi<v>Functions.c), as repository-relative paths, and the
+    system headers named."""
     inc_dirs = [os.path.join(root, d) for d in
-                ("src/fmi", f"src/models/{name}", "src/models/common", "include/fmi2")]
+                ("src/fmi", f"src/models/{name}", "src/models/common", f"include/fmi{fmi_version}")]
     inc_dirs += sorted({os.path.dirname(os.path.join(root, s)) for s in sources})   # as add_fmu
     todo = [os.path.normpath(os.path.join(root, s)) for s in sources]
-    todo.append(os.path.join(root, "src/fmi/fmi2Functions.c"))
+    todo.append(os.path.join(root, f"src/fmi/fmi{fmi_version}Functions.c"))
     files, system = set(), set()
     while todo:
         path = todo.pop()
@@ -640,7 +641,7 @@ def main(argv=None):
     binaries = [own] + add_binaries(tree, name, platform_dirs, a.fmi_version, older_than=a.xml)
     platforms = sorted(d for d in os.listdir(os.path.join(tree, "binaries")))
 
-    files, system = closure(root, name, a.sources)
+    files, system = closure(root, name, a.sources, a.fmi_version)
     libraries = ["artibus"]
     with_sundials = [os.path.basename(b) for b in binaries
                      if any(m in open(b, "rb").read() for m in SUNDIALS_MARKERS)]
