@@ -489,3 +489,47 @@ def test_packer_win64_hook_and_reproducible(tmp_path):
     with zipfile.ZipFile(tmp_path / "d.fmu") as z:
         md = ET.fromstring(z.read("modelDescription.xml"))
     assert md.get("generationDateAndTime") == "2026-01-01T00:00:00Z"
+
+
+def test_packer_platform_dirs(tmp_path):
+    """--platform-dir TUPLE=DIR packs DIR/<Name>.<ext> into the folder the FMI version names
+    (FMI 2.0: aarch64-linux keeps its FMI 3.0 tuple, x86_64-windows is win64); an empty or
+    missing one leaves the folder out (an old one removed); an unknown tuple is refused with
+    a message naming it, no traceback"""
+    name = "TrainGuidance"
+    tree = tmp_path / "tree"
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        z.extractall(tree)
+    gen = tmp_path / "gen"
+    gen.mkdir()
+    for f in ("model_vars.c", "model_vars.h"):
+        shutil.copy(tree / "sources" / f, gen / f)
+    arm, win = tmp_path / "arm", tmp_path / "win"
+    arm.mkdir()
+    win.mkdir()
+    so = b"\x7fELF not really an aarch64 shared object"
+    (arm / f"{name}.so").write_bytes(so)
+    (win / f"{name}.dll").write_bytes(b"MZ")
+    env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "SOURCE_DATE_EPOCH")}
+
+    def pack(out, *dirs):
+        return subprocess.run([sys.executable, str(ROOT / "src/fmi/package_fmu.py"), "--name", name,
+                               "--root", str(ROOT), "--xml", str(ROOT / "modelDescription" / f"{name}.xml"),
+                               "--gen", str(gen), "--tree", str(tree), "--fmu", str(out),
+                               "--platform", "x86_64-linux", "--fmi-version", "2",
+                               *[f"--platform-dir={d}" for d in dirs],
+                               "--sources", "src/models/TrainGuidance/model.c",
+                               "src/models/TrainGuidance/guidance.c", "--resources"],
+                              capture_output=True, text=True, env=env)
+
+    assert pack(tmp_path / "a.fmu", f"aarch64-linux={arm}", f"x86_64-windows={win}").returncode == 0
+    with zipfile.ZipFile(tmp_path / "a.fmu") as z:
+        assert z.read(f"binaries/aarch64-linux/{name}.so") == so
+        assert z.read(f"binaries/win64/{name}.dll") == b"MZ"
+        assert "binaries/aarch64-linux" in z.read("documentation/index.html").decode()
+    assert pack(tmp_path / "b.fmu", "aarch64-linux=", f"x86_64-windows={tmp_path / 'none'}").returncode == 0
+    with zipfile.ZipFile(tmp_path / "b.fmu") as z:
+        assert sorted({n.split("/")[1] for n in z.namelist() if n.startswith("binaries/")}) == ["linux64"]
+    bad = pack(tmp_path / "c.fmu", f"sparc-solaris={arm}")
+    assert bad.returncode != 0 and "sparc-solaris" in bad.stderr and "Traceback" not in bad.stderr
+    assert not (tmp_path / "c.fmu").exists()

@@ -634,6 +634,8 @@ def main(argv=None):
     platform_dirs = {"x86_64-windows": a.win64_dir}
     for item in a.platform_dir:
         platform, sep, d = item.partition("=")
+        if platform == a.platform and sep and not d:
+            continue        # the build's own platform, no cross build of it (a native ARM build)
         if not sep or platform not in SHARED_LIBRARY_EXT or platform == a.platform:
             sys.exit(f"package_fmu.py: --platform-dir {item!r}: not TUPLE=DIR with TUPLE one of "
                      f"{', '.join(p for p in SHARED_LIBRARY_EXT if p != a.platform)}")
