@@ -101,7 +101,8 @@ SHARED_LIBRARY_EXT = {
 #: FMI 2.0's names for binaries/ folders (FMI 2.0.4, 2.3: "win32", "win64", "linux32",
 #: "linux64", "darwin32", "darwin64"; "further names can be introduced by vendors"). A platform
 #: FMI 2.0 does not name keeps its FMI 3.0 tuple: 64-bit ARM Linux is binaries/aarch64-linux
-#: (linux64 is x86_64's by every tool's use). An importer must know that name: FMPy 0.3.32
+#: (FMI 3.0's table of platform tuples, 2.5.1, gives "Linux on ARM64" no FMI 2.0 name and
+#: linux64 to "Linux on 64-bit x86"). An importer must know that name: FMPy 0.3.32
 #: loads an FMI 2.0 binary from linux64 on any 64-bit Linux, so on ARM it takes the FMI 3.0
 #: FMU or compiles the source FMU (docs/developer/building.md).
 FMI2_FOLDERS = {
