@@ -3,7 +3,7 @@
 #   the repository's root as the working directory, its path in ROOT;
 #   CACHE           where third-party builds that do not change are kept, outside
 #                   the clone: $ARTIBUS_CACHE, default ${XDG_CACHE_HOME:-~/.cache}/artibus
-#                   (SUNDIALS for linux and win64, fmi-sim, the Wine prefix);
+#                   (SUNDIALS for linux, win64 and aarch64, fmi-sim, the Wine prefix);
 #                   `rm -rf` it to build everything again;
 #   work_dir DIR    DIR (relative to the root unless absolute) made; prints its
 #                   absolute path;

@@ -43,10 +43,13 @@ fi
 
 # the Windows 64-bit DLLs first (mingw-w64), packed by the linux build into binaries/win64
 bash scripts/build_win64.sh build-win64
+# the 64-bit ARM Linux binaries (Debian's aarch64 cross compilers, tested under qemu-user), packed into binaries/aarch64-linux
+bash scripts/build_aarch64.sh build-aarch64
 # SUNDIALS built optimised (Debian's static libraries are compiled without
 # optimisation), once, into build-sundials/ (scripts/build_sundials.sh, about a minute)
 bash scripts/build_sundials.sh build-sundials
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DARTIBUS_WIN64_DIR="$PWD/build-win64/win64" \
+  -DARTIBUS_AARCH64_DIR="$PWD/build-aarch64/aarch64-linux" \
   -DSUNDIALS_DIR="$PWD/build-sundials/sundials-install/lib/cmake/sundials" >/dev/null
 cmake --build build -j"$(nproc)"
 .venv/bin/artibus pack >/dev/null

@@ -96,10 +96,11 @@ def test_archive_lists_binaries_documentation_licences_icon(name):
     for member in names:
         if member.startswith("documentation/licenses/") and "artibus" not in member:
             assert _read(name, member) == (ROOT / "licenses" / member.rsplit("/", 1)[1]).read_bytes()
-    # win64 only as the mingw build's DLL, never anything else under binaries/
+    # win64 and aarch64-linux only as the cross builds' binaries, nothing else under binaries/
     for member in names:
         if member.startswith("binaries/"):
-            assert member in (f"binaries/linux64/{name}.so", f"binaries/win64/{name}.dll"), member
+            assert member in (f"binaries/linux64/{name}.so", f"binaries/win64/{name}.dll",
+                              f"binaries/aarch64-linux/{name}.so"), member
 
 
 @pytest.mark.parametrize("name", FMU_NAMES)
@@ -356,35 +357,53 @@ def _stimulus(md, t):
 
 
 @pytest.mark.parametrize("name", [n for n in FMU_NAMES if _ships_sources(n)])
-def test_sources_compile_and_give_the_shipped_results(name, tmp_path):
-    """gcc builds sources/ (the files of <SourceFiles>, sources/ as the include path, the
-    build's flags) into a shared library that needs only libc/libm; swapped into a copy of
-    the FMU it gives the shipped binary's results bit for bit"""
-    unzipped = tmp_path / "fmu"
-    with zipfile.ZipFile(fmu_file(name)) as z:
-        z.extractall(unzipped)
+def test_sources_are_one_flat_set(name):
+    """sources/ is one folder, the only include path: every file of <SourceFiles> is in it,
+    every local #include of every file there names a file there, and the FMI headers are not
+    shipped (FMI 2.0.4, 2.3: the importer's own are used)"""
+    names = _names(name)
+    shipped = {n[len("sources/"):] for n in names if n.startswith("sources/") and n != "sources/"}
+    assert shipped and all("/" not in f for f in shipped), sorted(shipped)
+    assert not shipped & {"fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"}
     md = read_model_description(str(fmu_file(name)))
+    assert len(md.buildConfigurations) == 1 and len(md.buildConfigurations[0].sourceFileSets) == 1
     files = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
-    assert "fmi2Functions.c" in files and "model_vars.c" in files
-    for f in files:
-        assert (unzipped / "sources" / f).is_file(), f
-    so = tmp_path / f"{name}.so"
-    cmd = ["gcc", "-std=gnu11", "-O3", "-DNDEBUG", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror",
-           "-Wno-unused-parameter", "-I", str(unzipped / "sources"),
-           *[str(unzipped / "sources" / f) for f in files], "-o", str(so), "-lm"]
+    assert files[0] == "fmi2Functions.c" and "model_vars.c" in files
+    assert set(files) <= shipped
+    assert {f for f in shipped if f.endswith(".c")} == set(files)   # nothing left uncompiled
+    for f in shipped:
+        for inc in re.findall(r'^\s*#\s*include\s*"([^"]+)"', _read(name, f"sources/{f}").decode(), re.M):
+            assert inc in shipped or inc.startswith("fmi2"), (f, inc)
+
+
+@pytest.mark.parametrize("name", [n for n in FMU_NAMES if _ships_sources(n)])
+def test_fmpy_compile_gives_the_shipped_results(name, tmp_path):
+    """A copy of the FMU with its binaries removed, compiled by `fmpy compile` (FMPy's CMake
+    project: the first source file set, sources/ and FMPy's FMI headers as the include path,
+    warnings as errors), gets a linux64 binary that needs only libc/libm, and gives the shipped
+    binary's results bit for bit on a co-simulation of (at most 3 s of) its default experiment
+    with every input moving"""
+    if not shutil.which("cmake"):
+        pytest.skip("cmake is not installed (fmpy compile runs it; scripts/setup.sh installs it)")
+    copy = tmp_path / f"{name}.fmu"
+    with zipfile.ZipFile(fmu_file(name)) as zin, zipfile.ZipFile(copy, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            if not item.filename.startswith("binaries/"):
+                zout.writestr(item, zin.read(item))
+    assert fmpy.supported_platforms(str(copy)) == ["c-code"]
     env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
-    out = subprocess.run(cmd, capture_output=True, text=True, env=env)
-    assert out.returncode == 0, out.stderr
+    out = subprocess.run([sys.executable, "-m", "fmpy.cli", "compile", "--warning-as-error", str(copy)],
+                         capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+    with zipfile.ZipFile(copy) as z:
+        assert f"binaries/linux64/{name}.so" in z.namelist()
+        so = tmp_path / f"{name}.so"
+        so.write_bytes(z.read(f"binaries/linux64/{name}.so"))
     ldd = subprocess.run(["ldd", str(so)], capture_output=True, text=True, check=True, env=env).stdout
     libs = {line.split()[0].rsplit("/", 1)[-1] for line in ldd.splitlines() if line.strip()}
     assert libs <= SYSTEM_LIBS, libs
 
-    rebuilt = tmp_path / f"{name}.fmu"
-    with zipfile.ZipFile(fmu_file(name)) as zin, zipfile.ZipFile(rebuilt, "w", zipfile.ZIP_DEFLATED) as zout:
-        for item in zin.infolist():
-            data = so.read_bytes() if item.filename == f"binaries/linux64/{name}.so" else zin.read(item)
-            zout.writestr(item, data)
-
+    md = read_model_description(str(fmu_file(name)))
     stop = min(float(md.defaultExperiment.stopTime), 3.0)
     step = float(md.defaultExperiment.stepSize or 0.01)
     t = np.arange(0.0, stop + step, step)
@@ -396,7 +415,7 @@ def test_sources_compile_and_give_the_shipped_results(name, tmp_path):
     outputs = [v.name for v in md.modelVariables if v.causality == "output" and v.type != "String"]
     kw = dict(stop_time=stop, output_interval=step, input=inputs, output=outputs, fmi_type="CoSimulation")
     shipped = simulate_fmu(str(fmu_file(name)), **kw)
-    ours = simulate_fmu(str(rebuilt), **kw)
+    ours = simulate_fmu(str(copy), **kw)
     assert len(shipped) == len(t) or len(shipped) > 10
     moved = False
     for v in outputs:
@@ -404,6 +423,30 @@ def test_sources_compile_and_give_the_shipped_results(name, tmp_path):
         assert np.array_equal(a, b), f"{v}: largest difference {np.max(np.abs(a - b))}"
         moved |= bool(np.ptp(a.astype(float)) > 0)
     assert moved, "no output moved: the comparison would say nothing"
+
+
+def test_build_description_is_valid_fmi3(tmp_path):
+    """the FMI 3.0 sources/buildDescription.xml the packer writes (for the FMI 3.0 build)
+    passes FMI 3.0's fmi3BuildDescription.xsd (FMPy's copy) and FMPy reads back the files,
+    the language and the one include directory"""
+    spec = importlib.util.spec_from_file_location("package_fmu", ROOT / "src/fmi/package_fmu.py")
+    pf = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(pf)
+    files = ["fmi3Functions.c", "model.c", "guidance.c", "model_vars.c"]
+    xml = tmp_path / "buildDescription.xml"
+    xml.write_text(pf.build_description("TrainGuidance", files), encoding="utf-8")
+    from fmpy.model_description import read_build_description
+    (conf,) = read_build_description(str(xml), validate=True)
+    assert conf.modelIdentifier == "TrainGuidance"
+    (fset,) = conf.sourceFileSets
+    assert fset.sourceFiles == files and fset.language == "C99" and fset.includeDirectories == ["."]
+    # the binaries/ folders by FMI version (FMI 2.0.4, 2.3; FMI 3.0, 2.5.1.1)
+    assert [pf.binaries_folder(p, "2") for p in ("x86_64-linux", "x86_64-windows", "aarch64-linux")] \
+        == ["linux64", "win64", "aarch64-linux"]
+    assert [pf.binaries_folder(p, "3") for p in ("x86_64-linux", "x86_64-windows", "aarch64-linux")] \
+        == ["x86_64-linux", "x86_64-windows", "aarch64-linux"]
+    with pytest.raises(ValueError, match="sparc"):
+        pf.binaries_folder("sparc-solaris")
 
 
 def test_packer_win64_hook_and_reproducible(tmp_path):
@@ -446,3 +489,47 @@ def test_packer_win64_hook_and_reproducible(tmp_path):
     with zipfile.ZipFile(tmp_path / "d.fmu") as z:
         md = ET.fromstring(z.read("modelDescription.xml"))
     assert md.get("generationDateAndTime") == "2026-01-01T00:00:00Z"
+
+
+def test_packer_platform_dirs(tmp_path):
+    """--platform-dir TUPLE=DIR packs DIR/<Name>.<ext> into the folder the FMI version names
+    (FMI 2.0: aarch64-linux keeps its FMI 3.0 tuple, x86_64-windows is win64); an empty or
+    missing one leaves the folder out (an old one removed); an unknown tuple is refused with
+    a message naming it, no traceback"""
+    name = "TrainGuidance"
+    tree = tmp_path / "tree"
+    with zipfile.ZipFile(fmu_file(name)) as z:
+        z.extractall(tree)
+    gen = tmp_path / "gen"
+    gen.mkdir()
+    for f in ("model_vars.c", "model_vars.h"):
+        shutil.copy(tree / "sources" / f, gen / f)
+    arm, win = tmp_path / "arm", tmp_path / "win"
+    arm.mkdir()
+    win.mkdir()
+    so = b"\x7fELF not really an aarch64 shared object"
+    (arm / f"{name}.so").write_bytes(so)
+    (win / f"{name}.dll").write_bytes(b"MZ")
+    env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "SOURCE_DATE_EPOCH")}
+
+    def pack(out, *dirs):
+        return subprocess.run([sys.executable, str(ROOT / "src/fmi/package_fmu.py"), "--name", name,
+                               "--root", str(ROOT), "--xml", str(ROOT / "modelDescription" / f"{name}.xml"),
+                               "--gen", str(gen), "--tree", str(tree), "--fmu", str(out),
+                               "--platform", "x86_64-linux", "--fmi-version", "2",
+                               *[f"--platform-dir={d}" for d in dirs],
+                               "--sources", "src/models/TrainGuidance/model.c",
+                               "src/models/TrainGuidance/guidance.c", "--resources"],
+                              capture_output=True, text=True, env=env)
+
+    assert pack(tmp_path / "a.fmu", f"aarch64-linux={arm}", f"x86_64-windows={win}").returncode == 0
+    with zipfile.ZipFile(tmp_path / "a.fmu") as z:
+        assert z.read(f"binaries/aarch64-linux/{name}.so") == so
+        assert z.read(f"binaries/win64/{name}.dll") == b"MZ"
+        assert "binaries/aarch64-linux" in z.read("documentation/index.html").decode()
+    assert pack(tmp_path / "b.fmu", "aarch64-linux=", f"x86_64-windows={tmp_path / 'none'}").returncode == 0
+    with zipfile.ZipFile(tmp_path / "b.fmu") as z:
+        assert sorted({n.split("/")[1] for n in z.namelist() if n.startswith("binaries/")}) == ["linux64"]
+    bad = pack(tmp_path / "c.fmu", f"sparc-solaris={arm}")
+    assert bad.returncode != 0 and "sparc-solaris" in bad.stderr and "Traceback" not in bad.stderr
+    assert not (tmp_path / "c.fmu").exists()

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Assemble an FMU's tree and zip it (called by add_fmu in CMakeLists.txt after linking).
 
-The tree <build>/fmu/<Name>/ already holds binaries/linux64/<Name>.so. This adds
+The tree <build>/fmu/<Name>/ already holds the build's own binary (binaries/linux64/<Name>.so
+for --platform x86_64-linux and FMI 2.0). This adds
 
   modelDescription.xml     the repository's modelDescription/<Name>.xml (the single source,
                            kept whole) with author, version (pyproject.toml's), copyright,
@@ -12,9 +13,15 @@ The tree <build>/fmu/<Name>/ already holds binaries/linux64/<Name>.so. This adds
   model.png                src/models/<Name>/model.png (made by scripts/make_icons.py);
   documentation/index.html from the model description and src/models/<Name>/README.md;
   documentation/licenses/  artibus's LICENSE and the notices of the libraries inside;
-  sources/                 the C sources, where the model needs nothing beyond the C library;
+  sources/                 the C sources, where the model needs nothing beyond the C library:
+                           one flat folder, sources/ the only include path (FMPy's
+                           `fmpy compile` compiles the listed files with no other), and for
+                           FMI 3.0 sources/buildDescription.xml (build_description());
   resources/               the add_fmu RESOURCES;
-  binaries/win64/<Name>.dll  when --win64-dir holds it (the mingw build);
+  binaries/<folder>/<Name>.<ext>  for each --platform-dir PLATFORM=DIR whose DIR holds the
+                           cross build's binary (the mingw build's <Name>.dll, the aarch64
+                           build's <Name>.so), in the folder the FMI version names it
+                           (binaries_folder());
 
 then writes the archive (entries in a fixed order with a fixed time stamp, so the same
 inputs give the same bytes) through a temporary file, so a reader never sees half an FMU.
@@ -22,7 +29,8 @@ inputs give the same bytes) through a temporary file, so a reader never sees hal
 Only the Python standard library is used: this runs inside the CMake build.
 
 usage: package_fmu.py --name N --root SRC --xml XML --gen GENDIR --tree TREE --fmu OUT.fmu
-                      [--sources S...] [--resources R...] [--win64-dir DIR]
+                      [--platform TUPLE] [--fmi-version 2|3] [--platform-dir TUPLE=DIR ...]
+                      [--sources S...] [--resources R...]
 """
 
 import argparse
@@ -80,6 +88,37 @@ LICENSE_TEXT = {
     "Eigen": "Eigen (MPL-2.0, header-only)",
 }
 
+#: the platforms artibus builds or could build, by their FMI 3.0 platform tuple (FMI 3.0,
+#: 2.5.1.1: <arch>-<sys>), with the shared library's file extension
+SHARED_LIBRARY_EXT = {
+    "x86_64-linux": ".so",
+    "aarch64-linux": ".so",
+    "x86_64-windows": ".dll",
+    "x86_64-darwin": ".dylib",
+    "aarch64-darwin": ".dylib",
+}
+
+#: FMI 2.0's names for binaries/ folders (FMI 2.0.4, 2.3: "win32", "win64", "linux32",
+#: "linux64", "darwin32", "darwin64"; "further names can be introduced by vendors"). A platform
+#: FMI 2.0 does not name keeps its FMI 3.0 tuple: 64-bit ARM Linux is binaries/aarch64-linux
+#: (FMI 3.0's table of platform tuples, 2.5.1, gives "Linux on ARM64" no FMI 2.0 name and
+#: linux64 to "Linux on 64-bit x86"). An importer must know that name: FMPy 0.3.32
+#: loads an FMI 2.0 binary from linux64 on any 64-bit Linux, so on ARM it takes the FMI 3.0
+#: FMU or compiles the source FMU (docs/developer/building.md).
+FMI2_FOLDERS = {
+    "x86_64-linux": "linux64",
+    "x86_64-windows": "win64",
+    "x86_64-darwin": "darwin64",
+}
+
+#: the FMI headers the importer brings: not in sources/ (FMI 2.0.4, 2.3: "all needed C sources
+#: and C header files ... with exception of fmi2TypesPlatform.h, fmi2FunctionTypes.h and
+#: fmi2Functions.h"; FMI 3.0, 2.5.1: the same for fmi3*.h)
+STANDARD_HEADERS = {
+    "2": ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+    "3": ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h"),
+}
+
 INCLUDE_RE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 
 
@@ -102,13 +141,15 @@ def includes(path):
         return INCLUDE_RE.findall(f.read())
 
 
-def closure(root, name, sources):
-    """The model's C files and every local header they include (transitively), as
-    repository-relative paths, and the system headers named."""
+def closure(root, name, sources, fmi_version="2"):
+    """The model's C files and every local header they include (transitively), with the FMI
+    layer of that FMI version (src/fmi/fmi<v>Functions.c), as repository-relative paths, and the
+    system headers named."""
     inc_dirs = [os.path.join(root, d) for d in
-                ("src/fmi", f"src/models/{name}", "src/models/common", "include/fmi2")]
+                ("src/fmi", f"src/models/{name}", "src/models/common", f"include/fmi{fmi_version}")]
+    inc_dirs += sorted({os.path.dirname(os.path.join(root, s)) for s in sources})   # as add_fmu
     todo = [os.path.normpath(os.path.join(root, s)) for s in sources]
-    todo.append(os.path.join(root, "src/fmi/fmi2Functions.c"))
+    todo.append(os.path.join(root, f"src/fmi/fmi{fmi_version}Functions.c"))
     files, system = set(), set()
     while todo:
         path = todo.pop()
@@ -383,7 +424,8 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
     if de is not None:
         rows.append(("default experiment", ", ".join(f"{k} = {v}" for k, v in de.attrib.items())))
     rows.append(("sources", f"sources/ ({len(source_files)} C files listed in &lt;SourceFiles&gt;, "
-                 "compile them with sources/ as the include path)" if source_files else
+                 "one flat folder: compile them with sources/ and your importer's FMI headers as the "
+                 "include path, or <code>fmpy compile</code> the FMU)" if source_files else
                  f"not shipped: {e(why_not or '')}"))
     meta = "".join(f"<tr><th>{e(k)}</th><td>{v if k == 'sources' else e(v or '')}</td></tr>" for k, v in rows)
 
@@ -465,34 +507,73 @@ def copy(src, dst):
     shutil.copyfile(src, dst)
 
 
-def ship_sources(root, name, gen, tree, files):
-    """sources/: the files at their repository paths under sources/ (src/ dropped), the
-    generated model_vars.c/.h and the FMI headers at the top, and for each header the
-    build finds through an include directory (the model's folder, common/) a one-line
-    header at the top that includes it, so sources/ alone is the include path."""
+def ship_sources(root, gen, tree, files, fmi_version="2"):
+    """sources/: the model's files (closure()) and the generated model_vars.c/.h in one flat
+    folder, so sources/ alone is the include path: every local #include names a file by its
+    name alone (the build puts each source's folder on the include path), and no two files
+    share a name. The FMI headers stay out (STANDARD_HEADERS: the importer's own are used).
+    Returns the C files to compile, the FMI layer first."""
     dst = os.path.join(tree, "sources")
     reset_dir(dst)
-    c_files = []
-    top = {}
-    for f in files:
-        rel = f[len("src/"):] if f.startswith("src/") else f
-        if rel.startswith(("fmi/", "include/fmi2/")):
-            rel = os.path.basename(rel)
-        copy(os.path.join(root, f), os.path.join(dst, rel))
-        if rel.endswith(".c"):
-            c_files.append(rel)
-        elif rel.startswith((f"models/{name}/", "models/common/")):
-            top.setdefault(os.path.basename(rel), rel)
-    for g in ("model_vars.c", "model_vars.h"):
-        copy(os.path.join(gen, g), os.path.join(dst, g))
-    c_files.append("model_vars.c")
-    for base, rel in sorted(top.items()):
-        if os.path.exists(os.path.join(dst, base)):
+    skip = STANDARD_HEADERS[fmi_version]
+    flat = {}
+    for f in list(files) + [os.path.join(os.path.relpath(gen, root), g) for g in ("model_vars.c", "model_vars.h")]:
+        base = os.path.basename(f)
+        if base in skip:
             continue
-        with open(os.path.join(dst, base), "w", encoding="utf-8") as out:
-            out.write(f'/* artibus: {base} lives in {rel}; the build has its folder on the include path */\n'
-                      f'#include "{rel}"\n')
-    return sorted(c_files, key=lambda c: (c.count("/"), c))
+        if base in flat:
+            raise ValueError(f"sources/: {flat[base]} and {f} have the same name {base}")
+        flat[base] = f
+        copy(os.path.join(root, f), os.path.join(dst, base))
+        for kind, inc in includes(os.path.join(root, f)):
+            if kind == '"' and "/" in inc:
+                raise ValueError(f"{f}: #include \"{inc}\" names a folder; sources/ is flat")
+    layer = {f"fmi{fmi_version}Functions.c": 0}
+    return sorted((c for c in flat if c.endswith(".c")), key=lambda c: (layer.get(c, 1), c))
+
+
+def build_description(name, c_files):
+    """sources/buildDescription.xml (FMI 3.0, 2.5.1.2 "Build Configurations", the schema
+    fmi3BuildDescription.xsd): one build configuration for the model identifier, one C99
+    source file set, sources/ (".") its only include directory. Returns the document's text.
+    (FMI 2.0.4, 2.3 lets an FMI 2.0 FMU carry it too; FMPy reads it for FMI 3.0 only, so an
+    FMI 2.0 FMU says the same with <SourceFiles>.)"""
+    root = ET.Element("fmiBuildDescription", {"fmiVersion": "3.0"})
+    conf = ET.SubElement(root, "BuildConfiguration", {"modelIdentifier": name})
+    fset = ET.SubElement(conf, "SourceFileSet", {"language": "C99"})
+    for f in c_files:
+        ET.SubElement(fset, "SourceFile", {"name": f})
+    ET.SubElement(fset, "IncludeDirectory", {"name": "."})
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def binaries_folder(platform, fmi_version="2"):
+    """The binaries/ folder of a platform (its FMI 3.0 tuple) in an FMU of that FMI version."""
+    if platform not in SHARED_LIBRARY_EXT:
+        raise ValueError(f"platform {platform!r}: not one of {', '.join(SHARED_LIBRARY_EXT)}")
+    return FMI2_FOLDERS.get(platform, platform) if fmi_version == "2" else platform
+
+
+def add_binaries(tree, name, platform_dirs, fmi_version="2", older_than=None):
+    """binaries/<folder>/<name>.<ext> of each cross-built platform whose folder (platform_dirs:
+    {tuple: dir}, empty dirs skipped) holds <name>.<ext>; a platform without it gets no folder
+    (an old one is removed). A binary older than the file older_than is warned about. Returns
+    the binaries copied."""
+    copied = []
+    for platform, src_dir in sorted(platform_dirs.items()):
+        fname = name + SHARED_LIBRARY_EXT[platform]
+        dst = os.path.join(tree, "binaries", binaries_folder(platform, fmi_version))
+        if os.path.isdir(dst):
+            shutil.rmtree(dst)
+        src = os.path.join(src_dir, fname) if src_dir else ""
+        if not src or not os.path.isfile(src):
+            continue
+        if older_than and os.path.getmtime(src) < os.path.getmtime(older_than):
+            print(f"package_fmu.py: warning: {src} is older than {older_than}", file=sys.stderr)
+        copy(src, os.path.join(dst, fname))
+        copied.append(src)
+    return copied
 
 
 def zip_tree(tree, fmu):
@@ -534,31 +615,36 @@ def main(argv=None):
     ap.add_argument("--fmu", required=True)
     ap.add_argument("--sources", nargs="*", default=[])
     ap.add_argument("--resources", nargs="*", default=[])
-    ap.add_argument("--win64-dir", default="")
+    ap.add_argument("--platform", default="x86_64-linux", choices=sorted(SHARED_LIBRARY_EXT),
+                    help="the platform of the binary already in the tree (the build's own)")
+    ap.add_argument("--fmi-version", default="2", choices=("2", "3"))
+    ap.add_argument("--platform-dir", action="append", default=[], metavar="TUPLE=DIR",
+                    help="a cross build's folder of <Name>.<ext> for platform TUPLE (DIR may be empty)")
+    ap.add_argument("--win64-dir", default="", help="the same as --platform-dir x86_64-windows=DIR")
     a = ap.parse_args(argv)
     name, root, tree = a.name, os.path.abspath(a.root), os.path.abspath(a.tree)
     version = project_version(root)
     model_dir = os.path.join(root, "src", "models", name)
 
-    so = os.path.join(tree, "binaries", "linux64", f"{name}.so")
-    if not os.path.isfile(so):
-        sys.exit(f"package_fmu.py: {so} missing")
+    own = os.path.join(tree, "binaries", binaries_folder(a.platform, a.fmi_version),
+                       name + SHARED_LIBRARY_EXT[a.platform])
+    if not os.path.isfile(own):
+        sys.exit(f"package_fmu.py: {own} missing")
 
-    # binaries/win64 from the cross build's folder, when it has this FMU's DLL
-    win_dst = os.path.join(tree, "binaries", "win64")
-    if os.path.isdir(win_dst):
-        shutil.rmtree(win_dst)
-    binaries = [so]
-    if a.win64_dir:
-        dll = os.path.join(a.win64_dir, f"{name}.dll")
-        if os.path.isfile(dll):
-            if os.path.getmtime(dll) < os.path.getmtime(a.xml):
-                print(f"package_fmu.py: warning: {dll} is older than {a.xml}", file=sys.stderr)
-            copy(dll, os.path.join(win_dst, f"{name}.dll"))
-            binaries.append(dll)
+    # the cross builds' binaries, where their folders hold this FMU's
+    platform_dirs = {"x86_64-windows": a.win64_dir}
+    for item in a.platform_dir:
+        platform, sep, d = item.partition("=")
+        if platform == a.platform and sep and not d:
+            continue        # the build's own platform, no cross build of it (a native ARM build)
+        if not sep or platform not in SHARED_LIBRARY_EXT or platform == a.platform:
+            sys.exit(f"package_fmu.py: --platform-dir {item!r}: not TUPLE=DIR with TUPLE one of "
+                     f"{', '.join(p for p in SHARED_LIBRARY_EXT if p != a.platform)}")
+        platform_dirs[platform] = d or platform_dirs.get(platform, "")
+    binaries = [own] + add_binaries(tree, name, platform_dirs, a.fmi_version, older_than=a.xml)
     platforms = sorted(d for d in os.listdir(os.path.join(tree, "binaries")))
 
-    files, system = closure(root, name, a.sources)
+    files, system = closure(root, name, a.sources, a.fmi_version)
     libraries = ["artibus"]
     with_sundials = [os.path.basename(b) for b in binaries
                      if any(m in open(b, "rb").read() for m in SUNDIALS_MARKERS)]
@@ -586,9 +672,15 @@ def main(argv=None):
     for res in a.resources:
         copy(os.path.join(root, res), os.path.join(tree, "resources", os.path.basename(res)))
     os.makedirs(os.path.join(tree, "resources"), exist_ok=True)
-    c_files = ship_sources(root, name, a.gen, tree, files) if why_not is None else []
-    if c_files:
+    try:
+        c_files = ship_sources(root, a.gen, tree, files, a.fmi_version) if why_not is None else []
+    except ValueError as e:
+        sys.exit(f"package_fmu.py: {name}: {e}")
+    if c_files and a.fmi_version == "2":
         add_source_files(md, c_files)
+    elif c_files:   # FMI 3.0 has no <SourceFiles>: the build description says it
+        with open(os.path.join(tree, "sources", "buildDescription.xml"), "w", encoding="utf-8") as f:
+            f.write(build_description(name, c_files))
     write_xml(tree_md, os.path.join(tree, "modelDescription.xml"))
 
     icon = os.path.join(model_dir, "model.png")

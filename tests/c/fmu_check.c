@@ -10,7 +10,7 @@
  *        co-simulation from the start values and the parameters given, STOP/H steps
  *        of H with tolerance TOL, then every real output printed as "name value";
  *        tests/test_win64.py compares the win64 DLL's, run under Wine, with the
- *        linux64 binary's)
+ *        linux64 binary's, tests/test_aarch64.py the aarch64 one's under qemu-user)
  */
 #ifdef _WIN32
 /* the win64 build (scripts/build_win64.sh), run under Wine: the DLL through LoadLibrary */
@@ -22,7 +22,12 @@
 #define FMU_BINARY "%s/binaries/win64/%s.dll"
 #else
 #include <dlfcn.h>
+#if defined(__aarch64__)
+/* the aarch64 build (scripts/build_aarch64.sh), run under qemu-user (or on an ARM machine) */
+#define FMU_BINARY "%s/binaries/aarch64-linux/%s.so"
+#else
 #define FMU_BINARY "%s/binaries/linux64/%s.so"
+#endif
 #endif
 #include <math.h>
 #include <stdarg.h>

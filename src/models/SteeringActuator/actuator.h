@@ -12,7 +12,7 @@
 #ifndef STEERING_ACTUATOR_H
 #define STEERING_ACTUATOR_H
 
-#include "../common/can_fallback.h"
+#include "can_fallback.h"   /* src/models/common, on the include path */
 
 typedef struct {
     double Tact, rateMax;        /* [s], [rad/s]; 0 = none */

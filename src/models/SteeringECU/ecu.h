@@ -49,10 +49,13 @@
 #ifndef STEERING_ECU_H
 #define STEERING_ECU_H
 
-#include "../TrainGuidance/guidance.h"
-#include "../ForceMinimization/forcemin.h"
-#include "../common/can_fallback.h"
-#include "../common/leading_hinges.h"
+/* by name alone: the build puts the folders of src/models/TrainGuidance,
+ * ForceMinimization and common on the include path, the source FMU has them all
+ * in sources/ */
+#include "guidance.h"
+#include "forcemin.h"
+#include "can_fallback.h"
+#include "leading_hinges.h"
 
 /* the messages an ECU watches, in this order (bits of the stale mask) */
 enum { ECU_MSG_A1 = 0, ECU_MSG_G1 = 1, ECU_MSG_G2 = 2, ECU_MSG_STATE = 3, ECU_MSG_A6 = 4, ECU_NMSG = 5 };
