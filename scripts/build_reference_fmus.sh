@@ -43,7 +43,7 @@ if ! have_all; then
     echo 'fn main() {}' >"$crate/src/main.rs"
     QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet cargo fetch --manifest-path "$crate/Cargo.toml"
     # where cargo unpacked fmi-sys (its registry under CARGO_HOME)
-    src_dir="$(cargo metadata --format-version 1 --manifest-path "$crate/Cargo.toml" 2>/dev/null \
+    src_dir="$(cargo metadata --offline --format-version 1 --manifest-path "$crate/Cargo.toml" 2>/dev/null \
       | python3 -c 'import json, sys, os
 m = json.load(sys.stdin)
 p = next(p for p in m["packages"] if p["name"] == "fmi-sys")

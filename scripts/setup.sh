@@ -78,4 +78,4 @@ fi
 # the Modelica Reference-FMUs (FMI 2.0), a test set of FMUs made by others
 # (tests/test_reference_fmus.py): built from their sources in the crate fmi-sys
 # (crates.io) once per machine into the cache, linked as .tools/reference-fmus/
-bash scripts/build_reference_fmus.sh
+bash scripts/build_reference_fmus.sh || echo "setup: the Reference-FMUs could not be built; their tests will be skipped"
