@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES="cmake make g++ libsundials-dev libeigen3-dev python3 python3-venv python3-pip mingw-w64 wine64 dpkg-dev chromium"
+APT_PACKAGES="cmake make g++ libsundials-dev libeigen3-dev python3 python3-venv python3-pip mingw-w64 wine64 dpkg-dev chromium libtbb12"
 missing=""
 for p in $APT_PACKAGES; do
   dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"
@@ -77,3 +77,8 @@ if [ -x "$fmi_sim/bin/fmi-sim" ] && [ "$(readlink .tools/bin/fmi-sim 2>/dev/null
   mkdir -p .tools/bin
   ln -sfn "$fmi_sim/bin/fmi-sim" .tools/bin/fmi-sim
 fi
+
+# the Modelica Reference-FMUs (FMI 2.0), a test set of FMUs made by others
+# (tests/test_reference_fmus.py): built from their sources in the crate fmi-sys
+# (crates.io) once per machine into the cache, linked as .tools/reference-fmus/
+bash scripts/build_reference_fmus.sh || echo "setup: the Reference-FMUs could not be built; their tests will be skipped"

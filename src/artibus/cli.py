@@ -7,7 +7,8 @@
   artibus list [--parameters]          the benches and FMUs, one line each (--parameters: every bound value)
   artibus info BENCH|FMU               a bench's components and connections, or an FMU's variables
   artibus simulate FMU [options]       run one FMU alone, write CSV
-  artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp
+  artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp; --portable [--variant V]:
+                                       a pack other SSP masters run as we do (fmus/<BENCH>[_V].portable.ssp)
   artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
   artibus replay LOG --bench BENCH     a recorded log (.csv, .blf, .asc) drives a bench; model against measured
   artibus sweep BENCH --grid C.V=A,B  many cases on Dask (grid, --variant axis, --design CSV/YAML), resumable
@@ -151,8 +152,20 @@ def cmd_list(args):
 
 def cmd_pack(args):
     from artibus.bench import ssp
-    for name in args.bench or ssp.bench_names():
-        print(ssp.pack(name))
+    if not args.portable:
+        if args.variant or args.output:
+            raise ArtibusError("--variant and -o are for a portable pack (--portable)")
+        for name in args.bench or ssp.bench_names():
+            print(ssp.pack(name))
+        return 0
+    from artibus.bench.portable import pack_portable
+    benches = args.bench or [b for b in ssp.bench_names() if ssp.read(ssp.ssp_path(b)).can is None]
+    if args.output and len(benches) != 1:
+        raise ArtibusError("-o names one portable pack: give one BENCH")
+    if args.variant and len(benches) != 1:
+        raise ArtibusError("--variant selects a variant of one BENCH")
+    for name in benches:
+        print(pack_portable(name, args.variant, out=args.output and _check_output(Path(args.output))))
     return 0
 
 
@@ -298,6 +311,8 @@ def cmd_simulate(args):
         raise
     from artibus.runner import save
     save(result, out)
+    if result.terminated is not None:     # the FMU's own end (fmi2Terminated): a normal end, exit 0
+        print(f"{result.terminated}")
     print(f"{out}: {len(result.rows)} rows")
     return 0
 
@@ -434,7 +449,13 @@ def build_parser():
     s.add_argument("--parameters", action="store_true", help="every bench's bound parameter values too")
     s.set_defaults(func=cmd_list)
     s = sub.add_parser("pack", help="pack benches into self-contained .ssp files")
-    s.add_argument("bench", nargs="*", help="default: every bench in ssp/benches")
+    s.add_argument("bench", nargs="*", help="default: every bench in ssp/benches (with --portable: every CAN-free one)")
+    s.add_argument("--portable", action="store_true",
+                   help="a pack other SSP masters run as we do (ecos, libcosim, FMPy): each component's parameters "
+                        "resolved into one inline parameter set 'bench'; fmus/<BENCH>[_<VARIANT>].portable.ssp")
+    s.add_argument("--variant", action="append", metavar="NAME",
+                   help="with --portable: a variant of the bench resolved into the pack (repeatable, later ones win)")
+    s.add_argument("-o", "--output", metavar="FILE", help="with --portable and one BENCH: the pack's path")
     s.set_defaults(func=cmd_pack)
     s = sub.add_parser("info", help="show an FMU's variables or a bench's structure")
     s.add_argument("fmu", metavar="BENCH|FMU", help="a bench name, the name of a built FMU, or the path of an .ssp or .fmu")

@@ -1,5 +1,6 @@
-"""Recorded trajectories (``Result``) and the error that carries the results
-up to a failure (``SimulationError``)."""
+"""Recorded trajectories (``Result``), the error that carries the results
+up to a failure (``SimulationError``), and an FMU's own end of a run
+(``Termination``, ``terminated``)."""
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -17,6 +18,41 @@ class SimulationError(ArtibusError):
         self.log = log
 
 
+@dataclass(frozen=True)
+class Termination:
+    """An FMU ended the run, as FMI 2.0 lets it (fmi2DoStep returned fmi2Discard
+    and fmi2GetBooleanStatus(fmi2Terminated) says true, FMI 2.0.4 section 4.2.3):
+    a normal end at ``time`` (its fmi2LastSuccessfulTime), not a failure."""
+    component: str      # the component (a bench) or the model (an FMU alone) that ended it
+    time: float         # s
+
+    def __str__(self):
+        return f"{self.component} ended the simulation at t = {self.time:g} s (fmi2Terminated)"
+
+
+#: FMI 2.0's fmi2Discard and the status kinds asked after it (fmi2Functions.h)
+FMI2_DISCARD, FMI2_LAST_SUCCESSFUL_TIME, FMI2_TERMINATED = 2, 2, 3
+
+
+def terminated(slave, status):
+    """After fmi2DoStep returned ``status``: the FMU's fmi2LastSuccessfulTime if it
+    ended the simulation (fmi2Discard with fmi2Terminated true), else None (then a
+    failure). An FMU that cannot say (its status functions fail) has not ended it.
+    NaN where it ended it but gives no fmi2LastSuccessfulTime (the caller takes
+    the end of the step then)."""
+    if status != FMI2_DISCARD:
+        return None
+    try:
+        if not slave.getBooleanStatus(FMI2_TERMINATED):
+            return None
+    except Exception:
+        return None
+    try:
+        return float(slave.getRealStatus(FMI2_LAST_SUCCESSFUL_TIME))
+    except Exception:
+        return float("nan")
+
+
 @dataclass
 class Result:
     """Recorded trajectories: ``result['x[1]']`` is an array over ``result.time``."""
@@ -28,7 +64,8 @@ class Result:
         """A result from a filled table (a row per time), kept as its array;
         its rows a view of the table's (no list of a row object per time)."""
         result = cls.__new__(cls)           # (the fields' defaults without __init__'s calls)
-        result.__dict__.update(names=list(names), rows=_ArrayRows(table), strings={}, units={}, _array=table)
+        result.__dict__.update(names=list(names), rows=_ArrayRows(table), strings={}, units={}, terminated=None,
+                               _array=table)
         return result
 
     #: String columns: {name: [text per row]} (their column in the array is NaN)
@@ -36,6 +73,8 @@ class Result:
     #: {name: unit} of the columns, from the FMUs' model descriptions (the variable's
     #: unit, else its declaredType's; "" for none; "s" for time)
     units: dict = field(default_factory=dict)
+    #: a Termination where an FMU ended the run before the stop time, else None
+    terminated: Termination | None = None
 
     def __getitem__(self, name):
         if name in self.strings:

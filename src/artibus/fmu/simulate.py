@@ -1,12 +1,15 @@
 """Run one FMU on its own: parameters in, input functions of time, outputs
 recorded at every communication point. If the FMU fails midway the result up
-to the failure is kept and handed over with the error and the FMU's log."""
+to the failure is kept and handed over with the error and the FMU's log. An
+FMU that ends the simulation itself (fmi2Discard with fmi2Terminated, as the
+Reference-FMUs' Stair does at t = 9 s) ends the run there as a normal end:
+the result up to its last successful time, with ``Result.terminated``."""
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
 from artibus.bench.units import unit_of
 from artibus.fmu.instance import Fmu, claim_logger_proxy
-from artibus.fmu.result import Result, SimulationError
+from artibus.fmu.result import Result, SimulationError, Termination, terminated
 
 
 #: a default experiment without stepSize (FMI 2.0 allows it): this many steps
@@ -91,7 +94,19 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             record(t)
             n = int(round((stop_time - start_time) / step))
             for i in range(n):
-                fmu.slave.doStep(t, step)
+                try:
+                    fmu.slave.doStep(t, step)
+                except FMICallException as e:
+                    t_end = terminated(fmu.slave, e.status) if e.function == "fmi2DoStep" else None
+                    if t_end is None:
+                        raise
+                    # the FMU ended the simulation: its values at its last successful time
+                    # (getters are allowed after fmi2Discard), as FMPy's simulate_fmu records them
+                    t_end = t_end if t_end == t_end else start_time + (i + 1) * step
+                    if t_end > t:
+                        record(t_end)
+                    result.terminated = Termination(fmu.md.modelName, t_end)
+                    break
                 t = start_time + (i + 1) * step
                 record(t)
                 fmu.set_values({n_: f(t) for n_, f in inputs.items()})

@@ -54,6 +54,8 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
                 runner.save_partial(e, out)
                 raise
             print_warnings((u.path, u.fmu.log) for u in sim.units)
+            if result.terminated is not None:   # an FMU's own end (fmi2Terminated): a normal end, said once
+                log(f"{name}: {result.terminated}")
             can_summary = None
             if sim.can is not None:
                 can_summary = sim.can.summary(result.time[-1] - result.time[0])

@@ -36,6 +36,7 @@ from artibus.runner.unit import _last_message
 CORE_ABI = 10                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
+_AC_DO_STEP = 1                    # core.h: fmi2DoStep failed (or returned fmi2Discard)
 _AC_CAN = 4                        # core.h: a frame could not be encoded
 _AC_GET_REAL, _AC_SET_REAL, _AC_UNSETTLED, _AC_EXIT_INIT = 2, 3, 5, 6
 
@@ -353,6 +354,19 @@ class _CoreStepper:
                 self.can.end(start, h)
         if failed == _AC_CAN:          # a frame the encoder refused: artibus.can says why, as in the Python loop
             self.can.refused(s.fail_unit, start + s.fail_k * h)
+        if failed == _AC_DO_STEP:      # fmi2Discard with fmi2Terminated: the FMU's own end, as the Python loop
+            k = s.fail_k
+            end = sim._end_of(sim.units[s.fail_unit], s.fail_status, self.plan, k, start + k * h, h)
+            if end is not None:
+                row = table[k + 1]
+                row[0] = start + (k + 1) * h
+                for col, (u, name) in enumerate(sim.record, start=1):
+                    row[col] = u.raw.out[u.out_names.index(name)]
+                if progress:
+                    sys.stderr.write("\n")
+                result = Result.from_array(sim.names, table[:k + 2, :m])
+                result.terminated = end
+                return result
         if failed:
             k = s.fail_k
             u = sim.units[s.fail_unit]

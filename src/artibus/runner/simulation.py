@@ -18,7 +18,11 @@
 - recording of every connection (or a chosen list) at every base step, of any
   type (a Boolean as 0/1, a String's text in Result.strings);
 - on a failure midway, the results so far are kept with the failing time and
-  the FMU's log.
+  the FMU's log;
+- an FMU that ends the simulation itself (fmi2DoStep's fmi2Discard with
+  fmi2Terminated) ends the run as a normal end: the base step it ended in is
+  finished by the others, recorded, and the run returns its Result with
+  ``terminated`` (artibus.fmu.Termination: which component, when).
 """
 import math
 import shutil
@@ -32,7 +36,7 @@ from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
 from artibus.bench import ssp as ssp_mod
-from artibus.fmu import Result, SimulationError
+from artibus.fmu import Result, SimulationError, Termination, terminated
 from artibus.runner.core import _core_stepper
 from artibus.runner.plan import _Plan
 from artibus.runner.results import _check_room
@@ -242,7 +246,7 @@ class Simulation(_Setup):
         n = int(round((stop - start) / h))
         _check_room(n + 1, len(self.names), self.bench.file)
         t = start
-        current = None
+        current = stepping = None
         plan = _Plan(self.order, n)
         stepper = _core_stepper(self, plan, None, core)
         if stepper is not None:
@@ -259,10 +263,13 @@ class Simulation(_Setup):
                 self.wall = _time.perf_counter() - wall0
                 if self.can is not None:
                     self.can.finish()
-                    return self._with_can_columns(result, stepper.table)
+                    end = result.terminated
+                    result = self._with_can_columns(result, stepper.table)
+                    result.terminated = end
                 return result
             rec.take(t)
             for k in range(n):
+                stepping = k
                 t = start + k * h
                 if self.can is not None and k % self.can_ratio == 0:
                     self.can.tick(k // self.can_ratio, t)
@@ -298,8 +305,22 @@ class Simulation(_Setup):
             if stepper is None:          # (the core attached its own)
                 e.result = rec.result()
             raise
-        except FMICallException:
+        except FMICallException as e:
             current = current or getattr(self, "_busy", None)    # (in the initialisation)
+            end = None
+            if stepping is not None and current is not None and e.function == "fmi2DoStep":
+                end = self._end_of(current, e.status, plan, stepping, t, h)
+            if end is not None:          # the FMU ended the run: a normal end at the end of this step
+                if progress:
+                    sys.stderr.write("\n")
+                rec.take(t + h)
+                self.wall = _time.perf_counter() - wall0
+                result = rec.result()
+                if self.can is not None:
+                    self.can.finish()
+                    result = self._with_can_columns(result)
+                result.terminated = end
+                return result
             who = current.path if current else "?"
             log = current.fmu.log if current else [m for u in self.units for m in u.fmu.log]
             raise SimulationError(f"{self.ssp}: component '{who}' failed at t = {t:g} s: "
@@ -309,6 +330,49 @@ class Simulation(_Setup):
             self.can.finish()
             return self._with_can_columns(rec.result())
         return rec.result()
+
+    def _end_of(self, u, status, plan, k, t, h):
+        """After unit u's fmi2DoStep returned ``status`` in base step k (from t,
+        step h): a Termination if it ended the simulation (artibus.fmu.terminated),
+        with the base step finished (_finish_step), else None (a failure)."""
+        t_end = terminated(u.fmu.slave, status)
+        if t_end is None:
+            return None
+        self._finish_step(u, plan, k, t, h)
+        return Termination(u.path, t_end if t_end == t_end else t + h)
+
+    def _finish_step(self, ended, plan, k, t, h):
+        """The rest of base step k after ``ended`` ended the simulation in its
+        fmi2DoStep, in Python for either loop (the C core stops at the call that
+        returned fmi2Discard; its buffers are these): ``ended``'s outputs read
+        (getters are allowed after fmi2Discard: its values at its last successful
+        time), then the propagations, writes and steps the plan has after it in
+        this base step, so that every unit ends the step at t + h as in the other
+        steps. A unit that ends the simulation there too is read as well; one that
+        fails is a SimulationError naming it."""
+        ended.raw.read()
+        starting, ending, gs = plan[k]
+        if self.algorithm == "jacobi":       # (every input was set before the steps)
+            rest = [(u, False, True) for u in ending[ending.index(ended) + 1:]]
+        else:
+            i = next(i for i, (u, _, _) in enumerate(gs) if u is ended)
+            rest = gs[i + 1:]
+        for u, starts, ends in rest:
+            try:
+                if starts:
+                    self._propagate(u, t)
+                    u.raw.write()
+                if ends:
+                    try:
+                        self._step(u, t + h - u.step)
+                    except FMICallException as e:
+                        if e.function != "fmi2DoStep" or terminated(u.fmu.slave, e.status) is None:
+                            raise
+                    u.raw.read()
+            except FMICallException:
+                raise SimulationError(f"{self.ssp}: component '{u.path}' failed at t = {t:g} s "
+                                      f"(after '{ended.path}' ended the simulation): "
+                                      f"{_last_message(u.fmu.log)}", None, list(u.fmu.log)) from None
 
     def _with_can_columns(self, result, wide=None):
         """can.<message>.sinceGood: row i > 0 holds the value after the last tick

@@ -54,7 +54,7 @@ from artibus.study.sweep.designs import (DISTRIBUTIONS, MAX_CASES, BenchInfo, De
 from artibus.study.sweep.plots import kpi_columns, rerun_command, study                    # noqa: F401
 from artibus.study.sweep.run import SweepResult, sweep                                      # noqa: F401
 from artibus.study.sweep.store import (CASES_DIR, MANIFEST, PLOT, SERIES_DIR, STATUS_FAILED,  # noqa: F401
-                                       STATUS_OK, TABLE, WORST, assemble)
+                                       STATUS_OK, STATUS_TERMINATED, TABLE, WORST, assemble)
 from artibus.study.sweep.worker import release, run_case, run_cases                        # noqa: F401
 
 

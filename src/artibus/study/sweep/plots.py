@@ -9,7 +9,10 @@ import numpy as np
 
 from artibus.base import ArtibusError
 from artibus.study.sweep.designs import _variant_list
-from artibus.study.sweep.store import MANIFEST, PLOT, STATUS_OK, TABLE, WORST, _write_text
+from artibus.study.sweep.store import MANIFEST, PLOT, STATUS_FAILED, STATUS_OK, STATUS_TERMINATED, TABLE, WORST, _write_text
+
+#: cases with KPIs: those that ran to the stop time and those an FMU ended (fmi2Terminated)
+_RAN = (STATUS_OK, STATUS_TERMINATED)
 
 
 def kpi_columns(table):
@@ -62,9 +65,11 @@ def study(out, kpi=None, worst=10, largest=True):
     col = _pick_kpi(table, kpi)
     written = []
     lines = [f"Sweep of {manifest['bench']}: {len(rows)} cases, "
-             f"{sum(r['status'] != STATUS_OK for r in rows)} failed ({out / TABLE})", ""]
+             f"{sum(r['status'] == STATUS_FAILED for r in rows)} failed"
+             + (f", {sum(r['status'] == STATUS_TERMINATED for r in rows)} ended early by an FMU"
+                if any(r['status'] == STATUS_TERMINATED for r in rows) else "") + f" ({out / TABLE})", ""]
     if col is not None:
-        ok = [r for r in rows if r["status"] == STATUS_OK and r.get(col) is not None and math.isfinite(r[col])]
+        ok = [r for r in rows if r["status"] in _RAN and r.get(col) is not None and math.isfinite(r[col])]
         ok.sort(key=lambda r: r[col], reverse=largest)
         lines.append(f"The {min(worst, len(ok))} cases with the {'largest' if largest else 'smallest'} {col}:")
         for r in ok[:worst]:
@@ -72,7 +77,7 @@ def study(out, kpi=None, worst=10, largest=True):
         lines.append("")
         if _plot(out / PLOT, manifest, rows, col):
             written.append(out / PLOT)
-    bad = [r for r in rows if r["status"] != STATUS_OK]
+    bad = [r for r in rows if r["status"] == STATUS_FAILED]
     if bad:
         lines.append(f"Failed cases ({len(bad)}):")
         for r in bad:
@@ -86,7 +91,7 @@ def _plot(path, manifest, rows, col):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    ok = [r for r in rows if r["status"] == STATUS_OK and r.get(col) is not None]
+    ok = [r for r in rows if r["status"] in _RAN and r.get(col) is not None]
     if not ok:
         return False
     axes = [(n, vs) for n, vs in manifest["axes"] if len(vs) > 1]

@@ -13,7 +13,7 @@ from artibus.study.sweep.cluster import _Chunks, _client, _Progress, _scatter
 from artibus.study.sweep.designs import (Design, _product_lists, bench_info, build_cases, case_key, parse_values,
                                          read_design, typed_value)
 from artibus.study.sweep.plots import study
-from artibus.study.sweep.store import (CASES_DIR, MANIFEST, SERIES_DIR, STATUS_FAILED, STATUS_OK, _case_row,
+from artibus.study.sweep.store import (CASES_DIR, MANIFEST, SERIES_DIR, STATUS_FAILED, _case_row,
                                        _parquet_bytes, _table, _write_bytes, _write_text, assemble)
 from artibus.study.sweep.worker import release, run_cases
 
@@ -87,7 +87,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
         if has_series and not retry_failed:
             return True
         import pyarrow.parquet as pq
-        failed = pq.read_table(f, columns=["status"])["status"][0].as_py() != STATUS_OK
+        failed = pq.read_table(f, columns=["status"])["status"][0].as_py() == STATUS_FAILED
         if retry_failed:
             return not failed and has_series
         return failed                         # a failed case has no series
@@ -158,7 +158,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                 while chunks.left() and len(running) < chunks.in_flight():
                     done.add(submit())       # the next task before this one's files: no worker waits
                 for i, (row, case_file, series_file, _) in zip(items, results):
-                    bad = row["status"] != STATUS_OK
+                    bad = row["status"] == STATUS_FAILED     # (a terminated case ran: not counted)
                     failed += bad
                     if series_file is not None:
                         _write_bytes(series_file, os.path.join(series_dir, f"{keys[i]}.parquet"))

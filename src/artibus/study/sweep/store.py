@@ -11,6 +11,8 @@ import numpy as np
 CASES_DIR, SERIES_DIR = "cases", "series"
 TABLE, MANIFEST, WORST, PLOT = "results.parquet", "sweep.json", "worst.txt", "study.png"
 STATUS_OK, STATUS_FAILED = "ok", "failed"
+#: a case an FMU ended before the stop time (fmi2Terminated): its KPIs over what ran, not a failure
+STATUS_TERMINATED = "terminated"
 
 
 def _write_parquet(table, path):

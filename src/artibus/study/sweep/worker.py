@@ -13,7 +13,7 @@ from pathlib import Path
 
 from artibus.base import ArtibusError
 from artibus.study.sweep.designs import _variant_list
-from artibus.study.sweep.store import STATUS_FAILED, STATUS_OK, _case_row, _parquet_bytes, _series_table, _table
+from artibus.study.sweep.store import STATUS_FAILED, STATUS_OK, STATUS_TERMINATED, _case_row, _parquet_bytes, _series_table, _table
 
 
 #: FMU instances reused across cases (fmi2Reset and a new initialisation); False: a fresh Simulation each case
@@ -163,6 +163,8 @@ def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_ti
                      **{k: v for k, v in case.items() if k != "variant"}}
         stop = stop_time if stop_time is not None else (ssp_mod.variant_stop_time(ssp, variants) if variants else None)
         r = _simulate(ssp, overrides, stop, step, content_hash)
+        if r.terminated is not None:        # an FMU's own end: the case ran, ended early
+            row["status"], row["error"] = STATUS_TERMINATED, str(r.terminated)
         try:
             for k in script.kpis(bench_name, r):
                 v = k.value

@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# The Modelica Reference-FMUs (BSD-2-Clause), FMI 2.0, built from their sources
+# for the tests (tests/test_reference_fmus.py): BouncingBall, Dahlquist,
+# Feedthrough, Resource, Stair, VanDerPol as FMI 2.0 FMUs (each both Model
+# Exchange and Co-Simulation; the tests use Co-Simulation), linux64.
+#
+# Their sources come from crates.io: the crate fmi-sys carries the FMI 3.0
+# standard's sources, whose docs/Reference-FMUs is the Reference-FMUs' own
+# tree (its CMakeLists.txt, models, LICENSE.txt). The crate is downloaded with
+# cargo (its ordinary client; nothing is compiled in Rust), the FMUs are built
+# with the Reference-FMUs' own CMake build (FMI_VERSION=2) into the cache
+# outside the clone, once per machine, and linked as .tools/reference-fmus/.
+# Without cargo the tests that use them say so and are skipped.
+#
+# usage: scripts/build_reference_fmus.sh
+set -euo pipefail
+. "$(dirname "$0")/build_common.sh"     # CACHE, quiet
+
+FMI_SYS_VERSION=0.5.0
+MODELS="BouncingBall Dahlquist Feedthrough Resource Stair VanDerPol"
+out="$CACHE/reference-fmus-fmi-sys-$FMI_SYS_VERSION"
+link="$ROOT/.tools/reference-fmus"
+
+have_all() {
+  local m
+  for m in $MODELS; do [ -f "$out/$m.fmu" ] || return 1; done
+}
+
+if ! have_all; then
+  if ! command -v cargo >/dev/null 2>&1; then
+    echo "reference-fmus: no cargo: the Reference-FMUs are not built; their tests will be skipped"
+    exit 0
+  fi
+  (
+    flock 9
+    have_all && exit 0
+    echo "reference-fmus: building the Reference-FMUs (FMI 2.0) from the crate fmi-sys $FMI_SYS_VERSION into $out"
+    crate="$out.crate"
+    rm -rf "$crate" "$out.build" "$out.src"
+    mkdir -p "$crate/src"
+    printf '[package]\nname = "artibus-reference-fmus"\nversion = "0.0.0"\nedition = "2021"\npublish = false\n\n[dependencies]\nfmi-sys = "=%s"\n' \
+      "$FMI_SYS_VERSION" >"$crate/Cargo.toml"
+    echo 'fn main() {}' >"$crate/src/main.rs"
+    QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet cargo fetch --manifest-path "$crate/Cargo.toml"
+    # where cargo unpacked fmi-sys (its registry under CARGO_HOME)
+    src_dir="$(cargo metadata --offline --format-version 1 --manifest-path "$crate/Cargo.toml" 2>/dev/null \
+      | python3 -c 'import json, sys, os
+m = json.load(sys.stdin)
+p = next(p for p in m["packages"] if p["name"] == "fmi-sys")
+print(os.path.join(os.path.dirname(p["manifest_path"]), "fmi-standard3", "docs", "Reference-FMUs"))')"
+    if [ ! -f "$src_dir/CMakeLists.txt" ]; then
+      echo "reference-fmus: no Reference-FMUs sources in the crate fmi-sys $FMI_SYS_VERSION ($src_dir)" >&2
+      exit 1
+    fi
+    # a copy of the sources, with one fix: an Integer, Boolean or String variable
+    # without a variability is "continuous" by FMI 2.0's default, which the
+    # standard forbids (FMPy's validation refuses Stair's counter): such a
+    # variable is made "discrete" in the model descriptions (FMI2.xml), as later
+    # Reference-FMUs releases declare it
+    cp -r "$src_dir" "$out.src"
+    python3 - "$out.src" $MODELS <<'PY'
+import re, sys
+from pathlib import Path
+for m in sys.argv[2:]:
+    f = Path(sys.argv[1]) / m / "FMI2.xml"
+    text = f.read_text(encoding="utf-8")
+    def fix(v):
+        head, body = v.group(1), v.group(2)
+        if "variability=" in head or not re.match(r"\s*<(Integer|Boolean|String)\b", body):
+            return v.group(0)
+        return head.replace("<ScalarVariable ", '<ScalarVariable variability="discrete" ', 1) + body
+    f.write_text(re.sub(r"(<ScalarVariable [^>]*>)(\s*<\w+)", fix, text), encoding="utf-8")
+PY
+    QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet \
+      cmake -S "$out.src" -B "$out.build" -DFMI_VERSION=2 -DCMAKE_BUILD_TYPE=Release
+    # shellcheck disable=SC2086
+    QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet \
+      cmake --build "$out.build" -j2 --target $MODELS
+    mkdir -p "$out"
+    for m in $MODELS; do cp "$out.build/dist/$m.fmu" "$out/$m.fmu"; done
+    cp "$src_dir/LICENSE.txt" "$out/LICENSE.txt"
+    echo "fmi-sys $FMI_SYS_VERSION (crates.io): fmi-standard3/docs/Reference-FMUs, FMI_VERSION=2," \
+      "Integer/Boolean/String variables without a variability declared discrete" >"$out/SOURCE.txt"
+    rm -rf "$out.build" "$out.src" "$crate"
+  ) 9>"$out.lock"
+fi
+if have_all && [ "$(readlink "$link" 2>/dev/null)" != "$out" ]; then
+  mkdir -p "$ROOT/.tools"
+  ln -sfn "$out" "$link"
+fi

@@ -1,0 +1,196 @@
+"""Portable packs: a bench as other SSP masters run it (``artibus pack --portable``).
+
+Our runner applies everything SSP 1.0 lets a bench say about its parameters:
+several bindings per component, .ssv files, parameter mappings (.ssm, with
+their transformations), system-level bindings, and our variants. Other masters
+apply less: ecos applies one named parameter set (``init(parameter_set=...)``),
+libcosim the first (or one named) parameter set of each component, and FMPy's
+``simulate_ssp`` none. A portable pack gives every master the same bench: each
+component carries every parameter as one inline parameter set named
+``PARAMETER_SET``, the values as our runner resolves them (the bench's
+bindings, its .ssv files and mappings, system-level bindings, and the chosen
+variants, later ones winning), typed as the FMU declares the variable, in the
+FMU variable's own unit. The components, connectors, connections (with their
+transformations), units and annotations are those of the bench; the .ssv and
+.ssm files and variants/ are left out (resolved); the FMUs and every other
+resource stay. Each component's communication step is written where the Open
+Simulation Platform's libcosim reads it (an ``osp:StepSizeHint`` annotation,
+and the base step as the DefaultExperiment's ``osp:FixedStepAlgorithm``),
+besides our own annotation. The pack is validated against the SSP 1.0 XSDs
+(FMPy's reader) before it is handed out.
+"""
+import math
+import zipfile
+from pathlib import Path
+
+from lxml import etree
+
+from artibus.base import ArtibusError, fmu_dir
+from artibus.bench import ssp as ssp_mod
+from artibus.bench.ssp import NS
+
+#: the one parameter set of each component (ecos: ``EcosSimulation.init(parameter_set=PARAMETER_SET)``);
+#: the name our benches' inline sets carry already
+PARAMETER_SET = "bench"
+#: the Open Simulation Platform's annotations (libcosim's SSP parser)
+OSP_TYPE = "com.opensimulationplatform"
+OSP_NS = "http://opensimulationplatform.com/SSP/OSPAnnotations"
+SSD, SSC, SSV = NS["ssd"], NS["ssc"], NS["ssv"]
+
+
+def portable_path(bench, variants=None, out_dir=None):
+    """fmus/<Bench>.portable.ssp, or <Bench>_<variant>....portable.ssp with variants."""
+    stem = Path(str(bench)).stem if str(bench).endswith(".ssp") else str(bench)
+    name = "_".join([stem] + list(variants or [])) + ".portable.ssp"
+    return Path(out_dir or fmu_dir()) / name
+
+
+def _text(value, v):
+    """(SSV element name, value attribute) of a parameter value for the FMU variable v
+    (fmpy's ScalarVariable; None: typed by the Python value)."""
+    t = v.type if v is not None else ("Boolean" if isinstance(value, bool) else "Integer" if isinstance(value, int)
+                                      else "Real" if isinstance(value, float) else "String")
+    if t == "Real":
+        return "Real", repr(float(value))
+    if t == "Integer":
+        return "Integer", str(int(value))
+    if t == "Boolean":
+        b = value if isinstance(value, bool) else str(value).strip() in ("true", "1")
+        return "Boolean", "true" if b else "false"
+    if t == "Enumeration":                       # SSP 1.0: the item's name
+        items = {str(int(i.value)): i.name for i in v.declaredType.items} if v.declaredType else {}
+        return "Enumeration", items.get(str(value), str(value))
+    return "String", str(value)
+
+
+def _steps(bench, z):
+    """{component path: its communication step} as our runner takes it without
+    --step: our annotation, else its FMU's default experiment's stepSize."""
+    from fmpy import read_model_description
+    import tempfile
+    steps, mds = {}, {}
+    with tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
+        for path, c in bench.components.items():
+            if c.source not in mds:
+                f = Path(tmp) / Path(c.source).name
+                f.write_bytes(z.read(c.source))
+                mds[c.source] = read_model_description(str(f))
+            de = mds[c.source].defaultExperiment
+            steps[path] = c.step or (float(de.stepSize) if de is not None and de.stepSize else None)
+    return steps, mds
+
+
+def pack_portable(bench, variants=None, out=None):
+    """The bench (a name or an .ssp) with its variants resolved into a portable
+    pack (see the module's docstring), written to ``out`` (default
+    portable_path). Returns its path."""
+    from artibus.bench.names import expand_all
+    from artibus.files import atomic_path
+    src = ssp_mod.ssp_path(bench)
+    variants = list(variants or [])
+    b = ssp_mod.read(src)
+    with zipfile.ZipFile(src) as z:
+        names = z.namelist()
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+        steps, mds = _steps(b, z)
+        files = {n: z.read(n) for n in names
+                 if n != "SystemStructure.ssd" and not n.endswith((".ssv", ".ssm"))
+                 and not n.startswith(f"{ssp_mod.VARIANT_DIR}/")}
+    where = f"{src}/SystemStructure.ssd"
+    values = {p: dict(c.parameters) for p, c in b.components.items()}
+    overrides = ssp_mod.variant_overrides(src, variants)
+    variables = {p: mds[c.source] for p, c in b.components.items()}
+
+    def variables_of(full):
+        comp = full.split("[", 1)[0].rpartition(".")[0]
+        return (comp + ".", [v.name for v in variables[comp].modelVariables]) if comp in variables else None
+    for full, value in expand_all(overrides, variables_of).items():
+        comp, _, var = full.rpartition(".")
+        if comp not in values:
+            raise ArtibusError(f"--variant: parameter '{full}': no component '{comp}' in {where}")
+        values[comp][var] = value
+    if any(c.can is not None for c in b.connections) or b.can is not None:
+        raise ArtibusError(f"{where}: the bench routes connections over CAN (artibus.can, an annotation of "
+                           f"ours): no other master runs that network; a portable pack holds CAN-free benches")
+
+    # the SSD: system-level bindings out (read() gave their values to the components),
+    # each component's bindings replaced by its one inline set
+    for bindings in root.iterfind(".//ssd:System/ssd:ParameterBindings", NS):
+        bindings.getparent().remove(bindings)
+
+    def walk(system, prefix):
+        for el in system.findall("ssd:Elements/*", NS):
+            path = f"{prefix}.{el.get('name')}" if prefix else el.get("name")
+            kind = etree.QName(el).localname
+            if kind == "System":
+                walk(el, path)
+            elif kind == "Component" and path in b.components:
+                _rewrite_component(el, values[path], variables[path], steps.get(path))
+    walk(root.find("ssd:System", NS), "")
+
+    known = [s for s in steps.values() if s]
+    if known:
+        base = min(known)
+        de = root.find("ssd:DefaultExperiment", NS)
+        if de is None:
+            de = etree.SubElement(root, f"{{{SSD}}}DefaultExperiment")
+        _osp_annotation(de, "Algorithm").append(etree.Element(f"{{{OSP_NS}}}FixedStepAlgorithm",
+                                                               baseStepSize=repr(base)))
+    stop = ssp_mod.variant_stop_time(src, variants)
+    if stop is not None:
+        root.find("ssd:DefaultExperiment", NS).set("stopTime", repr(stop))
+    # the prefixes other masters' readers expect, declared once at the top (libcosim
+    # reads "ssd:", "ssv:" and "osp:" as they are written)
+    etree.cleanup_namespaces(root, top_nsmap={"ssd": SSD, "ssc": SSC, "ssv": SSV, "osp": OSP_NS})
+    etree.indent(root, space="  ")
+    ssd = etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+
+    out = Path(out) if out is not None else portable_path(bench, variants)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(out, fsync=False) as tmp:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("SystemStructure.ssd", ssd)
+            for n, data in sorted(files.items()):
+                z.writestr(n, data)
+        try:
+            ssp_mod.read(tmp)          # valid against the SSP 1.0 XSDs, and readable as a bench
+        except ArtibusError as e:
+            raise ArtibusError(f"{out}: the portable pack of {bench} is not valid: {e}") from None
+    return out
+
+
+def _rewrite_component(el, values, md, step):
+    """One component: its ParameterBindings replaced by one binding with one inline
+    set of ``values`` (each typed as md declares it), and the OSP step-size hint."""
+    old = el.find("ssd:ParameterBindings", NS)
+    at = list(el).index(old) if old is not None else None
+    if old is not None:
+        el.remove(old)
+    if values:
+        byname = {v.name: v for v in md.modelVariables}
+        bindings = etree.Element(f"{{{SSD}}}ParameterBindings")
+        pv = etree.SubElement(etree.SubElement(bindings, f"{{{SSD}}}ParameterBinding"), f"{{{SSD}}}ParameterValues")
+        pset = etree.SubElement(pv, f"{{{SSV}}}ParameterSet", version="1.0", name=PARAMETER_SET)
+        params = etree.SubElement(pset, f"{{{SSV}}}Parameters")
+        for name, value in values.items():
+            kind, text = _text(value, byname.get(name))
+            if kind == "Real" and not math.isfinite(float(text)):
+                raise ArtibusError(f"component '{el.get('name')}': parameter '{name}' = {text} is not finite")
+            p = etree.SubElement(params, f"{{{SSV}}}Parameter", name=name)
+            etree.SubElement(p, f"{{{SSV}}}{kind}", value=text)
+        if at is None:    # after Connectors and ElementGeometry, before Annotations (SSP 1.0's order)
+            ann = el.find("ssd:Annotations", NS)
+            at = list(el).index(ann) if ann is not None else len(el)
+        el.insert(at, bindings)
+    if step:
+        _osp_annotation(el, "StepSizeHint", value=repr(step))
+
+
+def _osp_annotation(el, child, **attrs):
+    """An osp:<child> inside an ssc:Annotation of type OSP_TYPE in el's ssd:Annotations
+    (made where missing, last of el's children as SSP 1.0 orders them); returns the child."""
+    anns = el.find("ssd:Annotations", NS)
+    if anns is None:
+        anns = etree.SubElement(el, f"{{{SSD}}}Annotations")
+    ann = etree.SubElement(anns, f"{{{SSC}}}Annotation", type=OSP_TYPE)
+    return etree.SubElement(ann, f"{{{OSP_NS}}}{child}", **attrs)

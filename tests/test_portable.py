@@ -1,0 +1,85 @@
+"""Portable packs (artibus pack --portable, artibus.bench.portable): each
+component's parameters resolved into one inline set named "bench", the rest
+of the bench unchanged, valid against the SSP 1.0 XSDs; our runner gives the
+same results on the portable pack as on the bench with its bindings, files,
+mappings and variant, bit for bit (the same values reach the same FMUs)."""
+import zipfile
+
+import numpy as np
+import pytest
+from lxml import etree
+
+from artibus import cli
+from artibus.base import ArtibusError
+from artibus.bench import ssp
+from artibus.bench.portable import PARAMETER_SET, pack_portable
+from artibus.runner import Simulation
+
+NS = ssp.NS
+
+
+def _sets(pack):
+    root = etree.fromstring(zipfile.ZipFile(pack).read("SystemStructure.ssd"))
+    out = {}
+    for c in root.iter(f"{{{NS['ssd']}}}Component"):
+        bindings = c.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS)
+        out[c.get("name")] = bindings
+    return root, out
+
+
+@pytest.mark.parametrize("bench, variants, stop", [
+    ("Scania18m_Damping", [], 2.0),                  # .ssv files, an .ssm mapping, several bindings
+    ("Bus36m_Circle", ["guidedForceMin"], 2.0),       # a variant on top of the vehicle's .ssv
+    ("Scania18m_Damping", ["heavyRear"], 2.0),        # a variant that rebinds a parameter set
+])
+def test_our_runner_gives_the_same_results_on_the_portable_pack(bench, variants, stop, tmp_path):
+    pack = pack_portable(bench, variants, out=tmp_path / "p.ssp")
+    names = zipfile.ZipFile(pack).namelist()
+    assert not [n for n in names if n.endswith((".ssv", ".ssm")) or n.startswith("variants/")]
+    root, bindings = _sets(pack)
+    for comp, bs in bindings.items():                 # at most one binding, one inline set named "bench"
+        assert len(bs) <= 1, comp
+        for b in bs:
+            assert b.get("source") is None
+            psets = b.findall("ssd:ParameterValues/ssv:ParameterSet", NS)
+            assert [p.get("name") for p in psets] == [PARAMETER_SET]
+    assert root.find(".//ssd:System/ssd:ParameterBindings", NS) is None
+    # the prefixes libcosim's reader expects, as written
+    assert {"ssd", "ssc", "ssv", "osp"} <= set(root.nsmap)
+    ssp.read(pack)                                    # FMPy's reader: valid against the SSP 1.0 XSDs
+    overrides = ssp.variant_overrides(bench, variants)
+    with Simulation(bench, overrides=overrides) as a:
+        ra = a.run(stop_time=stop)
+        pa = a.parameters
+    with Simulation(pack) as b:
+        rb = b.run(stop_time=stop)
+        pb = b.parameters
+    assert {c: dict(v) for c, v in pa.items()} == {c: dict(v) for c, v in pb.items()}
+    assert ra.names == rb.names
+    np.testing.assert_array_equal(ra.array(), rb.array())
+
+
+def test_the_connections_and_connectors_are_the_benchs(tmp_path):
+    pack = pack_portable("Bus36m_Circle", ["guidedForceMin"], out=tmp_path / "p.ssp")
+    a, b = ssp.read(ssp.ssp_path("Bus36m_Circle")), ssp.read(pack)
+    assert [(c.start, c.end, c.factor, c.offset) for c in a.connections] == \
+           [(c.start, c.end, c.factor, c.offset) for c in b.connections]
+    assert {p: c.connectors for p, c in a.components.items()} == {p: c.connectors for p, c in b.components.items()}
+    assert {p: c.step for p, c in a.components.items()} == {p: c.step for p, c in b.components.items()}
+    # the variant's values are in: Guidance.guided true, ForceMin.law 1
+    assert b.components["Guidance"].parameters["guided"] is True
+    assert b.components["ForceMin"].parameters["law"] == 1
+    # the vehicle's .ssv (which ecos never applied) is in the Bus's one set
+    assert b.components["Bus"].parameters["nModules"] == a.components["Bus"].parameters["nModules"] == 3
+
+
+def test_cli_pack_portable_and_its_errors(tmp_path, capsys):
+    out = tmp_path / "u.portable.ssp"
+    assert cli.main(["pack", "--portable", "Urbino18_Circle", "-o", str(out)]) == 0
+    assert out.is_file() and str(out) in capsys.readouterr().out
+    assert cli.main(["pack", "--portable", "Bus36m_Circle", "--variant", "nosuch", "-o", str(out)]) == 1
+    assert "no such variant" in capsys.readouterr().err
+    assert cli.main(["pack", "Urbino18_Circle", "--variant", "x"]) == 1
+    assert "--portable" in capsys.readouterr().err
+    with pytest.raises(ArtibusError, match="CAN"):
+        pack_portable("Bus36m_Circle_CAN", out=tmp_path / "c.ssp")

@@ -1,0 +1,182 @@
+"""The Modelica Reference-FMUs (FMI 2.0 Co-Simulation: BouncingBall, Dahlquist,
+Feedthrough, Resource, Stair, VanDerPol), built from their sources by
+scripts/build_reference_fmus.sh (docs/developer/tests.md: from which sources, how), run
+through `artibus simulate` and in benches of ours against FMPy's simulate_fmu:
+a tool we never saw, whose FMUs follow the standard, gives the same table.
+
+Stair ends the simulation itself at t = 9 s (fmi2DoStep returns fmi2Discard and
+fmi2GetBooleanStatus(fmi2Terminated) says true): a normal end, exit 0, the
+results under the final name; its counter is 1 + floor(t) (it counts the
+seconds), up to 10 at t = 9 s."""
+import math
+import zipfile
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pytest
+
+from artibus import cli
+from artibus.fmu import simulate
+from artibus.runner import Simulation
+
+ROOT = Path(__file__).resolve().parents[1]
+REFERENCE_DIR = ROOT / ".tools" / "reference-fmus"
+MODELS = ["BouncingBall", "Dahlquist", "Feedthrough", "Resource", "Stair", "VanDerPol"]
+
+
+def reference_fmu(name):
+    path = REFERENCE_DIR / f"{name}.fmu"
+    if not path.is_file():
+        pytest.skip(f"{path} not built (scripts/setup.sh builds it with scripts/build_reference_fmus.sh; needs cargo)")
+    return path
+
+
+def read_csv(path):
+    import csv
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+def fmpy_table(path, step, stop_time=None, **kw):
+    """FMPy's simulate_fmu at our communication step (its default interval is the
+    default experiment's step, doubled while over 1000 steps)."""
+    r = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", output_interval=step, stop_time=stop_time, **kw)
+    return list(r.dtype.names), np.column_stack([r[n].astype(float) for n in r.dtype.names])
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_artibus_simulate_equals_fmpy(name, tmp_path, capsys):
+    fmu = reference_fmu(name)
+    out = tmp_path / f"{name}.csv"
+    assert cli.main(["simulate", str(fmu), "-o", str(out)]) == 0
+    names, ours = read_csv(out)
+    md = fmpy.read_model_description(str(fmu))
+    de = md.defaultExperiment
+    step = float(de.stepSize) if de.stepSize else float(de.stopTime) / 500
+    theirs_names, theirs = fmpy_table(fmu, step)
+    assert names == theirs_names
+    assert ours.shape == theirs.shape
+    np.testing.assert_allclose(ours, theirs, rtol=1e-11, atol=1e-300)   # the CSV's 12 digits
+    # through the Python API: the same FMU, the same calls, the same numbers, bit for bit
+    r = simulate(fmu)
+    np.testing.assert_array_equal(r.array(), theirs)
+    assert not list(tmp_path.glob("*.partial.csv"))
+
+
+def test_stair_ends_the_run_at_9_s_with_exit_0(tmp_path, capsys):
+    fmu = reference_fmu("Stair")
+    out = tmp_path / "Stair.csv"
+    assert cli.main(["simulate", str(fmu), "-o", str(out)]) == 0
+    said = capsys.readouterr()
+    assert "Stair ended the simulation at t = 9 s" in said.out
+    assert "error" not in said.err
+    names, table = read_csv(out)
+    assert names == ["time", "counter"]
+    t, counter = table[:, 0], table[:, 1]
+    assert t[-1] == pytest.approx(9.0, abs=1e-12)             # not the stop time (10 s)
+    assert len(t) == 46                                        # 0, 0.2, ..., 9
+    # it counts the seconds: 1 + floor(t) (an event at each whole second), 10 at 9 s
+    expect = [1 + math.floor(x + 1e-9) for x in t]
+    assert counter.tolist() == expect
+    _, theirs = fmpy_table(fmu, 0.2)
+    np.testing.assert_allclose(table, theirs, rtol=1e-11, atol=0)     # the CSV's 12 digits
+    r = simulate(fmu)
+    np.testing.assert_array_equal(r.array(), theirs)
+    assert str(r.terminated) == "Stair ended the simulation at t = 9 s (fmi2Terminated)"
+    assert not list(tmp_path.glob("*.partial.csv"))
+
+
+def test_a_discard_without_terminated_is_still_an_error(tmp_path):
+    """fmi2Discard alone (not terminated) is a failure: artibus.fmu.terminated says so."""
+    from artibus.fmu import terminated
+
+    class Slave:
+        def __init__(self, term):
+            self.term = term
+
+        def getBooleanStatus(self, kind):
+            assert kind == 3                   # fmi2Terminated
+            return self.term
+
+        def getRealStatus(self, kind):
+            assert kind == 2                   # fmi2LastSuccessfulTime
+            return 4.5
+
+    assert terminated(Slave(False), 2) is None
+    assert terminated(Slave(True), 3) is None          # fmi2Error: a failure whatever it says
+    assert terminated(Slave(True), 2) == 4.5
+
+
+NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+      'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"')
+
+
+def _component(name, connectors):
+    conns = "".join(f'<ssd:Connector name="{n}" kind="{k}"><ssc:{t}/></ssd:Connector>' for n, k, t in connectors)
+    return (f'<ssd:Component name="{name}" source="resources/{name}.fmu" type="application/x-fmu-sharedlibrary">'
+            f'<ssd:Connectors>{conns}</ssd:Connectors></ssd:Component>')
+
+
+def stair_bench(tmp_path, connect_feedthrough):
+    """Stair and Dahlquist side by side; with connect_feedthrough, Stair's counter
+    into Feedthrough's Integer input too (Integer connections: the Python loop)."""
+    elements = _component("Stair", [("counter", "output", "Integer")])
+    elements += _component("Dahlquist", [("x", "output", "Real")])
+    connections = ""
+    models = ["Stair", "Dahlquist"]
+    if connect_feedthrough:
+        elements += _component("Feedthrough", [("Int32_input", "input", "Integer"),
+                                                ("Int32_output", "output", "Integer")])
+        connections = ('<ssd:Connections><ssd:Connection startElement="Stair" startConnector="counter" '
+                       'endElement="Feedthrough" endConnector="Int32_input"/></ssd:Connections>')
+        models.append("Feedthrough")
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="Stairs">'
+           f'<ssd:System name="Stairs"><ssd:Elements>{elements}</ssd:Elements>{connections}</ssd:System>'
+           f'<ssd:DefaultExperiment startTime="0" stopTime="10"/></ssd:SystemStructureDescription>')
+    path = tmp_path / "Stairs.ssp"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        for m in models:
+            z.write(reference_fmu(m), f"resources/{m}.fmu")
+    return path
+
+
+@pytest.mark.parametrize("core", [True, False], ids=["C core", "Python loop"])
+def test_a_bench_holding_stair_ends_at_9_s(core, tmp_path):
+    """Stair's end ends the bench, in either loop: the last row at 9 s, Dahlquist's
+    x as FMPy computes it alone up to 9 s, the run's end said, not a failure."""
+    ssp = stair_bench(tmp_path, connect_feedthrough=False)
+    with Simulation(ssp, step=0.2, record=["Dahlquist.x"]) as sim:
+        r = sim.run(core=core)
+        assert sim.stepping.startswith("C core" if core else "Python loop")
+    assert r.terminated is not None
+    assert r.terminated.component == "Stair" and r.terminated.time == pytest.approx(9.0)
+    assert r.time[-1] == pytest.approx(9.0) and len(r.time) == 46
+    _, theirs = fmpy_table(reference_fmu("Dahlquist"), 0.2, stop_time=9.0)
+    np.testing.assert_allclose(r["Dahlquist.x"], theirs[:, 1], rtol=1e-12, atol=0)
+
+
+def test_a_bench_with_stair_connected_has_fmpys_table_and_exit_0(tmp_path, capsys):
+    ssp = stair_bench(tmp_path, connect_feedthrough=True)
+    out = tmp_path / "stairs.csv"
+    assert cli.main(["run", str(ssp), "--step", "0.2", "-o", str(out)]) == 0
+    said = capsys.readouterr()
+    assert "Stair ended the simulation at t = 9 s" in said.out
+    names, table = read_csv(out)
+    _, theirs = fmpy_table(reference_fmu("Stair"), 0.2)
+    np.testing.assert_allclose(table[:, [0, names.index("Stair.counter")]], theirs, rtol=1e-11, atol=0)
+    # the counter reached Feedthrough, which passes it on (Gauss-Seidel: within the step)
+    np.testing.assert_array_equal(table[1:, names.index("Feedthrough.Int32_output")],
+                                  table[1:, names.index("Stair.counter")])
+    assert not list(tmp_path.glob("*.partial.csv"))
+
+
+def test_a_sweep_case_that_stair_ends_is_terminated_not_failed(tmp_path):
+    from artibus.study.sweep import run_case
+    ssp = stair_bench(tmp_path, connect_feedthrough=False)
+    row, series = run_case("Stairs", "stairs-test", str(ssp), None, {"Dahlquist.k": 2.0}, {}, None, 0.2, True)
+    assert row["status"] == "terminated", row
+    assert "Stair ended the simulation at t = 9 s" in row["error"]
+    assert series["time"][-1] == pytest.approx(9.0)
