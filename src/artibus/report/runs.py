@@ -9,8 +9,6 @@ from pathlib import Path
 from artibus import runner
 from artibus.bench import ssp
 from artibus.files import check_output, make_dir, write_text
-from artibus.report import comparison
-from artibus.report.pages import write_index, write_report
 
 
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
@@ -25,7 +23,11 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     results after a failure); an interrupt leaves OUT.partial.csv
     (runner.save_partial). ``log``: print, for what the command line prints (an
     FMU's warnings go to sys.stderr). Returns [(bench, report directory, KPIs)]
-    of the benches with a report."""
+    of the benches with a report. The drawing (artibus.report.pages, comparison:
+    matplotlib) is imported only with ``report``."""
+    if report:
+        from artibus.report import comparison
+        from artibus.report.pages import write_index, write_report
     if stop_time is None and not every:
         stop_time = ssp.variant_stop_time(benches[0], variants)    # None: the bench's own
     summary = []
@@ -98,6 +100,7 @@ def fault_free_kpis(bench, overrides, out_dir, kpis, can_faults, step=None, reco
                     can=None, stop_time=None, log=print):
     """The same bench without the faults: its KPIs next to the faulty run's,
     printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free)."""
+    from artibus.report.pages import write_report
     with runner.Simulation(bench, step=step, overrides=overrides, record=record,
                            algorithm=algorithm, can=can) as sim:
         result = sim.run(stop_time=stop_time)
