@@ -16,9 +16,16 @@ command, and of a run's set-up in-process, with the targets.
    functions with the most cumulative time.
 
 The machine's load (os.getloadavg) is printed first: on a shared machine the
-wall times rise with it; the CPU times less so.
+wall times rise with it; the CPU times less so. Beside the commands, the floor
+no artibus command goes below: a process that imports only what every run
+needs from other packages (NumPy, FMPy, lxml), and one that imports nothing.
 
-usage: .venv/bin/python benchmarks/startup.py [--repeat N] [--profile]
+The commands run as a default Python runs them, with their bytecode written
+and read (__pycache__): without PYTHONDONTWRITEBYTECODE, which some
+environments set (then every start compiles artibus's modules again, ~0.03 s
+here); --as-is keeps the environment as it is.
+
+usage: .venv/bin/python benchmarks/startup.py [--repeat N] [--profile] [--as-is]
 """
 import argparse
 import cProfile
@@ -40,11 +47,14 @@ BENCHES = ["Scania18m_Damping", "Urbino18_Circle", "MultiAxle_StepSteer", "Bus36
 TARGETS = {"artibus --version": 0.15, "artibus run Scania18m_Damping -o x.csv (cache warm)": 0.35}
 
 
-def command(args, env=None, cwd=None):
-    """(wall s, CPU s) of one process running `artibus ARGS`."""
+BASE_ENV = dict(os.environ)
+
+
+def command(args, env=None, cwd=None, argv=None):
+    """(wall s, CPU s) of one process running `artibus ARGS` (or argv)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    r = subprocess.run(ARTIBUS + args, cwd=cwd, env={**os.environ, **(env or {})},
+    r = subprocess.run(argv or ARTIBUS + args, cwd=cwd, env={**BASE_ENV, **(env or {})},
                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -53,12 +63,12 @@ def command(args, env=None, cwd=None):
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def timed(label, repeat, args, env=None, cwd=None, before_each=None):
+def timed(label, repeat, args, env=None, cwd=None, before_each=None, argv=None):
     walls, cpus = [], []
     for _ in range(repeat):
         if before_each is not None:
             env = {**(env or {}), **before_each()}
-        w, c = command(args, env, cwd)
+        w, c = command(args, env, cwd, argv)
         walls.append(w)
         cpus.append(c)
     target = TARGETS.get(label)
@@ -106,7 +116,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--as-is", action="store_true", help="keep PYTHONDONTWRITEBYTECODE if set")
     args = ap.parse_args()
+    if not args.as_is and BASE_ENV.pop("PYTHONDONTWRITEBYTECODE", None) is not None:
+        print("(PYTHONDONTWRITEBYTECODE left out of the commands' environment: bytecode written and read)")
     load = os.getloadavg()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} cores; "
           f"best and median of {args.repeat}")
@@ -116,6 +129,10 @@ def main():
         command(["--version"])
         command(out)                                  # packed, cached, byte-compiled
         print("\nas a command (a new process each time):")
+        python = str(Path(sys.executable))
+        timed("floor: python -c pass", args.repeat, [], argv=[python, "-c", "pass"])
+        timed("floor: python -c 'import numpy, fmpy, lxml.etree'", args.repeat, [],
+              argv=[python, "-c", "import numpy, fmpy, lxml.etree"])
         timed("artibus --version", args.repeat, ["--version"])
         timed("artibus run Scania18m_Damping -o x.csv (cache warm)", args.repeat, out, cwd=tmp)
         n = iter(range(10**6))
