@@ -36,12 +36,19 @@ _PREFIX_TRASH = ".trash-"
 def root():
     """The cache's directory of unpacked archives, or None when switched off
     (ARTIBUS_CACHE_MB=0)."""
+    env = (os.environ.get("ARTIBUS_CACHE_MB"), os.environ.get("ARTIBUS_CACHE"), os.environ.get("XDG_CACHE_HOME"))
+    if _ROOT and _ROOT[0] == env:
+        return _ROOT[1]
     if _limit() <= 0:
-        return None
-    base = os.environ.get("ARTIBUS_CACHE")
-    if not base:
-        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "artibus"
-    return Path(base) / "unpacked"
+        base = None
+    else:
+        base = env[1] or Path(env[2] or Path.home() / ".cache") / "artibus"
+        base = Path(base) / "unpacked"
+    _ROOT[:] = [env, base]
+    return base
+
+
+_ROOT = []          # [the environment it was found from, the root]
 
 
 def _limit():
