@@ -9,6 +9,10 @@ import pytest
 from artibus import ArtibusError
 from artibus.files import atomic_path, atomic_write, check_output
 
+#: the unpacked bench and FMUs in a temporary directory of the run's own, removed at its
+#: end (the cache of artibus.cache off): what these tests watch
+NO_CACHE = {"ARTIBUS_CACHE_MB": "0"}
+
 
 def test_atomic_write_keeps_old_file_on_interrupt(tmp_path):
     """An interrupted write leaves the previous file, whole, and no temporary file."""
@@ -238,7 +242,7 @@ def _run_in_background(tmp_path, bench, out, stop):
     tmpdir.mkdir()
     proc = subprocess.Popen([sys.executable, "-m", "artibus", "run", str(bench), "--stop-time", str(stop),
                              "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir)})
+                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), **NO_CACHE})
     return proc, tmpdir
 
 
@@ -328,7 +332,7 @@ def test_interrupt_in_the_python_loop_keeps_partial_results(tmp_path, long_bench
     tmpdir.mkdir()
     proc = subprocess.Popen([sys.executable, "-m", "artibus", "run", str(long_bench), "--stop-time", "1e5",
                              "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), "ARTIBUS_CORE": "0"})
+                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), **NO_CACHE, "ARTIBUS_CORE": "0"})
     assert _wait_for(lambda: any(tmpdir.iterdir()))
     time.sleep(2.0)
     proc.send_signal(sig)

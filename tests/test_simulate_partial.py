@@ -12,6 +12,10 @@ import pytest
 
 from artibus import runner
 
+#: the unpacked bench and FMUs in a temporary directory of the run's own, removed at its
+#: end (the cache of artibus.cache off): what these tests watch
+NO_CACHE = {"ARTIBUS_CACHE_MB": "0"}
+
 
 def _wait_for(predicate, timeout=60.0):
     end = time.monotonic() + timeout
@@ -30,7 +34,7 @@ def test_simulate_interrupted_keeps_partial_results(tmp_path, sig):
     tmpdir.mkdir()
     proc = subprocess.Popen([sys.executable, "-m", "artibus", "simulate", "BusKinematics", "--stop-time", "1e5",
                              "--step", "0.01", "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir)})
+                            text=True, cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), **NO_CACHE})
     assert _wait_for(lambda: any(tmpdir.iterdir()))        # the FMU unpacked
     time.sleep(2.0)                                           # instantiated, initialised, stepping
     proc.send_signal(sig)

@@ -16,7 +16,6 @@ A full disk (ENOSPC, EDQUOT) becomes an ArtibusError naming the file.
 import contextlib
 import errno
 import os
-import secrets
 from pathlib import Path
 
 from artibus.base import ArtibusError
@@ -27,7 +26,7 @@ TMP_MARK = ".tmp-"          # NAME.tmp-PID-XXXX.SUFFIX
 def temp_name(path):
     """A temporary name beside ``path``, unique to this process and call, that keeps its suffix."""
     path = Path(path)
-    return path.with_name(f"{path.name}{TMP_MARK}{os.getpid()}-{secrets.token_hex(3)}{path.suffix}")
+    return path.with_name(f"{path.name}{TMP_MARK}{os.getpid()}-{os.urandom(3).hex()}{path.suffix}")
 
 
 def _disk_error(path, e):
@@ -107,7 +106,7 @@ def check_output(path, what="-o"):
         raise ArtibusError(f"{what} {path}: directory {parent} does not exist")
     if not parent.is_dir():
         raise ArtibusError(f"{what} {path}: {parent} is not a directory")
-    probe = parent / f".{path.name}.probe-{os.getpid()}-{secrets.token_hex(3)}"
+    probe = parent / f".{path.name}.probe-{os.getpid()}-{os.urandom(3).hex()}"
     fd = None
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)

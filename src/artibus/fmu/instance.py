@@ -3,9 +3,10 @@ FMU2Slave with a log of its own, the process's memory callbacks
 (artibus.fmu.memory) and model descriptions read once per content."""
 import shutil
 
-from fmpy import extract, read_model_description
+from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 
+from artibus import cache
 from artibus.base import ArtibusError
 
 
@@ -93,11 +94,28 @@ def _model_description(path):
         return read_model_description(path)       # its own error, named
     md = _MDS.get(key)
     if md is None:
-        md = read_model_description(path)
+        md = _stored_description(path)
         if len(_MDS) >= _MDS_KEPT:
             _MDS.pop(next(iter(_MDS)))
         _MDS[key] = md
     return md
+
+
+def _stored_description(path):
+    """read_model_description(path), parsed and validated once per content of
+    the FMU and kept beside its unpacked copy (artibus.cache.stored), for the
+    next process; under FMPy's version, as its classes pickle."""
+    import fmpy
+    if cache.root() is None:          # (the cache off: nothing kept)
+        return read_model_description(path)
+    try:
+        entry, temporary = cache.unpacked(path)
+    except Exception:                 # a broken archive: read_model_description names it
+        return read_model_description(path)
+    if temporary:
+        shutil.rmtree(entry, ignore_errors=True)
+        return read_model_description(path)
+    return cache.stored(entry, f"modelDescription-fmpy-{fmpy.__version__}", lambda: read_model_description(path))
 
 
 class Fmu:
@@ -117,24 +135,30 @@ class Fmu:
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.log = []
         self.instance_name = instance_name
-        self._dir = None
+        self._dir, self._own_dir = None, False
         try:
-            self._dir = extract(self.path)
+            # unpacked once per content and kept (artibus.cache), or into a temporary directory
+            self._dir, self._own_dir = cache.unpacked(self.path)
+            self._dir = str(self._dir)
             self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                    modelIdentifier=self.md.coSimulation.modelIdentifier,
                                    instanceName=instance_name)
         except Exception as e:   # a missing or broken binary
-            if self._dir:
-                shutil.rmtree(self._dir, ignore_errors=True)
+            self._remove_dir()
             raise ArtibusError(f"{self.path}: {self.md.modelName}'s binary cannot be loaded: {e}") from None
         self._callbacks = _callbacks(self.log)
         try:
             self.slave.instantiate(loggingOn=logging, callbacks=self._callbacks)
         except Exception:
-            shutil.rmtree(self._dir, ignore_errors=True)
+            self._remove_dir()
             _LOGS.pop(self._callbacks._env, None)
             raise ArtibusError(f"{self.path}: {self.md.modelName} could not be instantiated: "
                                f"{' '.join(self.log) or 'no message'}") from None
+
+    def _remove_dir(self):
+        """The unpacked FMU removed when it is this instance's own (a cache entry stays)."""
+        if self._dir and self._own_dir:
+            shutil.rmtree(self._dir, ignore_errors=True)
 
     def var(self, name):
         try:
@@ -207,7 +231,7 @@ class Fmu:
         try:
             self.slave.freeInstance()
         finally:
-            shutil.rmtree(self._dir, ignore_errors=True)
+            self._remove_dir()
             _LOGS.pop(self._callbacks._env, None)   # the instance is gone: it logs no more
 
     def __enter__(self):

@@ -10,8 +10,28 @@ what several benches' bench.py share (``benchkit``), seed 000's comparison page
 Every file is written under a temporary name and renamed (artibus.files), so
 a report stopped midway never leaves a torn PNG or page under its final name.
 """
-from artibus.report.animation import (animate, animation_writer, bench_animation, result_axle_traces,  # noqa: F401
-                                      result_links, result_outlines)
-from artibus.report.pages import (FAIL, PASS, STYLE, Kpi, generic, headline, run_metadata, thumbnail,  # noqa: F401
-                                  write_html, write_index, write_kpi_csv, write_report)
-from artibus.report.plots import birds_eye, colours, save_figure, signals, swept, swept_area  # noqa: F401
+import importlib
+
+# imported when first used (PEP 562), so that ``artibus run`` without
+# --report, which imports artibus.report.runs, never imports matplotlib
+_WHERE = {
+    **dict.fromkeys(("animate", "animation_writer", "bench_animation", "result_axle_traces", "result_links",
+                     "result_outlines"), "animation"),
+    **dict.fromkeys(("FAIL", "PASS", "STYLE", "Kpi", "generic", "headline", "run_metadata", "thumbnail",
+                     "write_html", "write_index", "write_kpi_csv", "write_report"), "pages"),
+    **dict.fromkeys(("birds_eye", "colours", "save_figure", "signals", "swept", "swept_area"), "plots"),
+}
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name):
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'artibus.report' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"artibus.report.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))

@@ -9,9 +9,6 @@ from pathlib import Path
 from artibus import runner
 from artibus.bench import ssp
 from artibus.files import check_output, make_dir, write_text
-from artibus.report import comparison
-from artibus.report import single_rate as single_rate_report
-from artibus.report.pages import write_index, write_report
 
 
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
@@ -28,7 +25,12 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     FMU's warnings go to sys.stderr). ``single_rate``: every component at one
     step (--single-rate). With ``report`` each multi-rate bench is run once
     more single-rate for its page (artibus.report.single_rate). Returns
-    [(bench, report directory, KPIs)] of the benches with a report."""
+    [(bench, report directory, KPIs)] of the benches with a report. The drawing
+    (artibus.report.pages, comparison: matplotlib) is imported only with ``report``."""
+    if report:
+        from artibus.report import comparison
+        from artibus.report import single_rate as single_rate_report
+        from artibus.report.pages import write_index, write_report
     if stop_time is None and not every:
         stop_time = ssp.variant_stop_time(benches[0], variants)    # None: the bench's own
     summary = []
@@ -109,6 +111,7 @@ def fault_free_kpis(bench, overrides, out_dir, kpis, can_faults, step=None, reco
                     can=None, stop_time=None, log=print):
     """The same bench without the faults: its KPIs next to the faulty run's,
     printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free)."""
+    from artibus.report.pages import write_report
     with runner.Simulation(bench, step=step, overrides=overrides, record=record,
                            algorithm=algorithm, can=can) as sim:
         result = sim.run(stop_time=stop_time)

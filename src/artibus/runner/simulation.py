@@ -27,13 +27,13 @@
 import math
 import shutil
 import sys
-import tempfile
 import time as _time
-import zipfile
+from pathlib import Path
 
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
+from artibus import cache
 from artibus.base import ArtibusError
 from artibus.bench import ssp as ssp_mod
 from artibus.fmu import Result, SimulationError, Termination, terminated
@@ -52,6 +52,34 @@ def _settled(before, now, tol=1e-12):
     settled only on itself."""
     return len(before) == len(now) and all(
         b == x or (math.isfinite(x) and abs(b - x) <= tol + tol * abs(x)) for b, x in zip(before, now))
+
+
+def _read_bench(path):
+    """artibus.bench.ssp.read(path), once per content of the .ssp (its .ssd and
+    parameter files parsed and validated against the XSDs once): kept in the
+    .ssp's cache entry (artibus.cache.stored), under the path it was read as
+    (its messages name it) and the code that reads it (artibus.bench.ssp and
+    .parameters, .units: every module of artibus.bench; FMPy's version), so an
+    edit of any reads it again."""
+    if cache.root() is None:
+        return ssp_mod.read(path)
+    try:
+        entry, temporary = cache.unpacked(path)
+    except Exception:                 # not a zip, a broken member: read names it
+        return ssp_mod.read(path)
+    if temporary:
+        shutil.rmtree(entry, ignore_errors=True)
+        return ssp_mod.read(path)
+    return cache.stored(entry, f"bench-{_reader_key(path)}", lambda: ssp_mod.read(path))
+
+
+def _reader_key(path):
+    import hashlib
+    import fmpy
+    h = hashlib.sha256(f"{path}\0{fmpy.__version__}".encode())
+    for module in sorted(Path(ssp_mod.__file__).parent.glob("*.py")):   # the whole reader: ssp, parameters, units, ...
+        h.update(module.read_bytes())
+    return h.hexdigest()[:24]
 
 
 class Simulation(_Setup):
@@ -82,16 +110,16 @@ class Simulation(_Setup):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
         self.algorithm = algorithm
         self.ssp = ssp_mod.ssp_path(ssp)
-        self.bench = ssp_mod.read(self.ssp)
+        self.bench = _read_bench(self.ssp)
         from artibus.bench.portability import warn
-        warn(self.ssp)
+        warn(self.ssp)                   # what the runner does not apply: once a process, not cached
         where = self.bench.file
         if step is not None and not step > 0:
             raise ArtibusError(f"--step {step}: the communication step must be > 0")
-        self._tmp = tempfile.mkdtemp(prefix="artibus-")
+        self._tmp, self._tmp_owned = None, False
         try:
-            with zipfile.ZipFile(self.ssp) as z:
-                z.extractall(self._tmp)
+            # unpacked once per content and kept (artibus.cache), or into a temporary directory
+            self._tmp, self._tmp_owned = cache.unpacked(self.ssp)
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
                         set(cut or ()))
         except BaseException:
@@ -400,7 +428,8 @@ class Simulation(_Setup):
             self.can.close()
         for u in getattr(self, "units", []):
             u.fmu.close()
-        shutil.rmtree(self._tmp, ignore_errors=True)
+        if getattr(self, "_tmp_owned", False):     # (a cache entry stays: artibus.cache)
+            shutil.rmtree(self._tmp, ignore_errors=True)
 
     def __enter__(self):
         return self

@@ -1,0 +1,246 @@
+"""Archives unpacked once and kept between runs: a bench's ``.ssp`` and its
+FMUs, by the SHA-256 of their bytes (``unpacked``), and what is read from
+them once (``stored``: a model description parsed and validated).
+
+Where: ``$ARTIBUS_CACHE/unpacked``, default ``~/.cache/artibus/unpacked``
+(``${XDG_CACHE_HOME:-~/.cache}/artibus``, the cache scripts/build_common.sh
+keeps the third-party builds in). An entry is the directory
+``<sha256>/``: written under a name of this process's own and renamed, so a
+directory under its final name is always complete, runs at once that unpack
+the same archive do not collide (the first rename wins, the other's copy is
+removed), and an interrupted unpacking leaves nothing under a final name. The
+key is the content: a rebuilt FMU or a repacked bench is a new entry, never a
+stale one. A run only reads an entry (the FMUs' binaries are loaded from it).
+
+The size is bounded: when an entry is added and the entries take more than
+$ARTIBUS_CACHE_MB megabytes (default 500), the ones used longest ago are
+removed, but none used in the last hour (another run may be loading it).
+``clean()`` removes every entry not in use; ``ARTIBUS_CACHE_MB=0`` unpacks
+into a temporary directory per run instead, removed after it (the behaviour
+before the cache)."""
+import hashlib
+import os
+import pickle
+import shutil
+import tempfile
+import time
+import zipfile
+from pathlib import Path
+
+DEFAULT_MB = 500
+KEEP_RECENT_S = 3600.0        # an entry used in the last hour is never pruned
+_PREFIX_TMP = ".tmp-"
+_PREFIX_TRASH = ".trash-"
+
+
+def root():
+    """The cache's directory of unpacked archives, or None when switched off
+    (ARTIBUS_CACHE_MB=0)."""
+    env = (os.environ.get("ARTIBUS_CACHE_MB"), os.environ.get("ARTIBUS_CACHE"), os.environ.get("XDG_CACHE_HOME"))
+    if _ROOT and _ROOT[0] == env:
+        return _ROOT[1]
+    if _limit() <= 0:
+        base = None
+    else:
+        base = env[1] or Path(env[2] or Path.home() / ".cache") / "artibus"
+        base = Path(base) / "unpacked"
+    _ROOT[:] = [env, base]
+    return base
+
+
+_ROOT = []          # [the environment it was found from, the root]
+
+
+def _limit():
+    """The bound in bytes ($ARTIBUS_CACHE_MB megabytes)."""
+    try:
+        return float(os.environ.get("ARTIBUS_CACHE_MB", DEFAULT_MB)) * 1e6
+    except ValueError:
+        return DEFAULT_MB * 1e6
+
+
+def content_key(path):
+    """The SHA-256 of the file's bytes, as hex."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+_KEYS = {}          # (path, size, mtime_ns, ctime_ns, inode) -> content key, for this process
+
+
+def _key(path):
+    """content_key(path), hashed once per file in this process: again only when
+    its size, times or inode changed. A file changed in the last 2 s is hashed
+    each time (its times may not have moved yet: the clock of file times is
+    coarse)."""
+    st = os.stat(path)
+    stamp = (str(path), st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
+    key = _KEYS.get(stamp)
+    if key is None:
+        key = content_key(path)
+        if time.time_ns() - max(st.st_mtime_ns, st.st_ctime_ns) > 2_000_000_000:
+            _KEYS[stamp] = key
+    return key
+
+
+def extract(archive, dest):
+    """Every member of the zip ``archive`` into the directory ``dest``."""
+    with zipfile.ZipFile(archive) as z:
+        z.extractall(dest)
+
+
+def unpacked(archive):
+    """(directory, temporary): the zip ``archive`` unpacked. From the cache
+    (temporary False: the caller leaves it as it is) or, with the cache off
+    or not writable, into a new temporary directory (temporary True: the
+    caller removes it). Errors of the archive itself (not a zip, a broken
+    member) are raised as zipfile/OS errors, as zipfile.extractall raises them."""
+    base = root()
+    if base is not None:
+        try:
+            key = _key(archive)
+            entry = base / key
+            if entry.is_dir():
+                _touch(entry)
+                return entry, False
+            base.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            base = None                 # (an unwritable cache: as with the cache off)
+    if base is None:
+        tmp = tempfile.mkdtemp(prefix="artibus-")
+        try:
+            extract(archive, tmp)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        return Path(tmp), True
+    tmp = base / f"{_PREFIX_TMP}{key}-{os.getpid()}-{os.urandom(4).hex()}"
+    try:
+        tmp.mkdir()
+        extract(archive, tmp)
+        try:
+            os.rename(tmp, entry)
+        except OSError:                 # another run renamed its copy first: that one it is
+            if not entry.is_dir():
+                raise
+            shutil.rmtree(tmp, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    _prune(base, keep=entry)
+    return entry, False
+
+
+def stored(entry, name, make):
+    """What ``make()`` returns, kept in the cache entry ``entry`` (a directory
+    ``unpacked`` returned) as the pickle ``name``: made once per content, read
+    back after. A temporary directory (the cache off) keeps nothing."""
+    entry = Path(entry)
+    base = root()
+    if base is None or entry.parent != base:
+        return make()
+    f = entry / f".artibus-{name}.pickle"
+    try:
+        with open(f, "rb") as fh:
+            return pickle.load(fh)
+    except Exception:                   # none yet, or from another version: made again
+        pass
+    value = make()
+    tmp = f.with_name(f"{f.name}.{os.getpid()}-{os.urandom(4).hex()}")
+    try:
+        with open(tmp, "wb") as fh:
+            pickle.dump(value, fh, protocol=pickle.HIGHEST_PROTOCOL)
+        os.replace(tmp, f)
+    except Exception:                   # (not picklable, not writable: made each time)
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+    return value
+
+
+def _touch(entry):
+    """An entry's mtime is when it was last used (the pruning's order); at
+    most once a minute, to spare the disk."""
+    try:
+        if time.time() - entry.stat().st_mtime > 60:
+            os.utime(entry)
+    except OSError:
+        pass
+
+
+def _size(d):
+    total = 0
+    for dirpath, _, files in os.walk(d):
+        for f in files:
+            try:
+                total += os.lstat(os.path.join(dirpath, f)).st_size
+            except OSError:
+                pass
+    return total
+
+
+def _entries(base):
+    out = []
+    for e in base.iterdir():
+        if e.name.startswith(".") or not e.is_dir():
+            continue
+        try:
+            out.append((e.stat().st_mtime, e))
+        except OSError:
+            pass
+    return sorted(out)
+
+
+def _remove(entry):
+    """An entry renamed away first (so no run finds half of it), then removed."""
+    trash = entry.with_name(f"{_PREFIX_TRASH}{entry.name}-{os.urandom(4).hex()}")
+    try:
+        os.rename(entry, trash)
+    except OSError:
+        return
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+def _prune(base, keep=None):
+    """The entries used longest ago removed while the cache is above its bound."""
+    limit = _limit()
+    try:
+        entries = [(m, e, _size(e)) for m, e in _entries(base)]
+    except OSError:
+        return
+    total = sum(s for _, _, s in entries)
+    now = time.time()
+    for mtime, e, size in entries:
+        if total <= limit:
+            break
+        if e == keep or now - mtime < KEEP_RECENT_S:
+            continue
+        _remove(e)
+        total -= size
+
+
+def clean(older_than=0.0):
+    """Every entry not used in the last ``older_than`` seconds removed, and
+    whatever an interrupted run left (temporary copies older than an hour).
+    Returns the number of entries removed."""
+    base = root()
+    if base is None or not base.is_dir():
+        return 0
+    now = time.time()
+    n = 0
+    for mtime, e in _entries(base):
+        if now - mtime >= older_than:
+            _remove(e)
+            n += 1
+    for e in base.iterdir():
+        if e.name.startswith((_PREFIX_TMP, _PREFIX_TRASH)):
+            try:
+                if now - e.stat().st_mtime > KEEP_RECENT_S:
+                    shutil.rmtree(e, ignore_errors=True)
+            except OSError:
+                pass
+    return n
