@@ -16,13 +16,18 @@ The tree <build>/fmu/<Name>/ already holds binaries/linux64/<Name>.so. This adds
   resources/               the add_fmu RESOURCES;
   binaries/win64/<Name>.dll  when --win64-dir holds it (the mingw build);
 
+With --fmi 3 the tree is the FMI 3.0 build's (<build>/fmu3/<Name>/, binaries/x86_64-linux and
+x86_64-windows): its modelDescription.xml is written by fmi3_description.py from the same
+completed FMI 2.0 description, and sources/ is not shipped (an FMI 3.0 source FMU needs
+sources/buildDescription.xml).
+
 then writes the archive (entries in a fixed order with a fixed time stamp, so the same
 inputs give the same bytes) through a temporary file, so a reader never sees half an FMU.
 
 Only the Python standard library is used: this runs inside the CMake build.
 
 usage: package_fmu.py --name N --root SRC --xml XML --gen GENDIR --tree TREE --fmu OUT.fmu
-                      [--sources S...] [--resources R...] [--win64-dir DIR]
+                      [--fmi 2|3] [--sources S...] [--resources R...] [--win64-dir DIR]
 """
 
 import argparse
@@ -36,6 +41,9 @@ import tempfile
 import time
 import xml.etree.ElementTree as ET
 import zipfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import fmi3_description  # noqa: E402  (src/fmi/, beside this script)
 
 AUTHOR = "the artibus authors"
 COPYRIGHT = "Copyright (c) 2026, the artibus authors"
@@ -65,6 +73,14 @@ ELEMENT_ORDER = {
           "DefaultExperiment", "VendorAnnotations", "ModelVariables", "ModelStructure"),
     "3": ("ModelExchange", "CoSimulation", "ScheduledExecution", "UnitDefinitions", "TypeDefinitions",
           "LogCategories", "DefaultExperiment", "ModelVariables", "ModelStructure", "Annotations"),
+}
+
+#: the binaries/ folder of each platform, per FMI version (FMI 2.0's names, FMI 3.0's
+#: platform tuples); the build puts the platform's own binary into its tree, the others
+#: are copied in from their cross builds' folders (--win64-dir)
+PLATFORM_DIRS = {
+    "2": {"linux": "linux64", "windows": "win64"},
+    "3": {"linux": "x86_64-linux", "windows": "x86_64-windows"},
 }
 
 #: libraries a binary may contain: (marker bytes in the binary, licence file, what)
@@ -109,6 +125,7 @@ def closure(root, name, sources):
                 ("src/fmi", f"src/models/{name}", "src/models/common", "include/fmi2")]
     todo = [os.path.normpath(os.path.join(root, s)) for s in sources]
     todo.append(os.path.join(root, "src/fmi/fmi2Functions.c"))
+    todo.append(os.path.join(root, "src/fmi/fmu_core.c"))
     files, system = set(), set()
     while todo:
         path = todo.pop()
@@ -360,7 +377,8 @@ def fmt_display(value, unit, md_units):
     return f' <span class="du">({y:.6g} {html.escape(dname)})</span>'
 
 
-def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=()):
+def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=(),
+                  fmi_version=None):
     e = html.escape
     units = {}
     for u in md.iter("Unit"):
@@ -370,14 +388,14 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
     interfaces = [k for k in ("CoSimulation", "ModelExchange") if md.find(k) is not None]
     de = md.find("DefaultExperiment")
     rows = [
-        ("FMI version", md.get("fmiVersion") + " (" + ", ".join(
+        ("FMI version", (fmi_version or md.get("fmiVersion")) + " (" + ", ".join(
             {"CoSimulation": "Co-Simulation", "ModelExchange": "Model Exchange"}[k] for k in interfaces) + ")"),
         ("version", md.get("version")),
         ("author", md.get("author")),
         ("copyright", md.get("copyright")),
         ("license", md.get("license")),
         ("generation tool", md.get("generationTool")),
-        ("GUID", md.get("guid")),
+        ("instantiation token" if fmi_version == "3.0" else "GUID", md.get("guid")),
         ("platforms", ", ".join(f"binaries/{p}" for p in platforms)),
     ]
     if de is not None:
@@ -535,17 +553,19 @@ def main(argv=None):
     ap.add_argument("--sources", nargs="*", default=[])
     ap.add_argument("--resources", nargs="*", default=[])
     ap.add_argument("--win64-dir", default="")
+    ap.add_argument("--fmi", choices=("2", "3"), default="2", help="the FMI version of the tree")
     a = ap.parse_args(argv)
+    pdirs = PLATFORM_DIRS[a.fmi]
     name, root, tree = a.name, os.path.abspath(a.root), os.path.abspath(a.tree)
     version = project_version(root)
     model_dir = os.path.join(root, "src", "models", name)
 
-    so = os.path.join(tree, "binaries", "linux64", f"{name}.so")
+    so = os.path.join(tree, "binaries", pdirs["linux"], f"{name}.so")
     if not os.path.isfile(so):
         sys.exit(f"package_fmu.py: {so} missing")
 
     # binaries/win64 from the cross build's folder, when it has this FMU's DLL
-    win_dst = os.path.join(tree, "binaries", "win64")
+    win_dst = os.path.join(tree, "binaries", pdirs["windows"])
     if os.path.isdir(win_dst):
         shutil.rmtree(win_dst)
     binaries = [so]
@@ -567,6 +587,8 @@ def main(argv=None):
     if uses_eigen(root, files):
         libraries.append("Eigen")
     why_not = needs_beyond_libc(files, system)
+    if a.fmi == "3":
+        why_not = "the FMI 3.0 build ships binaries only (the sources are in the FMI 2.0 FMU)"
 
     tree_md = parse(a.xml)
     md = tree_md.getroot()
@@ -589,7 +611,12 @@ def main(argv=None):
     c_files = ship_sources(root, name, a.gen, tree, files) if why_not is None else []
     if c_files:
         add_source_files(md, c_files)
-    write_xml(tree_md, os.path.join(tree, "modelDescription.xml"))
+    if a.fmi == "3":
+        md3 = fmi3_description.fmi3_model_description(md, a.xml)
+        order_elements(md3)
+        write_xml(ET.ElementTree(md3), os.path.join(tree, "modelDescription.xml"))
+    else:
+        write_xml(tree_md, os.path.join(tree, "modelDescription.xml"))
 
     icon = os.path.join(model_dir, "model.png")
     if os.path.isfile(icon):
@@ -601,7 +628,8 @@ def main(argv=None):
         copy(os.path.join(root, src), os.path.join(tree, "documentation", "licenses", fname))
     readme_path = os.path.join(model_dir, "README.md")
     readme = open(readme_path, encoding="utf-8").read() if os.path.isfile(readme_path) else ""
-    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials)
+    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials,
+                         fmi_version="3.0" if a.fmi == "3" else None)
     with open(os.path.join(tree, "documentation", "index.html"), "w", encoding="utf-8") as f:
         f.write(page)
 
