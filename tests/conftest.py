@@ -71,7 +71,7 @@ SLOW_FILES = {
     "test_replay_can.py", "test_reports.py", "test_runner_safety.py", "test_simulate_partial.py",
     "test_steering_controllers_benches.py", "test_sweep.py",
 }
-SLOW_TESTS = ("bus36m_hinge_forces_on_a_circle",)
+SLOW_TESTS = ("bus36m_hinge_forces_on_a_circle", "fmi3_win64")
 
 
 def pytest_configure(config):
