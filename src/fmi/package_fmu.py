@@ -588,7 +588,8 @@ def main(argv=None):
         libraries.append("Eigen")
     why_not = needs_beyond_libc(files, system)
     if a.fmi == "3":
-        why_not = "the FMI 3.0 build ships binaries only (the sources are in the FMI 2.0 FMU)"
+        why_not = ("the FMI 3.0 build ships binaries only (an FMI 3.0 source FMU describes its sources "
+                   "in sources/buildDescription.xml, which is not written yet)")
 
     tree_md = parse(a.xml)
     md = tree_md.getroot()
