@@ -53,5 +53,8 @@ if [ ! -f "$B/CMakeCache.txt" ]; then
 fi
 # only the FMUs and their importers (each fmu_check_<Name> needs its <Name>)
 targets="$(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p' CMakeLists.txt)"
+if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$B/CMakeCache.txt"; then   # and the FMI 3.0 builds: aarch64-linux/fmi3/
+  targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
+fi
 quiet cmake --build "$B" -j"$JOBS" --target $targets
 echo "aarch64: $(ls "$B"/aarch64-linux/*.so | wc -l) shared objects in $B/aarch64-linux"

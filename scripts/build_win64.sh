@@ -8,6 +8,8 @@
 #                         into the cache outside the clone ($ARTIBUS_CACHE)
 #   win64/<Name>.dll      every FMU's binary; scripts/setup.sh packs them into
 #                         binaries/win64 of each FMU (-DARTIBUS_WIN64_DIR)
+#   win64/fmi3/<Name>.dll the FMI 3.0 build's, packed into binaries/x86_64-windows of
+#                         fmus/fmi3/<Name>.fmu (unless the build has ARTIBUS_FMI3=OFF)
 #   fmu_check_<Name>.exe  the C importer (tests/c/fmu_check.c) for Wine
 #   wineprefix/           the Wine prefix tests/test_win64.py runs it in: a link to
 #                         $ARTIBUS_CACHE/wineprefix-<Wine version>, made once per machine
@@ -35,6 +37,9 @@ if [ ! -f "$B/CMakeCache.txt" ]; then
 fi
 # only the FMUs and their importers (each fmu_check_<Name> needs its <Name>)
 targets="$(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p' CMakeLists.txt)"
+if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$B/CMakeCache.txt"; then
+  targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
+fi
 quiet cmake --build "$B" -j"$JOBS" --target $targets
 echo "win64: $(ls "$B"/win64/*.dll | wc -l) DLLs in $B/win64"
 

@@ -29,7 +29,7 @@ from conftest import FMU_NAMES
 from artibus.fmu import Fmu
 from conftest import fmu_file
 
-HEADER = 80            # magic, size, guid[64], checksum: then the body (src/fmi/fmi2Functions.c)
+HEADER = 80            # magic, size, guid[64], checksum: then the body (src/fmi/fmu_core.c)
 
 
 def outputs(f):

@@ -174,7 +174,7 @@ def test_fmpy_prints_the_fmus_messages_again_after_a_run_with_a_logger(capsys):
     simulate_fmu(str(fmu_file("BusKinematics")), stop_time=0.1,
                  logger=lambda *a: None)                    # as the jack-knife test does
     gc.collect()
-    restore_fmpy_logger()                   # what conftest does after every such test
+    restore_fmpy_logger()                   # what conftest does after every such test (artibus.fmu.claim_logger_proxy)
     capsys.readouterr()
     simulate_fmu(str(fmu_file("SteeringActuator")), stop_time=0.1)   # warns: no command message
     out = capsys.readouterr().out

@@ -294,6 +294,14 @@ def cmd_simulate(args):
     from artibus.fmu import simulate
     from artibus.runner import save_partial
     fmu = _fmu_arg(args.fmu)
+    run = fmu
+    if args.fmi == "3":      # the FMI 3.0 build of a built FMU; the parameters checked against
+        if Path(args.fmu).suffix == ".fmu":       # its FMI 2.0 declarations (the same ones)
+            raise ArtibusError(f"--fmi 3 takes the name of a built FMU, not a path ({args.fmu}): "
+                               "give an FMI 3.0 .fmu's path without --fmi")
+        run = fmu_dir() / "fmi3" / f"{args.fmu}.fmu"
+        if not run.is_file():
+            raise ArtibusError(f"{run}: no FMI 3.0 build of {args.fmu} (built with -DARTIBUS_FMI3=ON)")
     out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"))
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
     extra = parse_set(args.set)
@@ -305,7 +313,7 @@ def cmd_simulate(args):
     check_against(extra, fmu, "--set")
     params.update(extra)
     try:
-        result = simulate(fmu, parameters=params, stop_time=args.stop_time, step=args.step)
+        result = simulate(run, parameters=params, stop_time=args.stop_time, step=args.step)
     except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
         save_partial(e, out)
         raise
@@ -467,6 +475,8 @@ def build_parser():
     s.add_argument("--stop-time", type=_seconds)
     s.add_argument("--step", type=_seconds)
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: <FMU>.csv)")
+    s.add_argument("--fmi", choices=["2", "3"], default="2",
+                   help="run the FMI 3.0 build of a built FMU (fmus/fmi3/<Name>.fmu; default 2)")
     s.set_defaults(func=cmd_simulate)
     s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia), "
                                      "or what of a bench other SSP masters run differently")

@@ -1,5 +1,8 @@
-/* The shared FMI 2.0 Co-Simulation layer: the instance every model works on,
- * the logging helpers, and the five functions each model supplies.
+/* The shared FMI layer (FMI 2.0 and FMI 3.0, one build per version: FMI_VERSION):
+ * the instance every model works on, the logging helpers, and the functions each
+ * model supplies. Nothing here depends on the FMI version but the callbacks kept
+ * in the instance; a model's code is the same for both (fmi2Functions.c and
+ * fmi3Functions.c are thin layers over fmu_core.c).
  *
  * A model folder src/models/<Name>/ holds
  *   config.h  ModelState: the model's own internal states that are not FMI
@@ -15,7 +18,14 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
+#ifndef FMI_VERSION
+#define FMI_VERSION 2
+#endif
+#if FMI_VERSION == 3
+#include "fmi3Functions.h"
+#else
 #include "fmi2Functions.h"
+#endif
 #include "vartable.h"
 #include "config.h"
 
@@ -23,7 +33,16 @@
 extern "C" {
 #endif
 
-/* instance states of the FMI 2.0 co-simulation state machine (spec 4.2.4) */
+/* the status every function returns: the values of fmi2Status and fmi3Status
+   (OK 0, Warning 1, Discard 2, Error 3, Fatal 4), so a layer casts it */
+typedef enum { OK = 0, Warning = 1, Discard = 2, Error = 3, Fatal = 4 } Status;
+
+/* which interface the instance was made for */
+typedef enum { IF_CO_SIMULATION, IF_MODEL_EXCHANGE } InterfaceType;
+
+/* instance states of the FMI 2.0 co-simulation state machine (spec 4.2.4); in
+   FMI 3.0 S_STEP_COMPLETE is Step Mode, and S_EVENT_MODE serves Model Exchange
+   and Co-Simulation with eventModeUsed alike */
 typedef enum {
     S_INSTANTIATED   = 1 << 0,
     S_INIT_MODE      = 1 << 1,
@@ -55,12 +74,19 @@ typedef struct ModelInstance {
     /* --- everything else: re-created, never saved --- */
     char *instanceName;
     char *resourceDir;      /* file system path of the FMU's resources/, or NULL */
+#if FMI_VERSION == 3
+    fmi3InstanceEnvironment env;
+    fmi3LogMessageCallback logMessage;
+    bool eventModeUsed;     /* fmi3InstantiateCoSimulation's */
+#else
     fmi2CallbackFunctions cb;
-    fmi2Type type;          /* fmi2CoSimulation, or fmi2ModelExchange (models whose
+#endif
+    InterfaceType type;     /* co-simulation, or model exchange (models whose
                                model description has <ModelExchange>) */
     bool logOn[LOG_NCATEGORIES];
-    double stopTime;        /* +INFINITY unless fmi2SetupExperiment defined it */
-    double tolerance;       /* 0 unless fmi2SetupExperiment defined it */
+    double stopTime;        /* +INFINITY unless the experiment (fmi2SetupExperiment,
+                               fmi3EnterInitializationMode) defined it */
+    double tolerance;       /* 0 unless the experiment defined it */
     bool restart;           /* a variable was set or the state restored: the
                                integrator must restart from v.d at the next step */
     bool forget;            /* that restart must also forget what the integrator
@@ -79,14 +105,14 @@ typedef struct ModelInstance {
 /* Check the parameters and set the initial state in v.d / v.s from them.
  * Called in initialization mode whenever an output is read, and at
  * fmi2ExitInitializationMode. Must be cheap and idempotent. */
-fmi2Status model_init(ModelInstance *comp);
+Status model_init(ModelInstance *comp);
 
 /* Compute all outputs from the state and the current inputs. */
 void model_outputs(ModelInstance *comp);
 
 /* Advance from v.time = t by h; on success set v.time = t + h. On failure log
  * why, leave v.d at the last good state and v.time at its time. */
-fmi2Status model_do_step(ModelInstance *comp, double t, double h);
+Status model_do_step(ModelInstance *comp, double t, double h);
 
 /* Release comp->solver (fmi2Reset, fmi2FreeInstance). */
 void model_free(ModelInstance *comp);
@@ -102,8 +128,8 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
 /* After a state was restored (v is the restored one, validated): rebuild what
  * the model derives at initialisation in comp->solver (a road, the integrator
  * of another size), so that a state restores into a fresh instance too. On
- * fmi2Error (logged) the layer puts the previous v back. */
-fmi2Status model_restored(ModelInstance *comp);
+ * Error (logged) the layer puts the previous v back. */
+Status model_restored(ModelInstance *comp);
 
 /* in model_state_valid: return STATE_INVALID("nAxles = %d", ...) */
 #define STATE_INVALID(...) (snprintf(why, n, __VA_ARGS__), false)
@@ -136,14 +162,14 @@ static inline bool sample_index_ok(double t0, long long k, double Ts, double tim
 void model_get_x(ModelInstance *comp, double x[]);
 /* set the continuous states from x[MODEL_NX] (finite, checked by the layer) */
 void model_set_x(ModelInstance *comp, const double x[]);
-/* dx/dt at v.time from the states and the inputs; fmi2Error (logged) where
+/* dx/dt at v.time from the states and the inputs; Error (logged) where
    the right-hand side is not defined there */
-fmi2Status model_derivatives(ModelInstance *comp, double dx[]);
+Status model_derivatives(ModelInstance *comp, double dx[]);
 /* the event indicators z[MODEL_NZ] (a state event where one changes sign) */
 void model_event_indicators(ModelInstance *comp, double z[]);
 /* at an event (fmi2NewDiscreteStates): *terminate = true to stop the
    simulation there (logged why); *tNext the next time event, INFINITY if none */
-fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext);
+Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext);
 
 /* The built-in test stimulus of a model run alone (`fmpy simulate`): one
  * sine period amp sin(2 pi t / period), an S-curve on a steering input, then
@@ -169,8 +195,8 @@ void log_event(ModelInstance *comp, const char *fmt, ...)
 /* warnings and errors always reach the logger */
 void log_warning(ModelInstance *comp, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
-/* returns fmi2Error, so that `return log_error(comp, ...)` reads naturally */
-fmi2Status log_error(ModelInstance *comp, const char *fmt, ...)
+/* returns Error, so that `return log_error(comp, ...)` reads naturally */
+Status log_error(ModelInstance *comp, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
 #ifdef __cplusplus

@@ -20,9 +20,16 @@ der(x[i]) becomes the field der_x (der_x[i]).
 Array fields are sized max index + 1 so that C code indexes them exactly as the
 paper does (``d->L[i]`` for i = 1..N, ``d->theta[i]`` for i = 0..N).
 
+With --fmi 3 the table is the FMI 3.0 build's: the value references are FMI 3.0's
+(fmi3_value_references: one space for all types), an Enumeration is read and written
+as Int64 (T_ENUMERATION), and MODEL_VR_TIME (the independent variable time) and
+MODEL_VR_Z0 (the first of the MODEL_NZ event indicators, which FMI 3.0 declares as
+variables) are defined. src/fmi/package_fmu.py writes the FMI 3.0 model description
+with the same value references.
+
 Only the Python standard library is used: this runs inside the CMake build.
 
-usage: gen_vars.py modelDescription.xml OUTDIR
+usage: gen_vars.py modelDescription.xml OUTDIR [--fmi 3]
 """
 
 import math
@@ -35,6 +42,7 @@ C_TYPE = {"Real": "double", "Integer": "int", "Enumeration": "int",
           "Boolean": "int", "String": "char"}
 TYPE_ENUM = {"Real": "T_REAL", "Integer": "T_INTEGER", "Enumeration": "T_INTEGER",
              "Boolean": "T_BOOLEAN", "String": "T_STRING"}
+TYPES = ("T_REAL", "T_INTEGER", "T_BOOLEAN", "T_STRING", "T_ENUMERATION")
 NAME_RE = re.compile(r"^([A-Za-z_][A-Za-z0-9_.]*)(?:\[(\d+)\])?$")
 # a derivative in the structured convention, der(NAME) or der(NAME[i]): field der_NAME
 DER_RE = re.compile(r"^der\(([A-Za-z_][A-Za-z0-9_.]*)(?:\[(\d+)\])?\)$")
@@ -132,6 +140,42 @@ def read_model_exchange(root, model, cs, xml_path):
                    "nz": int(root.get("numberOfEventIndicators", "0"))}
 
 
+def fmi3_value_references(model):
+    """The FMI 3.0 value references of the model's variables (FMI 3.0 has one value
+    reference space for all types, FMI 2.0 one per type): each variable keeps its FMI 2.0
+    value reference unless a variable before it (in the order of <ModelVariables>) has it;
+    then, and for the variables FMI 3.0 adds (the independent variable time, then the
+    event indicators of a Model Exchange model), the next numbers above the largest FMI 2.0
+    value reference. Returns {"vars": [vr per variable], "time": vr, "z": [vr per event
+    indicator]}."""
+    used, vrs = set(), []
+    nxt = max((v["vr"] for v in model["vars"]), default=-1) + 1
+    for v in model["vars"]:
+        if v["vr"] in used:
+            vrs.append(nxt)
+            nxt += 1
+        else:
+            vrs.append(v["vr"])
+            used.add(v["vr"])
+    nz = model["me"]["nz"] if model["me"] else 0
+    return {"vars": vrs, "time": nxt, "z": list(range(nxt + 1, nxt + 1 + nz))}
+
+
+def for_fmi3(model):
+    """The model with its FMI 3.0 value references and Enumerations as T_ENUMERATION."""
+    refs = fmi3_value_references(model)
+    out = dict(model)
+    out["vars"] = [dict(v, vr=vr) for v, vr in zip(model["vars"], refs["vars"])]
+    out["fmi3"] = refs
+    return out
+
+
+def type_enum(model, v):
+    if v["type"] == "Enumeration" and "fmi3" in model:
+        return "T_ENUMERATION"
+    return TYPE_ENUM[v["type"]]
+
+
 def fields(model):
     """One C field per base name; arrays sized by the largest index."""
     out = {}
@@ -171,6 +215,12 @@ def write_header(model, path):
     for v in model["vars"]:
         suffix = "" if v["index"] is None else f"_{v['index']}"
         lines.append(f"#define VR_{v['base']}{suffix} {v['vr']}u  /* {v['name']} */")
+    if "fmi3" in model:
+        refs = model["fmi3"]
+        lines += ["", "/* FMI 3.0: the independent variable time and the first event indicator */",
+                  f"#define MODEL_VR_TIME {refs['time']}u"]
+        if refs["z"]:
+            lines.append(f"#define MODEL_VR_Z0 {refs['z'][0]}u")
     me = model["me"]
     if me:
         lines += ["", "/* Model Exchange: the continuous states x[i] in the order of "
@@ -195,7 +245,7 @@ def write_source(model, path):
         lo = c_double(v["min"]) if v["min"] is not None else "-INFINITY"
         hi = c_double(v["max"]) if v["max"] is not None else "INFINITY"
         lines.append(
-            f'    {{ {c_string(v["name"])}, {v["vr"]}u, {TYPE_ENUM[v["type"]]}, '
+            f'    {{ {c_string(v["name"])}, {v["vr"]}u, {type_enum(model, v)}, '
             f'C_{v["causality"].upper()}, V_{v["variability"].upper()}, '
             f'offsetof(ModelData, {field_expr(v)}), {lo}, {hi} }},')
     lines.append("};")
@@ -207,8 +257,8 @@ def write_source(model, path):
     lines.append("const VarInfo *const REAL_OUTPUTS[] = { " + ", ".join(outputs + ["NULL"]) + " };")
     lines.append("")
     # per-type dense look-up: value reference -> index into VARS, -1 if none
-    for tname in ("T_REAL", "T_INTEGER", "T_BOOLEAN", "T_STRING"):
-        idx = {v["vr"]: i for i, v in enumerate(model["vars"]) if TYPE_ENUM[v["type"]] == tname}
+    for tname in TYPES:
+        idx = {v["vr"]: i for i, v in enumerate(model["vars"]) if type_enum(model, v) == tname}
         n = max(idx) + 1 if idx else 1
         table = ", ".join(str(idx.get(r, -1)) for r in range(n))
         lines.append(f"static const int LOOKUP_{tname}[{n}] = {{ {table} }};")
@@ -218,7 +268,7 @@ def write_source(model, path):
         "    const int *lookup; size_t n;",
         "    switch (type) {",
     ]
-    for tname in ("T_REAL", "T_INTEGER", "T_BOOLEAN", "T_STRING"):
+    for tname in TYPES:
         lines.append(f"    case {tname}: lookup = LOOKUP_{tname}; "
                      f"n = sizeof(LOOKUP_{tname}) / sizeof(int); break;")
     lines += [
@@ -257,11 +307,14 @@ def write_source(model, path):
 
 
 def main(argv):
-    if len(argv) != 3:
+    fmi3 = argv[3:] == ["--fmi", "3"]
+    if len(argv) != 3 and not fmi3:
         sys.stderr.write(__doc__)
         return 2
     try:
         model = read(argv[1])
+        if fmi3:
+            model = for_fmi3(model)
     except (ModelDescriptionError, ET.ParseError) as e:
         sys.stderr.write(f"gen_vars: {e}\n")
         return 1

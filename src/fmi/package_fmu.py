@@ -23,6 +23,11 @@ for --platform x86_64-linux and FMI 2.0). This adds
                            build's <Name>.so), in the folder the FMI version names it
                            (binaries_folder());
 
+With --fmi 3 the tree is the FMI 3.0 build's (<build>/fmu3/<Name>/, binaries/x86_64-linux and
+x86_64-windows): its modelDescription.xml is written by fmi3_description.py from the same
+completed FMI 2.0 description, and sources/ is not shipped (an FMI 3.0 source FMU needs
+sources/buildDescription.xml).
+
 then writes the archive (entries in a fixed order with a fixed time stamp, so the same
 inputs give the same bytes) through a temporary file, so a reader never sees half an FMU.
 
@@ -44,6 +49,9 @@ import tempfile
 import time
 import xml.etree.ElementTree as ET
 import zipfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import fmi3_description  # noqa: E402  (src/fmi/, beside this script)
 
 AUTHOR = "the artibus authors"
 COPYRIGHT = "Copyright (c) 2026, the artibus authors"
@@ -150,6 +158,7 @@ def closure(root, name, sources, fmi_version="2"):
     inc_dirs += sorted({os.path.dirname(os.path.join(root, s)) for s in sources})   # as add_fmu
     todo = [os.path.normpath(os.path.join(root, s)) for s in sources]
     todo.append(os.path.join(root, f"src/fmi/fmi{fmi_version}Functions.c"))
+    todo.append(os.path.join(root, "src/fmi/fmu_core.c"))
     files, system = set(), set()
     while todo:
         path = todo.pop()
@@ -401,7 +410,8 @@ def fmt_display(value, unit, md_units):
     return f' <span class="du">({y:.6g} {html.escape(dname)})</span>'
 
 
-def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=()):
+def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=(),
+                  fmi_version=None):
     e = html.escape
     units = {}
     for u in md.iter("Unit"):
@@ -411,14 +421,14 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
     interfaces = [k for k in ("CoSimulation", "ModelExchange") if md.find(k) is not None]
     de = md.find("DefaultExperiment")
     rows = [
-        ("FMI version", md.get("fmiVersion") + " (" + ", ".join(
+        ("FMI version", (fmi_version or md.get("fmiVersion")) + " (" + ", ".join(
             {"CoSimulation": "Co-Simulation", "ModelExchange": "Model Exchange"}[k] for k in interfaces) + ")"),
         ("version", md.get("version")),
         ("author", md.get("author")),
         ("copyright", md.get("copyright")),
         ("license", md.get("license")),
         ("generation tool", md.get("generationTool")),
-        ("GUID", md.get("guid")),
+        ("instantiation token" if fmi_version == "3.0" else "GUID", md.get("guid")),
         ("platforms", ", ".join(f"binaries/{p}" for p in platforms)),
     ]
     if de is not None:
@@ -617,7 +627,8 @@ def main(argv=None):
     ap.add_argument("--resources", nargs="*", default=[])
     ap.add_argument("--platform", default="x86_64-linux", choices=sorted(SHARED_LIBRARY_EXT),
                     help="the platform of the binary already in the tree (the build's own)")
-    ap.add_argument("--fmi-version", default="2", choices=("2", "3"))
+    ap.add_argument("--fmi-version", "--fmi", dest="fmi_version", default="2", choices=("2", "3"),
+                    help="the FMI version of the tree")
     ap.add_argument("--platform-dir", action="append", default=[], metavar="TUPLE=DIR",
                     help="a cross build's folder of <Name>.<ext> for platform TUPLE (DIR may be empty)")
     ap.add_argument("--win64-dir", default="", help="the same as --platform-dir x86_64-windows=DIR")
@@ -653,6 +664,10 @@ def main(argv=None):
     if uses_eigen(root, files):
         libraries.append("Eigen")
     why_not = needs_beyond_libc(files, system)
+    if a.fmi_version == "3":
+        why_not = ("the FMI 3.0 build ships binaries only for now: its sources/buildDescription.xml "
+                   "(build_description()) is written and schema-checked, but no importer's compile of it "
+                   "is tested yet; the FMI 2.0 FMU of the same model carries the same sources")
 
     tree_md = parse(a.xml)
     md = tree_md.getroot()
@@ -681,7 +696,12 @@ def main(argv=None):
     elif c_files:   # FMI 3.0 has no <SourceFiles>: the build description says it
         with open(os.path.join(tree, "sources", "buildDescription.xml"), "w", encoding="utf-8") as f:
             f.write(build_description(name, c_files))
-    write_xml(tree_md, os.path.join(tree, "modelDescription.xml"))
+    if a.fmi_version == "3":
+        md3 = fmi3_description.fmi3_model_description(md, a.xml)
+        order_elements(md3)
+        write_xml(ET.ElementTree(md3), os.path.join(tree, "modelDescription.xml"))
+    else:
+        write_xml(tree_md, os.path.join(tree, "modelDescription.xml"))
 
     icon = os.path.join(model_dir, "model.png")
     if os.path.isfile(icon):
@@ -693,7 +713,8 @@ def main(argv=None):
         copy(os.path.join(root, src), os.path.join(tree, "documentation", "licenses", fname))
     readme_path = os.path.join(model_dir, "README.md")
     readme = open(readme_path, encoding="utf-8").read() if os.path.isfile(readme_path) else ""
-    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials)
+    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials,
+                         fmi_version="3.0" if a.fmi_version == "3" else None)
     with open(os.path.join(tree, "documentation", "index.html"), "w", encoding="utf-8") as f:
         f.write(page)
 

@@ -12,7 +12,9 @@
 extern "C" {
 #endif
 
-typedef enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING } VarType;
+/* T_ENUMERATION: an Enumeration in the FMI 3.0 build (Int64 there); the FMI 2.0
+   build reads and writes it as an Integer (T_INTEGER) */
+typedef enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING, T_ENUMERATION } VarType;
 
 typedef enum {
     C_PARAMETER, C_CALCULATEDPARAMETER, C_INPUT, C_OUTPUT, C_LOCAL, C_INDEPENDENT

@@ -1,6 +1,7 @@
 """An FMU instance with its variables addressed by name (``Fmu``): FMPy's
-FMU2Slave with a log of its own, the process's memory callbacks
-(artibus.fmu.memory) and model descriptions read once per content."""
+FMU2Slave (or FMU3Slave, an FMI 3.0 FMU) with a log of its own, the process's
+memory callbacks (artibus.fmu.memory) and model descriptions read once per content."""
+import copy
 import shutil
 
 from fmpy import read_model_description
@@ -53,12 +54,16 @@ def _dispatcher():
     if not _DISPATCH:
         from fmpy.fmi2 import fmi2CallbackLoggerTYPE
 
+        from fmpy.fmi1 import printLogMessage
+
         def dispatch(env, instance, status, category, message):
             log = _LOGS.get(env)
             if log is not None:
                 log.append(f"[{_STATUS[status] if 0 <= status < 6 else status}] "
                            f"{(category or b'').decode(errors='replace')}: "
                            f"{(message or b'').decode(errors='replace')}")
+            else:                        # an FMU FMPy instantiated in this process: as FMPy prints it
+                printLogMessage(env, instance, status, category, message or b"")
         _DISPATCH.append(fmi2CallbackLoggerTYPE(dispatch))
     return _DISPATCH[0]
 
@@ -73,6 +78,25 @@ def claim_logger_proxy():
     cb = fmi2CallbackFunctions()
     cb.logger = _dispatcher()
     _proxy().addLoggerProxy(byref(cb))
+
+
+#: an FMI 3.0 variable's type as FMI 2.0 names it (the types artibus's FMUs use; the
+#: checks of artibus.bench.parameters speak FMI 2.0)
+FMI2_TYPE = {"Float64": "Real", "Int32": "Integer", "Enumeration": "Enumeration",
+             "Boolean": "Boolean", "String": "String"}
+#: the FMI 3.0 accessor of each (FMU3Slave.get<T>/set<T>); an Enumeration is an Int64
+FMI3_ACCESSOR = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Int64",
+                 "Boolean": "Boolean", "String": "String"}
+
+
+def _fmi3_logger(log):
+    from fmpy.fmi3 import fmi3LogMessageCallback
+
+    def logger(env, status, category, message):
+        log.append(f"[{_STATUS[status] if 0 <= status < 6 else status}] "
+                   f"{(category or b'').decode(errors='replace')}: "
+                   f"{(message or b'').decode(errors='replace')}")
+    return fmi3LogMessageCallback(logger)
 
 
 _MDS = {}                        # modelDescription.xml's (CRC-32, size) -> its description
@@ -129,10 +153,25 @@ class Fmu:
         try:
             self.md = _model_description(self.path)
         except Exception as e:   # not a zip, no or a broken modelDescription.xml
-            raise ArtibusError(f"{self.path}: not a readable FMI 2.0 FMU: {e}") from None
-        if self.md.fmiVersion != "2.0" or self.md.coSimulation is None:
-            raise ArtibusError(f"{self.path}: {self.md.modelName} is not an FMI 2.0 co-simulation FMU")
-        self.vars = {v.name: v for v in self.md.modelVariables}
+            raise ArtibusError(f"{self.path}: not a readable FMI 2.0 or 3.0 FMU: {e}") from None
+        if self.md.fmiVersion not in ("2.0", "3.0") or self.md.coSimulation is None:
+            raise ArtibusError(f"{self.path}: {self.md.modelName} is not an FMI 2.0 or 3.0 "
+                               "co-simulation FMU")
+        self.fmi = int(self.md.fmiVersion[0])
+        if self.fmi == 3:
+            # as FMI 2.0 names the types (the same variables: tests/test_fmi3.py)
+            self.vars = {}
+            for v in self.md.modelVariables:
+                if v.causality == "independent":
+                    continue
+                if v.type not in FMI2_TYPE:
+                    raise ArtibusError(f"{self.path}: {v.name} is an FMI 3.0 {v.type}, which artibus "
+                                       "does not read")
+                v = copy.copy(v)
+                v.type = FMI2_TYPE[v.type]
+                self.vars[v.name] = v
+        else:
+            self.vars = {v.name: v for v in self.md.modelVariables}
         self.log = []
         self.instance_name = instance_name
         self._dir, self._own_dir = None, False
@@ -140,15 +179,25 @@ class Fmu:
             # unpacked once per content and kept (artibus.cache), or into a temporary directory
             self._dir, self._own_dir = cache.unpacked(self.path)
             self._dir = str(self._dir)
-            self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
-                                   modelIdentifier=self.md.coSimulation.modelIdentifier,
-                                   instanceName=instance_name)
+            if self.fmi == 3:
+                from fmpy.fmi3 import FMU3Slave
+                self.slave = FMU3Slave(guid=self.md.instantiationToken, unzipDirectory=self._dir,
+                                       modelIdentifier=self.md.coSimulation.modelIdentifier,
+                                       instanceName=instance_name)
+            else:
+                self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
+                                       modelIdentifier=self.md.coSimulation.modelIdentifier,
+                                       instanceName=instance_name)
         except Exception as e:   # a missing or broken binary
             self._remove_dir()
             raise ArtibusError(f"{self.path}: {self.md.modelName}'s binary cannot be loaded: {e}") from None
         self._callbacks = _callbacks(self.log)
         try:
-            self.slave.instantiate(loggingOn=logging, callbacks=self._callbacks)
+            if self.fmi == 3:
+                self._logger = _fmi3_logger(self.log)
+                self.slave.instantiate(loggingOn=logging, logMessage=self._logger)
+            else:
+                self.slave.instantiate(loggingOn=logging, callbacks=self._callbacks)
         except Exception:
             self._remove_dir()
             _LOGS.pop(self._callbacks._env, None)
@@ -180,7 +229,9 @@ class Fmu:
                 raise ArtibusError(f"{self.instance_name}.{name} = {value!r}: not a valid {v.type} "
                                    f"for {self.md.modelName}: {e}") from None
             vr = [v.valueReference]
-            if v.type == "Real":
+            if self.fmi == 3:
+                getattr(self.slave, f"set{FMI3_ACCESSOR[v.type]}")(vr, [x])
+            elif v.type == "Real":
                 self.slave.setReal(vr, [x])
             elif v.type in ("Integer", "Enumeration"):
                 self.slave.setInteger(vr, [x])
@@ -190,9 +241,9 @@ class Fmu:
                 self.slave.setString(vr, [x])
 
     def get(self, *names):
-        """The Real variables' values (fmi2GetReal in one call)."""
+        """The Real variables' values (fmi2GetReal, fmi3GetFloat64, in one call)."""
         reals = [self.var(n).valueReference for n in names]
-        return self.slave.getReal(reals)
+        return self.slave.getFloat64(reals) if self.fmi == 3 else self.slave.getReal(reals)
 
     def get_values(self, names):
         """The values of variables of any type, as Python values: float, int
@@ -201,21 +252,41 @@ class Fmu:
         by_type = {}
         for i, n in enumerate(names):
             v = self.var(n)
-            by_type.setdefault("Integer" if v.type == "Enumeration" else v.type, []).append((i, v.valueReference))
+            t = FMI3_ACCESSOR[v.type] if self.fmi == 3 else "Integer" if v.type == "Enumeration" else v.type
+            by_type.setdefault(t, []).append((i, v.valueReference))
         for t, items in by_type.items():
             got = getattr(self.slave, f"get{t}")([vr for _, vr in items])
             for (i, _), x in zip(items, got):
                 out[i] = (bool(x) if t == "Boolean" else x.decode("utf-8", errors="replace")
-                          if t == "String" else x)
+                          if t == "String" and isinstance(x, bytes) else x)   # FMI 3.0: str already
         return out
+
+    def enter_initialization_mode(self, start_time=0.0):
+        """FMI 2.0: setupExperiment and enterInitializationMode; FMI 3.0:
+        enterInitializationMode with the start time."""
+        if self.fmi == 3:
+            self.slave.enterInitializationMode(startTime=start_time)
+        else:
+            self.slave.setupExperiment(startTime=start_time)
+            self.slave.enterInitializationMode()
+
+    def do_step(self, t, h):
+        self.slave.doStep(t, h)
+
+    def last_successful_time(self):
+        """where a failed step stopped (fmi2GetRealStatus(fmi2LastSuccessfulTime);
+        FMI 3.0: the time variable, the instance's time)"""
+        if self.fmi == 3:
+            return self.slave.getFloat64([next(v.valueReference for v in self.md.modelVariables
+                                               if v.causality == "independent")])[0]
+        return self.slave.getRealStatus(2)  # fmi2LastSuccessfulTime
 
     def initialize(self, values, start_time=0.0):
         """setupExperiment, the values set in initialisation mode, exit it:
         the instance is ready to step from start_time. Returns self."""
         claim_logger_proxy()
         try:
-            self.slave.setupExperiment(startTime=start_time)
-            self.slave.enterInitializationMode()
+            self.enter_initialization_mode(start_time)
             self.set_values(values)
             self.slave.exitInitializationMode()
         except Exception:

@@ -48,7 +48,7 @@ def _row(values, types):
 
 def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
              outputs=None, start_time=0.0):
-    """Simulate one FMU.
+    """Simulate one FMU (FMI 2.0 or 3.0, Co-Simulation).
 
     parameters: {name: value} set in initialization mode (checked against
     each variable's type, see artibus.bench.parameters.coerce).
@@ -86,8 +86,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
 
         t = start_time
         try:
-            fmu.slave.setupExperiment(startTime=start_time)
-            fmu.slave.enterInitializationMode()
+            fmu.enter_initialization_mode(start_time)
             fmu.set_values(parameters)
             fmu.set_values({n: f(t) for n, f in inputs.items()})
             fmu.slave.exitInitializationMode()
@@ -95,7 +94,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             n = int(round((stop_time - start_time) / step))
             for i in range(n):
                 try:
-                    fmu.slave.doStep(t, step)
+                    fmu.do_step(t, step)
                 except FMICallException as e:
                     t_end = terminated(fmu.slave, e.status) if e.function == "fmi2DoStep" else None
                     if t_end is None:
@@ -120,7 +119,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         except FMICallException:
             # keep the state the FMU stopped in (getters are allowed in the error state)
             try:
-                t_fail = fmu.slave.getRealStatus(2)  # fmi2LastSuccessfulTime
+                t_fail = fmu.last_successful_time()
                 if t_fail > result.rows[-1][0] if result.rows else True:
                     record(t_fail)
                     t = t_fail

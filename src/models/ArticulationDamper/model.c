@@ -18,7 +18,7 @@ static double valve_pressure(ModelInstance *comp) {
     return D->tauP > 0.0 ? S->pValve : damper_pset(&S->par, D->pct);
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     DamperParams *p = &S->par;
     p->R = D->R;
     p->Xrear = D->Xrear;
@@ -42,7 +42,7 @@ fmi2Status model_init(ModelInstance *comp) {
     S->pValve = damper_pset(p, D->pct);      /* the valve settled at the initial command */
     S->Ediss = 0.0;
     S->warned = 0;
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -65,8 +65,8 @@ void model_outputs(ModelInstance *comp) {
     D->der_Ediss = dx[1];
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
-    fmi2Status status = fmi2OK;
+Status model_do_step(ModelInstance *comp, double t, double h) {
+    Status status = OK;
     const double pv = valve_pressure(comp);
     DamperOut o;
     if (damper_eval(&S->par, D->Lambda, D->LambdaDot, pv, &o) && !S->warned) {
@@ -74,7 +74,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         log_warning(comp, "t = %g s: Lambda = %g rad: a cylinder would be shorter than %g m (beyond the "
                           "end stop at LambdaStop = %g rad); its length is held at %g m (warned once)",
                     t, D->Lambda, DAMPER_L_MIN, D->LambdaStop, DAMPER_L_MIN);
-        status = fmi2Warning;
+        status = Warning;
     }
     double pInt;
     const double pNew = damper_pressure_step(pv, damper_pset(&S->par, D->pct), D->tauP, h, &pInt);
@@ -97,7 +97,7 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }
 
 /* ---- Model Exchange: x = [pValve, Ediss]. Co-simulation solves the valve lag
  * in closed form over a step with the inputs held (damper_pressure_step) and
@@ -116,14 +116,14 @@ void model_set_x(ModelInstance *comp, const double x[]) {
     S->Ediss = x[1];
 }
 
-fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
+Status model_derivatives(ModelInstance *comp, double dx[]) {
     const double pv = valve_pressure(comp);
     DamperOut o;
     damper_eval(&S->par, D->Lambda, D->LambdaDot, pv, &o);
     dx[0] = damper_pressure_rate(S->pValve, damper_pset(&S->par, D->pct), D->tauP);
     /* the energy over a unit time at this pressure: the power */
     dx[1] = damper_step_energy(&o, D->LambdaDot, pv, 1.0);
-    return fmi2OK;
+    return OK;
 }
 
 void model_event_indicators(ModelInstance *comp, double z[]) {
@@ -132,9 +132,9 @@ void model_event_indicators(ModelInstance *comp, double z[]) {
     z[2] = D->LambdaDot;
 }
 
-fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
     (void)comp;
     *terminate = false;
     *tNext = INFINITY;
-    return fmi2OK;
+    return OK;
 }

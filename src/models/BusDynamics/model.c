@@ -54,7 +54,7 @@ static void make_inputs(ModelInstance *comp, double t, DynInputs *u) {
     dyn_steer(u, D->nAxles);
 }
 
-static fmi2Status check_inputs(ModelInstance *comp, double t) {
+static Status check_inputs(ModelInstance *comp, double t) {
     const double stim = t < D->testSteerPeriod ? fabs(D->testSteerAmp) : 0.0;
     for (int a = 1; a <= D->nAxles; a++) {
         const double s = a == 1 ? stim : 0.0;
@@ -62,10 +62,10 @@ static fmi2Status check_inputs(ModelInstance *comp, double t) {
             return log_error(comp, "delta[%d] = %.12g rad (with test steering amplitude %g) is at or "
                                    "beyond pi/2: the wheel would stand across its module", a, D->delta[a], s);
     }
-    return fmi2OK;
+    return OK;
 }
 
-static fmi2Status check_parameters(ModelInstance *comp) {
+static Status check_parameters(ModelInstance *comp) {
     const int N = D->nModules;
     for (int m = 1; m <= N; m++) {
         if (!(D->m[m] > 0)) return log_error(comp, "m[%d] = %.12g kg: a module mass must be > 0", m, D->m[m]);
@@ -94,11 +94,11 @@ static fmi2Status check_parameters(ModelInstance *comp) {
             if (D->mu[a] != 1.0)
                 log_warning(comp, "mu[%d] = %g has no effect: tyreModel 0 is the linear tyre Fy = C alpha "
                                   "without friction (seed 000, eq. 24); use tyreModel 1, 2 or 3", a, D->mu[a]);
-    return fmi2OK;
+    return OK;
 }
 
 /* static axle loads into D->Fz */
-static fmi2Status static_loads(ModelInstance *comp, DynParams *p) {
+static Status static_loads(ModelInstance *comp, DynParams *p) {
     if (D->FzFromMasses) {
         const int m = dyn_static_loads(p, GRAVITY);
         if (m)
@@ -107,14 +107,14 @@ static fmi2Status static_loads(ModelInstance *comp, DynParams *p) {
                                    "negative load); set FzFromMasses = false and give Fz0[]", m);
     }
     for (int a = 1; a <= DYN_MAX_AXLES; a++) D->Fz[a] = a <= p->nAxle ? p->Fz[a] : 0.0;
-    return fmi2OK;
+    return OK;
 }
 
-fmi2Status model_init(ModelInstance *comp) {
-    if (check_parameters(comp) || check_inputs(comp, comp->v.time)) return fmi2Error;
+Status model_init(ModelInstance *comp) {
+    if (check_parameters(comp) || check_inputs(comp, comp->v.time)) return Error;
     DynParams p;
     make_params(comp, &p);
-    if (static_loads(comp, &p)) return fmi2Error;
+    if (static_loads(comp, &p)) return Error;
 
     /* the initial state: pose of module 1 and the yaw angles, velocity of the
        CG of module 1 given in its own frame */
@@ -130,7 +130,7 @@ fmi2Status model_init(ModelInstance *comp) {
     const double c = cos(D->psi_start[1]), sn = sin(D->psi_start[1]);
     s->zd[0] = c * D->vx_start - sn * D->vy_start;
     s->zd[1] = sn * D->vx_start + c * D->vy_start;
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -199,8 +199,8 @@ static int rhs(double t, const double *y, double *ydot, void *user) {
     return dyn_eval(&sv->p, &sv->u, y, y + nq, ydot + nq, NULL) ? -1 : 0;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
-    if (check_inputs(comp, t)) return fmi2Error;
+Status model_do_step(ModelInstance *comp, double t, double h) {
+    if (check_inputs(comp, t)) return Error;
     Solver *sv = comp->solver;
     if (!sv) {
         sv = comp->solver = calloc(1, sizeof(Solver));
@@ -209,7 +209,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         sv->ode = ode_new(comp, 2 * (2 + D->nModules), rhs, 0, NULL, sv,
                           D->solver == 2 ? ODE_ERK : D->solver == 1 ? ODE_ADAMS : ODE_BDF,
                           D->rtol, D->atol);
-        if (!sv->ode) return fmi2Error;
+        if (!sv->ode) return Error;
     }
     make_params(comp, &sv->p);
     for (int a = 1; a <= DYN_MAX_AXLES; a++) sv->p.Fz[a] = D->Fz[a];
@@ -230,10 +230,10 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     memcpy(s->zd, y + nq, sizeof(double) * (size_t)nq);
     if (res == ODE_REACHED) {
         comp->v.time = t + h;
-        return fmi2OK;
+        return OK;
     }
     comp->v.time = tret;
-    return fmi2Error;   /* CVODE failure, already logged with its flag and time */
+    return Error;   /* CVODE failure, already logged with its flag and time */
 }
 
 void model_free(ModelInstance *comp) {
@@ -262,8 +262,8 @@ void model_set_x(ModelInstance *comp, const double x[]) {
     }
 }
 
-fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
-    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+Status model_derivatives(ModelInstance *comp, double dx[]) {
+    if (check_inputs(comp, comp->v.time)) return Error;
     Solver sv = { .comp = comp, .uHeld = false };
     make_params(comp, &sv.p);
     for (int a = 1; a <= DYN_MAX_AXLES; a++) sv.p.Fz[a] = D->Fz[a];
@@ -280,16 +280,16 @@ fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
         dx[i] = ydot[i];
         dx[DYN_MAX_Q + i] = ydot[nq + i];
     }
-    return fmi2OK;
+    return OK;
 }
 
 void model_event_indicators(ModelInstance *comp, double z[]) { (void)comp; (void)z; }
 
-fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
     (void)comp;
     *terminate = false;
     *tNext = INFINITY;
-    return fmi2OK;
+    return OK;
 }
 
 /* FMU state: the coordinates and their rates; the integrator (its size from
@@ -301,13 +301,13 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     ModelInstance *scratch = calloc(1, sizeof *scratch);    /* no logger: silent */
     if (!scratch) return STATE_INVALID("out of memory");
     scratch->v.d = *d;
-    const fmi2Status st = check_parameters(scratch);
+    const Status st = check_parameters(scratch);
     free(scratch);
-    if (st != fmi2OK) return STATE_INVALID("its parameters are not consistent (as fmi2ExitInitializationMode checks them)");
+    if (st != OK) return STATE_INVALID("its parameters are not consistent (as fmi2ExitInitializationMode checks them)");
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) {
+Status model_restored(ModelInstance *comp) {
     model_free(comp);
-    return fmi2OK;
+    return OK;
 }

@@ -41,7 +41,7 @@ static double gammaF_at(ModelInstance *comp, double t) {
     return D->gammaF + test_sine(D->testSteerAmp, D->testSteerPeriod, t);
 }
 
-static fmi2Status check_inputs(ModelInstance *comp, double t) {
+static Status check_inputs(ModelInstance *comp, double t) {
     const double stim = t < D->testSteerPeriod ? fabs(D->testSteerAmp) : 0.0;
     if (!(fabs(D->gammaF) + stim < M_PI / 2))
         return log_error(comp, "gammaF = %.17g rad (with test steering amplitude %g) is at or "
@@ -51,15 +51,15 @@ static fmi2Status check_inputs(ModelInstance *comp, double t) {
         if (D->steerable[i] && !(fabs(D->gamma[i]) < M_PI / 2))
             return log_error(comp, "gamma[%d] = %.17g rad is at or beyond pi/2 (eq. 14 needs "
                                    "cos(gamma_i) != 0)", i, D->gamma[i]);
-    return fmi2OK;
+    return OK;
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     if (D->k > D->N)
         return log_error(comp, "k = %d: the driving axle must be on a segment 0..N = 0..%d", D->k, D->N);
     if (D->j > D->N)
         return log_error(comp, "j = %d: the distinguished segment must be 0..N = 0..%d", D->j, D->N);
-    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+    if (check_inputs(comp, comp->v.time)) return Error;
 
     /* the initial state: tractor pose and joint angles, then the pose of j */
     for (int i = 0; i <= KIN_MAX_WAGONS; i++) D->theta[i] = D->x[i] = D->y[i] = 0.0;
@@ -77,7 +77,7 @@ fmi2Status model_init(ModelInstance *comp) {
         return log_error(comp, "beta_start[%d] = %.4f deg is beyond betaMax[%d] = %.4f deg: the "
                                "virtual steering angle delta_%d (eq. 17) is at or beyond 90 deg",
                          i, D->beta_start[i] * DEG, i, r.betaMax[i] * DEG, i);
-    return fmi2OK;
+    return OK;
 }
 
 static int derivs(ModelInstance *comp, const KinChain *c, double t, const double *y, double *ydot);
@@ -170,15 +170,15 @@ static void jackknife_message(ModelInstance *comp, const KinChain *c, int i, dou
         log_warning(comp, JACKKNIFE_MSG, i, t, i, D->beta[i] * DEG, i, r.betaMax[i] * DEG, i);
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
-    if (check_inputs(comp, t)) return fmi2Error;
+Status model_do_step(ModelInstance *comp, double t, double h) {
+    if (check_inputs(comp, t)) return Error;
     Solver *s = comp->solver;
     if (!s) {
         s = comp->solver = calloc(1, sizeof(Solver));
         if (!s) return log_error(comp, "out of memory");
         s->comp = comp;
         s->ode = ode_new(comp, 3 + D->N, rhs, D->N, roots, s, ODE_ERK, D->rtol, D->atol);
-        if (!s->ode) return fmi2Error;
+        if (!s->ode) return Error;
     }
     make_chain(comp, &s->chain);
 
@@ -195,17 +195,17 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
 
     if (res == ODE_REACHED) {
         comp->v.time = t + h;
-        return fmi2OK;
+        return OK;
     }
     comp->v.time = tret;
     if (res == ODE_ROOT) {
         for (int i = 1; i <= N; i++) {
             if (!found[i - 1]) continue;
             jackknife_message(comp, &s->chain, i, tret, true);
-            return fmi2Error;
+            return Error;
         }
     }
-    return fmi2Error;   /* integrator failure, already logged with its flag and time */
+    return Error;   /* integrator failure, already logged with its flag and time */
 }
 
 void model_free(ModelInstance *comp) {
@@ -232,8 +232,8 @@ void model_set_x(ModelInstance *comp, const double x[]) {
     for (int i = 1; i <= KIN_MAX_WAGONS; i++) D->beta[i] = i <= D->N ? x[2 + i] : 0.0;
 }
 
-fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
-    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+Status model_derivatives(ModelInstance *comp, double dx[]) {
+    if (check_inputs(comp, comp->v.time)) return Error;
     KinChain c;
     make_chain(comp, &c);
     double x[3 + KIN_MAX_WAGONS];
@@ -242,7 +242,7 @@ fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
     /* beyond the jack-knife bound (the integrator may try a step there before
        it locates the event) the equations still give finite rates */
     derivs(comp, &c, comp->v.time, x, dx);
-    return fmi2OK;
+    return OK;
 }
 
 void model_event_indicators(ModelInstance *comp, double z[]) {
@@ -254,9 +254,9 @@ void model_event_indicators(ModelInstance *comp, double z[]) {
 }
 
 /* a jack-knife ends the simulation, as it ends a co-simulation step */
-fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
     *tNext = INFINITY;
-    if (check_inputs(comp, comp->v.time)) return fmi2Error;
+    if (check_inputs(comp, comp->v.time)) return Error;
     KinChain c;
     make_chain(comp, &c);
     double x[3 + KIN_MAX_WAGONS], g[KIN_MAX_WAGONS];
@@ -266,9 +266,9 @@ fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNex
         if (g[i - 1] > 0.0) continue;
         jackknife_message(comp, &c, i, comp->v.time, false);
         *terminate = true;
-        return fmi2Warning;
+        return Warning;
     }
-    return fmi2OK;
+    return OK;
 }
 
 /* FMU state: ModelState holds nothing; the integrator (of size 3 + N) is made again */
@@ -277,7 +277,7 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) {
+Status model_restored(ModelInstance *comp) {
     model_free(comp);
-    return fmi2OK;
+    return OK;
 }

@@ -18,7 +18,7 @@ static DcInputs inputs(ModelInstance *comp) {
     return in;
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     DcParams p = { .f1 = D->f1, .b1 = D->b1, .b11 = D->b11, .f2 = D->f2, .b2 = D->b2,
                    .m2 = D->m2, .Crear = D->Crear, .option = D->option,
                    .K1 = D->K1, .K2 = D->K2, .K3 = D->K3, .Krev = D->Krev,
@@ -49,7 +49,7 @@ fmi2Status model_init(ModelInstance *comp) {
     const DcInputs in = inputs(comp);
     dc_reset(&S->c, &in);                    /* the outputs of the initial inputs */
     S->fault = 0;                            /* faults are reported from the first step on */
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -91,14 +91,14 @@ static void report(ModelInstance *comp, unsigned fault, double t) {
     S->fault = fault;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = S->c.p.Ts;
     for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         const DcInputs in = inputs(comp);
         report(comp, S->k == 0 ? dc_reset(&S->c, &in) : dc_sample(&S->c, &in), tk);
     }
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
@@ -121,4 +121,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }

@@ -39,7 +39,7 @@ static unsigned sample(ModelInstance *comp, double t) {
     return fm_sample(&S->f, gamma1_at(comp, t), d1, d2, D->gamma4, D->gamma6);
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     const FmParams p = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lA3 = D->lA3, .lg2 = D->lg2,
                          .l3 = D->l3, .lA5 = D->lA5, .gamma3Max = D->gamma3Max,
                          .gamma5Max = D->gamma5Max };
@@ -50,7 +50,7 @@ fmi2Status model_init(ModelInstance *comp) {
     S->k = 0;
     sample(comp, comp->v.time);              /* the outputs of the initial inputs */
     S->fault = 0;                            /* faults are reported from the first step on */
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -89,13 +89,13 @@ static void report(ModelInstance *comp, unsigned fault, double t) {
     S->fault = fault;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = D->Ts;
     for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         report(comp, sample(comp, tk), tk);
     }
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
@@ -111,4 +111,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }

@@ -51,7 +51,7 @@ static void steering(ModelInstance *comp, double t, double delta[]) {
         delta[1] += D->testSteerAmp;
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     MaVehicle veh;
     MaMass mm;
     make_vehicle(comp, &veh);
@@ -67,7 +67,7 @@ fmi2Status model_init(ModelInstance *comp) {
     comp->v.s.warnedSpeed = 0;
     log_event(comp, "n = %d axles, M = %g kg, sum m_i l_i = %g kg m, I_ZZ = %g kg m2, I_XX = %g kg m2",
               D->n, mm.M, mm.sum_ml, mm.I_ZZ, mm.I_XX);
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -108,7 +108,7 @@ static int rhs(double t, const double *y, double *ydot, void *user) {
     return 0;
 }
 
-static fmi2Status advance(ModelInstance *comp, Solver *s, bool restart, double t0, double t1) {
+static Status advance(ModelInstance *comp, Solver *s, bool restart, double t0, double t1) {
     double y[7] = { D->w_r, D->v, D->p, D->phi, D->psi, D->x, D->y };
     double tret;
     const OdeResult res = ode_advance(s->ode, restart, t0, y, t1, &tret, NULL);
@@ -116,31 +116,31 @@ static fmi2Status advance(ModelInstance *comp, Solver *s, bool restart, double t
     D->psi = y[4]; D->x = y[5]; D->y = y[6];
     if (res != ODE_REACHED) {
         comp->v.time = tret;
-        return fmi2Error;               /* already logged with the CVODE flag and time */
+        return Error;               /* already logged with the CVODE flag and time */
     }
     comp->v.time = t1;
-    return fmi2OK;
+    return OK;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     Solver *s = comp->solver;
     if (!s) {
         s = comp->solver = calloc(1, sizeof(Solver));
         if (!s) return log_error(comp, "out of memory");
         s->comp = comp;
         s->ode = ode_new(comp, 7, rhs, 0, NULL, s, ODE_BDF, D->rtol, D->atol);
-        if (!s->ode) return fmi2Error;
+        if (!s->ode) return Error;
     }
     make_vehicle(comp, &s->veh);
     ma_prepare(&s->veh, &s->mm);
 
-    fmi2Status status = fmi2OK;
+    Status status = OK;
     if (D->u < D->uMin && !comp->v.s.warnedSpeed) {
         comp->v.s.warnedSpeed = 1;
         log_warning(comp, "u = %g m/s is below uMin = %g m/s at t = %g s: the linear model divides "
                           "by u (eq. 2) and is evaluated at u = uMin while u < uMin (warned once "
                           "per episode)", D->u, D->uMin, t);
-        status = fmi2Warning;
+        status = Warning;
     }
     s->u = speed(comp);
     s->Md = D->M_d;
@@ -150,7 +150,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     bool restart = comp->restart;
     if (D->testSteerAmp != 0.0 && t < ts - tol && ts < t1 - tol) {
         steering(comp, t, s->delta);
-        if (advance(comp, s, restart, t, ts)) return fmi2Error;
+        if (advance(comp, s, restart, t, ts)) return Error;
         log_event(comp, "test step steer of %g rad on delta[1] at t = %g s", D->testSteerAmp, ts);
         restart = true;
         t = ts;
@@ -161,7 +161,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         if (delta[i] != s->delta[i]) restart = true;    /* the test step began at t */
         s->delta[i] = delta[i];
     }
-    if (advance(comp, s, restart, t, t1)) return fmi2Error;
+    if (advance(comp, s, restart, t, t1)) return Error;
     return status;
 }
 
@@ -183,7 +183,7 @@ void model_set_x(ModelInstance *comp, const double x[]) {
     D->psi = x[4]; D->x = x[5]; D->y = x[6];
 }
 
-fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
+Status model_derivatives(ModelInstance *comp, double dx[]) {
     Solver s;
     s.comp = comp;
     make_vehicle(comp, &s.veh);
@@ -193,17 +193,17 @@ fmi2Status model_derivatives(ModelInstance *comp, double dx[]) {
     steering(comp, comp->v.time, s.delta);
     double x[7];
     model_get_x(comp, x);
-    return rhs(comp->v.time, x, dx, &s) ? fmi2Error : fmi2OK;
+    return rhs(comp->v.time, x, dx, &s) ? Error : OK;
 }
 
 void model_event_indicators(ModelInstance *comp, double z[]) { (void)comp; (void)z; }
 
 /* the built-in test step steer is a time event */
-fmi2Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
+Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext) {
     *terminate = false;
     const double ts = D->testSteerTime;
     *tNext = D->testSteerAmp != 0.0 && comp->v.time < ts - step_tol(comp) ? ts : INFINITY;
-    return fmi2OK;
+    return OK;
 }
 
 /* FMU state: a warning flag; the integrator is made again at the next step */
@@ -213,7 +213,7 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) {
+Status model_restored(ModelInstance *comp) {
     model_free(comp);
-    return fmi2OK;
+    return OK;
 }

@@ -77,7 +77,7 @@ static void road_path(ModelInstance *comp, char *path, size_t len) {
     else snprintf(path, len, "%s/%s", comp->resourceDir, f);
 }
 
-static fmi2Status build_road(ModelInstance *comp, Road *road) {
+static Status build_road(ModelInstance *comp, Road *road) {
     double *x = malloc(ROAD_RAW_MAX * sizeof *x), *y = malloc(ROAD_RAW_MAX * sizeof *y);
     if (!x || !y) {
         free(x);
@@ -106,7 +106,7 @@ static fmi2Status build_road(ModelInstance *comp, Road *road) {
     free(y);
     if (n < 0) return log_error(comp, "road = %d: %s", D->road, err);
     log_event(comp, "road = %d: %.3f m, %d points at ds = %g m", D->road, road->length, road->n, D->ds);
-    return fmi2OK;
+    return OK;
 }
 
 static void input(ModelInstance *comp, DriverInput *in) {
@@ -137,7 +137,7 @@ static void sample(ModelInstance *comp, const Road *road, const DriverParams *p)
     }
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     if (D->nSpeed == 1)
         return log_error(comp, "nSpeed = 1: a speed profile needs 2..10 points (0: constant vSet)");
     for (int k = 2; k <= D->nSpeed; k++)
@@ -162,7 +162,7 @@ fmi2Status model_init(ModelInstance *comp) {
     const RoadKey key = road_key(comp);
     if (!(w->built && D->road != ROAD_CSV && memcmp(&key, &w->key, sizeof key) == 0)) {
         w->built = 0;                         /* a CSV road is read again: its file may have changed */
-        if (build_road(comp, &w->road)) return fmi2Error;
+        if (build_road(comp, &w->road)) return Error;
         w->built = 1;
         w->key = key;
     }
@@ -183,7 +183,7 @@ fmi2Status model_init(ModelInstance *comp) {
     input(comp, &in);
     driver_start(&w->road, &p, &in, &s->mem);
     sample(comp, &w->road, &p);       /* sample 0, at t0 */
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -198,7 +198,7 @@ void model_outputs(ModelInstance *comp) {
     D->method = o->method;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     Work *w = comp->solver;
     if (!w) return log_error(comp, "fmi2DoStep: the road was not built (model not initialised)");
     DriverParams p;
@@ -208,7 +208,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     const double end = t + h + 1e-9 * p.Ts;
     while (s->t0 + s->kNext * p.Ts <= end) sample(comp, &w->road, &p);
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) {
@@ -235,22 +235,22 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
 }
 
 /* the road of the restored parameters (built again unless it is the one built) */
-fmi2Status model_restored(ModelInstance *comp) {
+Status model_restored(ModelInstance *comp) {
     /* before initialisation the road is built by model_init, from the parameters then */
-    if (comp->v.state & (S_INSTANTIATED | S_INIT_MODE)) return fmi2OK;
+    if (comp->v.state & (S_INSTANTIATED | S_INIT_MODE)) return OK;
     Work *w = comp->solver;
     const RoadKey key = road_key(comp);
     if (w && w->built && D->road != ROAD_CSV && memcmp(&key, &w->key, sizeof key) == 0) {
         if (comp->v.s.mem.iRef >= w->road.n)
             return log_error(comp, "road index iRef = %d is beyond the road's %d points",
                              comp->v.s.mem.iRef, w->road.n);
-        return fmi2OK;
+        return OK;
     }
     Work *nw = malloc(sizeof(Work));
     if (!nw) return log_error(comp, "out of memory");
     if (build_road(comp, &nw->road)) {
         free(nw);
-        return fmi2Error;
+        return Error;
     }
     if (comp->v.s.mem.iRef >= nw->road.n) {
         const int np = nw->road.n;
@@ -261,5 +261,5 @@ fmi2Status model_restored(ModelInstance *comp) {
     nw->key = key;
     free(w);
     comp->solver = nw;
-    return fmi2OK;
+    return OK;
 }

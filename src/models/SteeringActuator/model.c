@@ -13,7 +13,7 @@
 
 static const char *const MODE_NAME[] = { "normal", "holding", "ramping to straight", "at the safe angle" };
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     const ActParams p = { .Tact = D->Tact, .rateMax = D->rateMax, .nStale = D->nStale, .nRecover = D->nRecover,
                           .tHold = D->tHold, .rampRate = D->rampRate, .Ts = D->Ts };
     const double cmd[2] = { D->cmd[1], D->cmd[2] };
@@ -23,7 +23,7 @@ fmi2Status model_init(ModelInstance *comp) {
     S->t0 = comp->v.time;
     S->k = 0;
     S->mode = CF_NORMAL;
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -50,7 +50,7 @@ static void report(ModelInstance *comp, double t) {
     S->mode = mode;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = D->Ts;
     const double cmd[2] = { D->cmd[1], D->cmd[2] };
     for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
@@ -58,7 +58,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         report(comp, tk);
     }
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
@@ -76,4 +76,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }

@@ -26,7 +26,7 @@ static EcuInputs inputs(ModelInstance *comp) {
     return in;
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     const EcuParams p = {
         .module = D->module,
         .tg = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lg2 = D->lg2, .l3 = D->l3,
@@ -46,7 +46,7 @@ fmi2Status model_init(ModelInstance *comp) {
     S->stale = 0;
     S->mode = CF_NORMAL;
     S->direction = S->e.direction;
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -99,7 +99,7 @@ static void report(ModelInstance *comp, double t) {
     S->mode = e->cf.mode;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = D->Ts;
     const EcuInputs in = inputs(comp);
     for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
@@ -107,7 +107,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         report(comp, tk);
     }
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
@@ -127,4 +127,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }

@@ -10,7 +10,7 @@
 
 #define S (&comp->v.s)
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     SbParams p = { .nGround = D->nGround, .vSSC = D->vSSC, .LambdaDotSSC = D->LambdaDotSSC,
                    .tHold = D->tHold, .pctSSC = D->pctSSC, .LambdaEP0 = D->LambdaEP0,
                    .LambdaEP1 = D->LambdaEP1, .pctEP = D->pctEP, .pctMax = D->pctMax, .Ts = D->Ts };
@@ -35,7 +35,7 @@ fmi2Status model_init(ModelInstance *comp) {
     S->b.ssc = first.ssc;
     S->b.ep = first.ep;
     S->fault = 0;
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -57,7 +57,7 @@ static void report(ModelInstance *comp, unsigned fault, double t) {
     S->fault = fault;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = S->b.p.Ts;
     for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         const double was = S->b.ssc;
@@ -67,7 +67,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
                       S->b.ssc != 0.0 ? "on" : "off", D->v, D->LambdaDot);
     }
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
@@ -88,4 +88,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }

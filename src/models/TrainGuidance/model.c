@@ -39,7 +39,7 @@ static void hinges(ModelInstance *comp, double *d1, double *d2) {
     leading_hinges(D->backwards, D->dPsi[1], D->dPsi[2], d1, d2);
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     const TgParams p = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lg2 = D->lg2, .l3 = D->l3,
                          .S4 = D->S4, .S6 = D->S6, .Ts = D->Ts,
                          .gamma4Max = D->gamma4Max, .gamma6Max = D->gamma6Max };
@@ -56,7 +56,7 @@ fmi2Status model_init(ModelInstance *comp) {
     S->k = 0;
     S->fault = 0;
     S->backwards = D->backwards;
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -103,7 +103,7 @@ static void report(ModelInstance *comp, unsigned fault, double t, double gamma1,
     S->fault = fault;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     const double Ts = S->g.p.Ts;
     for (double tk; sample_due(S->t0, S->k, Ts, t, h, &tk); S->k++) {   /* samples in [t, t + h) */
         const double gamma1 = gamma1_at(comp, tk);
@@ -125,7 +125,7 @@ fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
         report(comp, fault, tk, gamma1, D->v);
     }
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) { (void)comp; }
@@ -154,4 +154,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }

@@ -6,14 +6,14 @@
 #include "fmu.h"
 
 /* string_out = prefix + string_in must fit the layer's string buffer */
-static fmi2Status check(ModelInstance *comp) {
+static Status check(ModelInstance *comp) {
     if (strlen(D->prefix) + strlen(D->string_in) >= ARTIBUS_STRLEN)
         return log_error(comp, "prefix + string_in is %zu bytes, longer than string_out's %d",
                          strlen(D->prefix) + strlen(D->string_in), ARTIBUS_STRLEN - 1);
-    return fmi2OK;
+    return OK;
 }
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     comp->v.s.steps = 0;
     return check(comp);
 }
@@ -33,11 +33,11 @@ void model_outputs(ModelInstance *comp) {
     D->count = comp->v.s.steps;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
-    if (check(comp) != fmi2OK) return fmi2Error;
+Status model_do_step(ModelInstance *comp, double t, double h) {
+    if (check(comp) != OK) return Error;
     comp->v.s.steps++;
     comp->v.time = t + h;
-    return fmi2OK;
+    return OK;
 }
 
 void model_free(ModelInstance *comp) {
@@ -59,4 +59,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }

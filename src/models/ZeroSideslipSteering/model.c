@@ -35,7 +35,7 @@ static const char *PREPARE_ERROR[] = {
     "K(u) is undefined: its denominator vanishes at every speed",
 };
 
-fmi2Status model_init(ModelInstance *comp) {
+Status model_init(ModelInstance *comp) {
     ModelState *s = &comp->v.s;
     ZsVehicle veh;
     make_vehicle(comp, &veh);
@@ -56,7 +56,7 @@ fmi2Status model_init(ModelInstance *comp) {
                     "(-1: none)", s->gains.rear, zs_gain(&s->gains, 0.0),
               s->gains.D2 != 0.0 ? s->gains.N2 / s->gains.D2 : INFINITY, s->gains.uPole);
     sample(comp, s->t0);                /* sample 0, at t0 */
-    return fmi2OK;
+    return OK;
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -68,10 +68,10 @@ void model_outputs(ModelInstance *comp) {
 }
 
 /* bad input is warned about once per episode and kind */
-static fmi2Status warn(ModelInstance *comp, double tk) {
+static Status warn(ModelInstance *comp, double tk) {
     ModelState *s = &comp->v.s;
     const unsigned fresh = s->flags & ~s->warned;
-    if (!fresh) return fmi2OK;
+    if (!fresh) return OK;
     s->warned |= fresh;
     const double u = D->u + D->testSpeedRate * (tk - s->t0);
     if (fresh & ZS_INPUT_NOT_FINITE)
@@ -88,19 +88,19 @@ static fmi2Status warn(ModelInstance *comp, double tk) {
         log_warning(comp, "t = %g s: an axle's command reached its steering limit deltaMax (delta1 = "
                           "%g rad, u = %g m/s); the side-slip is no longer zero while it lasts "
                           "(warned once per episode)", tk, D->delta1 + D->testSteerAmp, u);
-    return fmi2Warning;
+    return Warning;
 }
 
-fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelState *s = &comp->v.s;
     const double Ts = D->Ts;
-    fmi2Status status = warn(comp, t);  /* sample 0's, if any */
+    Status status = warn(comp, t);  /* sample 0's, if any */
     /* every sample instant in (t, t + h], from the inputs held over the step */
     const double end = t + h + 1e-9 * Ts;
     while (s->t0 + s->kNext * Ts <= end) {
         const double tk = s->t0 + s->kNext * Ts;
         sample(comp, tk);
-        if (warn(comp, tk) == fmi2Warning) status = fmi2Warning;
+        if (warn(comp, tk) == Warning) status = Warning;
     }
     comp->v.time = t + h;
     return status;
@@ -126,4 +126,4 @@ bool model_state_valid(const ModelData *d, const ModelState *s, double time, cha
     return true;
 }
 
-fmi2Status model_restored(ModelInstance *comp) { (void)comp; return fmi2OK; }
+Status model_restored(ModelInstance *comp) { (void)comp; return OK; }
