@@ -147,7 +147,7 @@ def test_the_kpis_tell_the_variant_that_ran(runs):
     for v in VARIANTS:
         assert mod.variant_of(runs[v]) == v
         k = {x.name: x for x in mod.kpis(runs[v])}
-        assert k["max |lateral force| hinge 1"].paper == mod.VARIANTS[v][2]
+        assert k["max |lateral force| hinge 1"].paper == mod.paper_of(v, "F1")
 
 
 def test_a_run_that_is_none_of_the_variants_has_kpis_without_bounds(tmp_path):

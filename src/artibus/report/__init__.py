@@ -12,6 +12,7 @@ a report stopped midway never leaves a torn PNG or page under its final name.
 """
 from artibus.report.animation import (animate, animation_writer, bench_animation, result_axle_traces,  # noqa: F401
                                       result_links, result_outlines)
-from artibus.report.pages import (FAIL, PASS, STYLE, Kpi, generic, headline, run_metadata, thumbnail,  # noqa: F401
-                                  write_html, write_index, write_kpi_csv, write_report)
-from artibus.report.plots import birds_eye, colours, save_figure, signals, swept, swept_area  # noqa: F401
+from artibus.report.pages import (CALIBRATED, FAIL, NOT_GRADED, PASS, STYLE, Kpi, Table, generic,  # noqa: F401
+                                  headline, run_metadata, tally, thumbnail, write_html, write_index,
+                                  write_kpi_csv, write_report)
+from artibus.report.plots import birds_eye, colours, draw_bound, save_figure, signals, swept, swept_area  # noqa: F401
