@@ -147,7 +147,11 @@ def test_every_image_exists_and_reads(site):
             seen += 1
         for href in doc.xpath("//a/@href"):
             if "://" not in href:
-                assert (p.parent / href).exists(), f"{p}: link {href} leads nowhere"
+                path, _, frag = href.partition("#")
+                target = p.parent / path if path else p
+                assert target.exists(), f"{p}: link {href} leads nowhere"
+                if frag:        # an anchor (a ✘'s explanation) exists on the page it names
+                    assert _doc(target).xpath(f'//*[@id="{frag}"]'), f"{p}: link {href}: no such anchor"
     # the circle's 3 figures, its variants' and its animation; the comparison's 2; a thumbnail a bench
     assert seen >= 5 + 2 + len(BENCHES)
 

@@ -53,7 +53,9 @@ ABOUT6 = Bound(
     "(scripts/bus36m_offtracking_sensitivity.py, which wrote it, 2026-12-03): 4.37 m as estimated; the "
     "trailer axles 4.9 / 6.9 m apart instead of 5.9 m give 2.29 / 5.83 m, the hinges 5.6 / 6.6 m from the "
     "modules' centres instead of 6.1 m give 3.72 / 5.06 m: a metre more of trailer wheelbase puts it at the "
-    "paper's 6 m. What would change it: the paper's vehicle data. Steered, the paper's bound (< 1.0 m) does not depend on them and is met (guidedForceMin).",
+    "paper's 6 m. It also depends on the manoeuvre: A6's deviation is still growing when the bus leaves "
+    "the one full circle (the deviation figure), so a longer circle would give more. What would change "
+    "it: the paper's vehicle data and manoeuvre. Steered, the paper's bound (< 1.0 m) does not depend on them and is met (guidedForceMin).",
     "sensitivity_A6.png", (6.0,))
 STEERED = Bound("< 1.0 (the whole steered system)", DEV_SRC, lambda d: d < 1.0,
                 "The paper's bound is for its whole steering system (A4, A6 guided, A3, A5 force-minimising) "
@@ -68,13 +70,15 @@ WRONG_F = Bound("> 20 with inaccurate A3/A5 angles", "seed 000, sec. I (its ref.
                 "The paper quotes > 20 kN from another study's simulations ([1]) for inaccurate A3/A5 angles "
                 "of a fully laden bus. The force depends on the estimated tyre stiffness and saturation "
                 "(tyreModel 1) and the axle loads (Bus36m.ssv).", levels=(20.0, -20.0))
-#: the paper's figures shown beside a configuration they are not a bound of: (paper text, why not graded)
+#: the paper's figures shown beside a configuration they are not a bound of: (paper text, why not graded[,
+#: where the paper states it])
 NOT_A6 = ("about 6 (the larger of A4, A6: A6's)",
           "the paper's 'about 6' is the larger deviation of the two, A6's (graded there)")
 NOT_STEERED = ("< 1.0 (the whole steered system)",
                "a bound for the whole steered system (A3, A5 force-minimising: variant guidedForceMin)")
 NOT_WRONG = ("> 20 with inaccurate A3/A5 angles",
-             "a figure for A3/A5 steered at inaccurate angles (variant guidedAll), not for this configuration")
+             "a figure for A3/A5 steered at inaccurate angles (variant guidedAll), not for this configuration",
+             WRONG_F.source)
 NOT_SMALL = ("< 4 (force minimisation)", "a bound with A3/A5 force-minimising (variant guidedForceMin)")
 
 #: name: (label, {quantity: Bound, or (paper text, why not graded)}); quantities A4, A6 (max deviation from
@@ -105,7 +109,7 @@ def graded_kpi(name, value, unit, bounds, quantity, source=""):
     if isinstance(b, Bound):
         return Kpi(name, value, unit, b.paper, b.source, bool(b.rule(value)), explain=b.explain,
                    explain_figure=b.figure)
-    return Kpi(name, value, unit, b[0], source, ungraded=b[1])
+    return Kpi(name, value, unit, b[0], b[2] if len(b) > 2 else source, ungraded=b[1])
 
 
 #: the notes of any run on this circle (the CAN benches' too)
@@ -241,7 +245,7 @@ def figures(r, out):
 SENSITIVITY = Path(__file__).parent / "sensitivity_A6.csv"
 
 
-def sensitivity_figure(path, kpis=()):
+def sensitivity_figure(path):
     """A6's deviation unsteered for the cases of scripts/bus36m_offtracking_sensitivity.py (its CSV beside
     this file) against the paper's 6 m; False when the CSV is missing."""
     if not SENSITIVITY.is_file():
@@ -250,17 +254,17 @@ def sensitivity_figure(path, kpis=()):
     import matplotlib.pyplot as plt
     with open(SENSITIVITY) as f:
         rows = list(csv.DictReader(f))
-    fig, ax = plt.subplots(figsize=(9, 3.4))
+    fig, ax = plt.subplots(figsize=(11, 3.4))
     labels = [r["case"] for r in rows]
     y = np.arange(len(rows))
     ax.barh(y - 0.18, [float(r["max_dev_A6_m"]) for r in rows], 0.36, label="A6", color="tab:blue")
     ax.barh(y + 0.18, [float(r["max_dev_A4_m"]) for r in rows], 0.36, label="A4", color="tab:orange")
     ax.set_yticks(y, labels, fontsize=8)
     ax.invert_yaxis()
-    report.draw_bound(ax, 6.0, "paper: approximately 6 m unsteered (seed 000, sec. III, Fig. 9)", horizontal=False)
+    report.draw_bound(ax, 6.0, "paper: approximately 6 m\nunsteered (seed 000,\nsec. III, Fig. 9)", horizontal=False)
     ax.set_xlabel("max deviation from the trace of A2, unsteered, 17.5 m circle [m]")
     ax.grid(True, axis="x", alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set_title("How the unsteered off-tracking depends on our estimated lengths (the paper gives none)",
                  fontsize=9)
     fig.tight_layout()
@@ -308,7 +312,7 @@ def study(r, out):
                    bounds=lines)
     images.append(("variants.png", "The four variants side by side: unsteered, guided, guidedAll, "
                                    "guidedForceMin."))
-    if sensitivity_figure(out / "sensitivity_A6.png", K):
+    if sensitivity_figure(out / "sensitivity_A6.png"):
         images.append(("sensitivity_A6.png", "Unsteered: A6's deviation from the trace of A2 with our estimated "
                                              "lengths changed (scripts/bus36m_offtracking_sensitivity.py), against "
                                              "the paper's 'approximately 6 m'."))
