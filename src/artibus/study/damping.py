@@ -259,7 +259,7 @@ def _rear_path(path, runs, case, title):
     save_figure(fig, path, dpi=110)
 
 
-def _fmt(x, nd=3):
+def _fmt(x, nd=4):
     return "inf" if x == math.inf else f"{x:.{nd}g}"
 
 
