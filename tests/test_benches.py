@@ -54,6 +54,13 @@ def test_bench_runs_with_its_report(bench, tmp_path):
     page = (tmp_path / "index.html").read_text()
     kpi_table = lhtml.fromstring(page).xpath("//table")[0]        # the KPI table (further tables: the notes')
     assert len(kpi_table.xpath("tr")) == len(shown) + 1
+    # a KPI is graded only with the paper's figure and where it is stated, and carries the explanation its
+    # ✘ would show; a calibration target is never ✔ (tests/test_grading.py: each bound is its configuration's)
+    for k in kpis:
+        if k.calibrated:
+            assert k.verdict == "calibrated", k.name
+        if k.graded:
+            assert k.paper and k.source and k.explain.strip(), f"{bench}: {k.name}"
     # every ✘ is explained on its page (why, what it depends on, what would change it)
     for k in kpis:
         if k.failed:
