@@ -102,7 +102,7 @@ SLOW_FILES = {
     "test_can_backwards.py", "test_can_faults.py", "test_circle_variants.py", "test_damping_benches.py",
     "test_replay_can.py", "test_reports.py", "test_runner_safety.py", "test_simulate_partial.py", "test_single_rate.py",
     "test_masters.py",
-    "test_steering_controllers_benches.py", "test_sweep.py",
+    "test_steering_controllers_benches.py", "test_sweep.py", "test_grading.py",
 }
 SLOW_TESTS = ("bus36m_hinge_forces_on_a_circle", "fmi3_win64")
 

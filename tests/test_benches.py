@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from fmpy.ssp.ssd import read_ssd, read_ssv
 from lxml import etree
+from lxml import html as lhtml
 
 from artibus import fmu_dir, runner
 from artibus.bench import ssp
@@ -46,8 +47,26 @@ def test_bench_runs_with_its_report(bench, tmp_path):
         for n in r.names:
             assert np.all(np.isfinite(r[n])), n
         kpis = write_report(sim.bench.name, r, tmp_path, sim.wall)
+        # a normal run warns of nothing (e.g. no v < 0 when the bus stops at the end of the road)
+        warnings = [f"{u.path}: {m}" for u in sim.units for m in u.fmu.log if m.startswith("[Warning]")]
+        assert not warnings, warnings[:5]
     shown = [k for k in kpis if not (k.missing and not k.why)]     # a KPI with no value and no reason is named below
-    assert (tmp_path / "index.html").read_text().count("<tr>") == len(shown) + 1
+    page = (tmp_path / "index.html").read_text()
+    kpi_table = lhtml.fromstring(page).xpath("//table")[0]        # the KPI table (further tables: the notes')
+    assert len(kpi_table.xpath("tr")) == len(shown) + 1
+    # a KPI is graded only with the paper's figure and where it is stated, and carries the explanation its
+    # ✘ would show; a calibration target is never ✔ (tests/test_grading.py: each bound is its configuration's)
+    for k in kpis:
+        if k.calibrated:
+            assert k.verdict == "calibrated", k.name
+        if k.graded:
+            assert k.paper and k.source and k.explain.strip(), f"{bench}: {k.name}"
+    # every ✘ is explained on its page (why, what it depends on, what would change it)
+    for k in kpis:
+        if k.failed:
+            assert k.explain.strip(), f"{bench}: {k.name} fails without an explanation"
+            assert k.explain.split(".")[0] in page.replace("&#x27;", "'"), k.name
+    assert "No explanation given." not in page
     assert all(p.read_bytes()[:4] == b"\x89PNG" for p in tmp_path.glob("*.png"))
 
 

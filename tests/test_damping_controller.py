@@ -99,29 +99,51 @@ def test_exact_model_matches_eq_2_3(open_fmu):
     assert np.max(np.abs(out["LambdaDotRef"] - rate)) <= 0.002 * np.max(np.abs(rate))
 
 
+def _lane_change_steering(**driver):
+    v = 50 * KMH
+    r = runner.run("Scania18m_LaneChange", stop_time=8.0, overrides={
+        "Driver.laneLength": 25.0, "Driver.vSet": v, "Bus.vx_start": v, "Bus.C[3]": CREAR,
+        "Driver.sHold": 1e9, **{f"Driver.{k}": x for k, x in driver.items()}})
+    t = np.arange(0.0, 8.0 - 1e-9, TS)
+    return v, t, np.interp(t, r.time, r["Driver.delta"])
+
+
 @pytest.fixture(scope="module")
 def lane_change_steering():
     """Seed 001's reference-model case (4.2): lane change 3.25 m over 25 m at
     50 km/h, friction 1 front and rear: the steering of our road-follow driver
     on BusDynamics with the Scania 18 m data (Scania18m_LaneChange with the
     case's numbers, the driver following to the end). Sampled at 50 Hz."""
-    v = 50 * KMH
-    r = runner.run("Scania18m_LaneChange", stop_time=8.0, overrides={
-        "Driver.laneLength": 25.0, "Driver.vSet": v, "Bus.vx_start": v, "Bus.C[3]": CREAR,
-        "Driver.sHold": 1e9})
-    t = np.arange(0.0, 8.0 - 1e-9, TS)
-    return v, t, np.interp(t, r.time, r["Driver.delta"])
+    return _lane_change_steering()
 
 
-def exact_vs_small(open_fmu, v, t, delta):
-    """The FMU's exact and small-angle references on the same steering:
-    deviations relative to the manoeuvre's peak angle and peak rate, as the
-    thesis gives them (4.3.1: 'an error of about 0.07 %', 'with max
-    articulation angle of ...')."""
+@pytest.fixture(scope="module")
+def thesis_range_steering():
+    """The same case with look-ahead times (Driver.tNear 0.3 s, tFar 0.5 s) that
+    give about the thesis's steering range (Fig. 4.5's axis, -4..+6 deg; ours
+    then about -4.7..+5.8 deg)."""
+    return _lane_change_steering(tNear=0.3, tFar=0.5)
+
+
+def bench_kc():
+    """The controller's complementary-gain table as on the bench (Scania18mKc.ssv)."""
+    from artibus.bench.parameters import read_parameters
+    p = read_parameters("Scania18mKc")
+    n = int(p["nKc"])
+    return {"nKc": n, **{f"KcSpeed[{i}]": p[f"KcSpeed[{i}]"] for i in range(1, n + 1)},
+            **{f"KcGain[{i}]": p[f"KcGain[{i}]"] for i in range(1, n + 1)}}
+
+
+def exact_vs_small(open_fmu, v, t, delta, kc=None):
+    """The FMU's exact and small-angle references on the same steering (with
+    kc, the complementary-gain table: delta* = Kc(v) delta drives both, as on
+    the bench): deviations relative to the manoeuvre's peak angle and peak
+    rate, as the thesis gives them (4.3.1: 'an error of about 0.07 %', 'with
+    max articulation angle of ...')."""
     outs = {}
     for ex in (False, True):
         fmu = open_fmu("DampingController")
-        init(fmu, option=0, exactRef=ex, v=v, v2=v, delta=0.0)
+        init(fmu, option=0, exactRef=ex, v=v, v2=v, delta=0.0, **(kc or {}))
         outs[ex], _ = run(fmu, len(t), delta=lambda s: float(np.interp(s, t, delta)))
     E, S = outs[True], outs[False]
     angle = np.max(np.abs(E["LambdaRef"] - S["LambdaRef"])) / np.max(np.abs(E["LambdaRef"]))
@@ -136,7 +158,7 @@ def test_exact_vs_small_angle_on_the_25m_lane_change(open_fmu, lane_change_steer
     equations', not the discretisation's); the deviation is that of the
     continuous equations; and, as the thesis concludes (4.3.1), it is less than
     the cosine approximation's own error (eq. 2.11) at the largest angle of the
-    manoeuvre. Measured: angle 0.17 %, rate 0.24 % of their peaks."""
+    manoeuvre. Measured (without Kc): angle 0.17 %, rate 0.24 % of their peaks."""
     v, t, delta = lane_change_steering
     E, S, angle, rate = exact_vs_small(open_fmu, v, t, delta)
     lamE, rateE = continuous(exact, v, t, delta)
@@ -152,19 +174,28 @@ def test_exact_vs_small_angle_on_the_25m_lane_change(open_fmu, lane_change_steer
     assert 0 < angle < cos_error and 0 < rate < cos_error
 
 
-@pytest.mark.xfail(strict=True, reason="not reproduced: on our steering history (-6.6..+7.0 deg against "
-                   "the thesis's -4..+6 deg) the exact and small-angle references differ by 0.17 % of "
-                   "the peak angle and 0.24 % of the peak rate, the thesis's 0.07 % and 0.12 %")
-def test_thesis_exact_vs_small_angle_figures(open_fmu, lane_change_steering):
-    """Seed 001, 4.3.1: at most about 0.07 % in angle, 0.12 % in rate. Not a
-    matter of our driver steering more: with look-ahead times that give about
-    the thesis's steering range (Driver.tNear 0.3 s, tFar 0.5 s: -4.7..+5.8 deg,
-    within Fig. 4.5's axis of -4..+6), the references still differ by 0.13 %
-    (angle) and 0.20 % (rate), measured 2026-12-02; the thesis's eq. 2.3 lost
-    its symbols in extraction (specs/001-damping.md reconstructs it from the
-    kinematics), so which form gives its figures is not known."""
-    _, _, angle, rate = exact_vs_small(open_fmu, *lane_change_steering)
-    assert angle <= 0.0007 and rate <= 0.0012
+#: the tolerance on the thesis's 0.07 / 0.12 %: its steering history is lost (Fig. 4.5 keeps only its
+#: axis, -4..+6 deg). The two references differ by terms of second order in the angles, so their
+#: difference grows about as the square of the steering amplitude: an amplitude known to about 10 %
+#: (the axis's ticks bound it, the curve is lost) gives about 20 % on the figures.
+E1_TOLERANCE = 0.20
+
+
+def test_thesis_exact_vs_small_angle_figures(open_fmu, thesis_range_steering):
+    """Seed 001, 4.3.1: about 0.07 % in angle, 0.12 % in rate, with the
+    reference models driven as on the bench: delta* = Kc(v) delta, the
+    controller's complementary gain (Scania18mKc.ssv: 0.764 at 50 km/h), on a
+    steering history in the thesis's range (-4..+6 deg, Fig. 4.5). Within
+    E1_TOLERANCE of the thesis's figures; measured 2026-12-03: about 0.075 %
+    and 0.117 %. Without Kc the figures are 0.13 / 0.20 % on this steering: Kc
+    scales the reference angle down, and with it the second-order terms."""
+    v, t, delta = thesis_range_steering
+    assert -5.5 < math.degrees(np.min(delta)) < -3.5 and 5.0 < math.degrees(np.max(delta)) < 6.5   # Fig. 4.5
+    kc = bench_kc()
+    _, _, angle, rate = exact_vs_small(open_fmu, v, t, delta, kc)
+    print(f"exact against small angle with Kc: angle {100 * angle:.4f} %, rate {100 * rate:.4f} %")
+    assert angle == pytest.approx(0.0007, rel=E1_TOLERANCE)
+    assert rate == pytest.approx(0.0012, rel=E1_TOLERANCE)
 
 
 # ---- torque, gate, percentage -------------------------------------------------

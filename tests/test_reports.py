@@ -74,19 +74,34 @@ def test_index_summary_has_every_bench_with_its_marks(site):
 
 
 def test_a_failing_kpi_is_marked_on_the_index(tmp_path):
+    """A ✘ is counted, shown first and linked from the index to its explanation
+    on the bench's page; a calibration target and a paper figure of another
+    configuration are shown as such and not counted."""
     d = tmp_path / "B"
     d.mkdir()
     ok = Kpi("fine", 0.5, "m", "< 1.0", "seed 000, Fig. 9", True)
-    bad = Kpi("too far", 2.0, "m", "< 1.0", "seed 000, Fig. 9", False)
-    report.write_html(d, "B", "", [ok, bad], [])
-    report.write_index(tmp_path, [("B", d, [ok, bad])], metadata={"date": "today"})
-    row = _doc(tmp_path / "index.html").xpath('//table[@class="summary"]/tr[td]')[0]
+    bad = Kpi("too far", 2.0, "m", "< 1.0", "seed 000, Fig. 9", False, explain="the geometry is estimated")
+    cal = Kpi("peak damping", 13.5, "%", "13.5", "seed 001, 5.2.2", True, calibrated=True)
+    other = Kpi("hinge force", 50.0, "kN", "> 20", "seed 000", ungraded="a bound of another configuration")
+    kpis = [ok, bad, cal, other]
+    assert report.tally(kpis) == (1, 1)
+    report.write_html(d, "B", "", kpis, [])
+    report.write_index(tmp_path, [("B", d, kpis)], metadata={"date": "today"})
+    index = _doc(tmp_path / "index.html")
+    row = index.xpath('//table[@class="summary"]/tr[td]')[0]
     fails = row.xpath('.//span[@class="fail"]')
     assert [f.text_content() for f in fails] == [f"1 {FAIL}", FAIL]
+    assert row.xpath('.//a[span[@class="fail"]]/@href') == ["B/index.html#why-1"]
+    assert f"1 {PASS}" in index.text_content() and f"1 {FAIL}" in index.text_content()
     lines = row.xpath("td[3]")[0].text_content()
     assert lines.index("too far") < lines.index("fine")            # the failing KPI first
     page = _doc(d / "index.html")
-    assert page.xpath('//td[@class="fail"]/text()') == [FAIL]
+    assert page.xpath('//td[@class="fail"]//text()') == [FAIL]
+    assert page.xpath('//td[@class="fail"]/a/@href') == ["#why-1"]
+    assert "the geometry is estimated" in page.xpath('string(//div[@id="why-1"])')
+    assert page.xpath('string(//td[@class="cal"])') == "calibrated"
+    assert "not graded: a bound of another configuration" in page.xpath('string(//td[@class="ungraded"])')
+    assert len(page.xpath('//td[@class="pass"]')) == 1
 
 
 def test_comparison_page_linked_and_as_the_results(site):
@@ -132,7 +147,11 @@ def test_every_image_exists_and_reads(site):
             seen += 1
         for href in doc.xpath("//a/@href"):
             if "://" not in href:
-                assert (p.parent / href).exists(), f"{p}: link {href} leads nowhere"
+                path, _, frag = href.partition("#")
+                target = p.parent / path if path else p
+                assert target.exists(), f"{p}: link {href} leads nowhere"
+                if frag:        # an anchor (a ✘'s explanation) exists on the page it names
+                    assert _doc(target).xpath(f'//*[@id="{frag}"]'), f"{p}: link {href}: no such anchor"
     # the circle's 3 figures, its variants' and its animation; the comparison's 2; a thumbnail a bench
     assert seen >= 5 + 2 + len(BENCHES)
 
@@ -146,9 +165,14 @@ def test_the_circle_page_shows_every_variant(site):
     for v in ("unsteered", "guided", "guidedAll", "guidedForceMin"):
         assert f"{v}: max deviation of A4 from the A2 trace" in kpis
         assert f"{v}: max |lateral force| hinge 1" in text
-    assert kpis["guidedForceMin: max |lateral force| hinge 1"].paper == "< 4 (steered)"
-    assert kpis["guided: max |lateral force| hinge 1"].paper == "> 20 with wrong A3/A5 angles"
-    assert kpis["unsteered: max deviation of A4 from the A2 trace"].passed is None
+    assert kpis["guidedForceMin: max |lateral force| hinge 1"].paper == "< 4 (force minimisation)"
+    assert kpis["guidedForceMin: max |lateral force| hinge 1"].graded
+    # the > 20 kN is graded on guidedAll only (inaccurate A3/A5 angles), shown beside guided, not graded
+    assert kpis["guidedAll: max |lateral force| hinge 1"].graded
+    assert not kpis["guided: max |lateral force| hinge 1"].graded
+    assert "guidedAll" in kpis["guided: max |lateral force| hinge 1"].ungraded
+    assert not kpis["unsteered: max deviation of A4 from the A2 trace"].graded
+    assert kpis["unsteered: max deviation of A6 from the A2 trace"].paper.startswith("about 6")
 
 
 def _chromium():
@@ -187,7 +211,9 @@ def test_units_in_the_report_csvs(site):
         for r, k in zip(own, kpis):
             if not k.missing:
                 assert float(r["value"]) == pytest.approx(float(k.value))
-            assert r["passed"] == ("" if k.passed is None else ("pass" if k.passed else "FAIL"))
+            want = ("calibrated" if k.calibrated else ("pass" if k.passed else "FAIL") if k.graded
+                    else "not graded" if k.ungraded else "")
+            assert r["passed"] == want
 
 
 def test_kpi_without_a_value_shows_why_or_is_named(tmp_path):

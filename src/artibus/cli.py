@@ -213,8 +213,9 @@ def cmd_replay(args):
             for label, rms, mx, unit in errors:
                 print(f"    {label}: {rms:.3f} {unit} RMS, {mx:.3f} {unit} max")
     if args.report:
-        imgs = replay.write_report(rep, args.report, f"{Path(args.log).name} replayed into {args.bench}")
-        for i in imgs + ["errors.csv"]:
+        title = f"{Path(args.log).name} replayed into {args.bench}"
+        replay.report_page(rep, args.report, title, f"{args.log} replayed into the bench {args.bench}.")
+        for i in sorted(p.name for p in Path(args.report).iterdir() if p.suffix in (".png", ".csv", ".html")):
             print(f"    {Path(args.report) / i}")
     return 0
 

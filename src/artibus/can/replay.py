@@ -453,3 +453,35 @@ def write_report(rep, out_dir, title):
     part.write_text("\n".join(rows) + "\n")
     part.replace(out / "errors.csv")
     return images
+
+
+def page_parts(rep, out_dir, title):
+    """A replay's page as every bench's: (KPIs, [(image, caption)], notes):
+    the figures of write_report and errors.csv in out_dir, a KPI row per
+    compared signal and run (RMS and largest error of model against
+    measured). The rows are not graded: a replay has no paper bound (seed 003
+    shows its errors as plots)."""
+    from artibus.report import Kpi
+    out = Path(out_dir)
+    images = write_report(rep, out, title)
+    kpis = []
+    for name, _, errors in runs(rep):
+        for label, rms, mx, unit in errors:
+            kpis.append(Kpi(f"{name}: {label}, RMS error against measured", rms, unit, "", "seed 003, sec. V"))
+            kpis.append(Kpi(f"{name}: {label}, largest error", mx, unit))
+    captions = {"angles.png": "Model (driven by the log's inputs) against measured: each compared signal over "
+                              "time (seed 003, Figs. 9-10).",
+                "path.png": "The wagon axle P1's path: the model's against the measured DGPS fixes (Fig. 11)."}
+    driven = "; ".join(f"{inp} <- {sig}" for inp, (sig, _) in rep.drive.items())
+    notes = [f"Inputs driven from the log: {driven}; the start state from its first samples.",
+             "Every error: errors.csv (RMS and largest, per run)."]
+    return kpis, [(i, captions.get(i, i)) for i in images], notes
+
+
+def report_page(rep, out_dir, title, intro="", notes=()):
+    """page_parts written as a page, out_dir/index.html (artibus.report.write_html); returns the KPIs."""
+    from artibus.report import write_html
+    out = Path(out_dir)
+    kpis, images, parts = page_parts(rep, out, title)
+    write_html(out, title, intro, kpis, [(out / i, c) for i, c in images], list(notes) + parts)
+    return kpis

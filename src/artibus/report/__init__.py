@@ -17,9 +17,11 @@ import importlib
 _WHERE = {
     **dict.fromkeys(("animate", "animation_writer", "bench_animation", "result_axle_traces", "result_links",
                      "result_outlines"), "animation"),
-    **dict.fromkeys(("FAIL", "PASS", "STYLE", "Kpi", "generic", "headline", "run_metadata", "thumbnail",
-                     "write_html", "write_index", "write_kpi_csv", "write_report"), "pages"),
-    **dict.fromkeys(("birds_eye", "colours", "save_figure", "signals", "swept", "swept_area"), "plots"),
+    **dict.fromkeys(("CALIBRATED", "FAIL", "NOT_GRADED", "PASS", "STYLE", "Kpi", "Table", "generic", "headline",
+                     "run_metadata", "tally", "thumbnail", "write_html", "write_index", "write_kpi_csv",
+                     "write_report"), "pages"),
+    **dict.fromkeys(("birds_eye", "colours", "draw_bound", "save_figure", "signals", "swept", "swept_area"),
+                    "plots"),
 }
 __all__ = sorted(_WHERE)
 

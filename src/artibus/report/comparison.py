@@ -110,16 +110,18 @@ def write(out_dir, results, run_extra=_run_extra):
         axes[1].plot(d["s"], d["dev"][6], color=c, lw=1.2, label=label)
         axes[2].plot(d["s"], d["F1"], color=c, lw=1.2, label=label)
     for a in axes[:2]:
-        a.axhline(1.0, color="k", lw=0.8, ls="--")
-    axes[2].axhline(4.0, color="k", lw=0.8, ls="--")
-    axes[2].axhline(-4.0, color="k", lw=0.8, ls="--")
+        plots.draw_bound(a, 1.0, "paper: < 1.0 m steered (seed 000, Fig. 9)")
+    plots.draw_bound(axes[1], 6.0, "paper: about 6 m unsteered (seed 000, sec. III)", color="0.4")
+    plots.draw_bound(axes[2], 4.0, "paper: < 4 kN with force minimisation (seed 000, Fig. 10)")
+    plots.draw_bound(axes[2], -4.0, "paper: < 4 kN with force minimisation (seed 000, Fig. 10)")
     axes[0].set_ylabel("A4 from A2's trace [m]")
     axes[1].set_ylabel("A6 from A2's trace [m]")
     axes[2].set_ylabel("hinge 1 lateral force [kN]")
     axes[2].set_xlabel("road progress of the driver's reference point s [m] (the circle from 25 to 135 m)")
     axes[0].set_title("Deviations of A4 and A6 from the trace of A2 (seed 000, Fig. 9; dashed: 1.0 m) and the "
                       "lateral force in the first hinge (Fig. 10; dashed: 4 kN)", fontsize=9)
-    axes[0].legend(fontsize=8)
+    for a in axes:
+        a.legend(fontsize=7)
     for a in axes:
         a.grid(True, alpha=0.3)
     fig.tight_layout()
@@ -128,9 +130,13 @@ def write(out_dir, results, run_extra=_run_extra):
     rows = []
     for label, d in data.items():
         p = d["peak"]
-        steered = label != "unsteered"
-        dev_ok = [(v < 1.0) if steered else None for v in (p["A4"], p["A6"])]
-        f_ok = (p["F1"] < 4.0) if "force minimisation" in label else ((p["F1"] > 20.0) if steered else None)
+        # each bound only for the case it belongs to: < 1.0 m and < 4 kN the paper's whole system (guidance +
+        # force minimisation, its arc-lag law); about 6 m (read as 5-7) the unsteered A6; pathMemory is beyond
+        # the paper (not graded); guided alone has A3/A5 straight: none of the paper's configurations
+        whole = label == "guided + force minimisation (Tasks 1, 2)"
+        dev_ok = [(p["A4"] < 1.0) if whole else None,
+                  (p["A6"] < 1.0) if whole else ((5.0 <= p["A6"] <= 7.0) if label == "unsteered" else None)]
+        f_ok = (p["F1"] < 4.0) if whole else None
 
         def td(v, ok, unit):
             cls = "" if ok is None else (' class="n pass"' if ok else ' class="n fail"')
@@ -155,8 +161,11 @@ geometry or masses, so the figures differ from its plots; the bounds are its.</p
 <td><i>{html.escape(PAPER['F1'][0])} ({html.escape(PAPER['F1'][1])})</i></td><td></td></tr>
 {''.join(rows)}
 </table>
-<p class=meta>{PASS}/{FAIL}: against the paper's bound for that case (deviations &lt; 1.0 m when steered; the
-force &lt; 4 kN with force minimisation, &gt; 20 kN guided without it). The cases are variants of one bench
+<p class=meta>{PASS}/{FAIL}: against the paper's bound for that case only: deviations &lt; 1.0 m and the force
+&lt; 4 kN for its whole steering system (guidance + force minimisation); A6 about 6 m unsteered (read as 5-7 m:
+ours is an estimated bus, see the unsteered row's explanation on <a href="../Bus36m_Circle/index.html">
+Bus36m_Circle</a>). Guided alone (A3, A5 straight) and pathMemory (beyond the paper) are not graded; the
+&gt; 20 kN the paper quotes for inaccurate A3/A5 angles is graded on the variant guidedAll there. The cases are variants of one bench
 (<code>artibus run Bus36m_Circle --variant guided</code>); its page shows every variant's KPIs:
 <a href="../Bus36m_Circle/index.html">Bus36m_Circle</a>.</p>
 <figure><img src="traces.png" alt="traces of A2, A4, A6"><figcaption>Traces of A2, A4 and A6 for each case, on the

@@ -19,39 +19,92 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from artibus import files
 from artibus.bench import script
 from artibus.report.animation import bench_animation
 from artibus.report.plots import signals
 
 PASS, FAIL = "✔", "✘"
+CALIBRATED = "calibrated"
+NOT_GRADED = "not graded"
 
 
 @dataclass
 class Kpi:
+    """One KPI of a run: its value and unit, the paper's figure beside it, and
+    its grade. A KPI is graded (``passed`` True or False: ✔ or ✘) only against
+    the paper's bound for the configuration that ran; a row the paper gives a
+    figure for that is not a bound of this configuration says why it is not
+    graded (``ungraded``); a calibration target (the value we calibrated to)
+    is ``calibrated``, never ✔. A ✘ carries its explanation (``explain``: why
+    it fails, what it depends on, what would change it; ``explain_figure``: a
+    PNG beside the page), shown on the page and linked from the index."""
     name: str
     value: float
     unit: str
     paper: str = ""        # the paper's figure, as the paper states it
     source: str = ""       # where in the paper (section, figure, table)
-    passed: bool | None = None   # against the paper's bound, where it states one
+    passed: bool | None = None   # against the paper's bound for this configuration, where it states one
     why: str = ""          # why there is no value (shown instead of it), e.g. "never in fallback"
+    ungraded: str = ""     # why the paper's figure beside it is not graded, e.g. "bound of another configuration"
+    calibrated: bool = False     # the value is a calibration target (set to the paper's figure, not tested by it)
+    explain: str = ""      # a ✘'s explanation: why, what it depends on, what would change it
+    explain_figure: str = ""     # a PNG in the page's folder illustrating the explanation
 
     @property
     def missing(self):
         v = self.value
         return v is None or (isinstance(v, float) and math.isnan(v))
 
+    @property
+    def graded(self):
+        """Whether the KPI counts in the tally (✔ or ✘)."""
+        return self.passed is not None and not self.calibrated and not self.missing
+
+    @property
+    def failed(self):
+        return self.graded and not bool(self.passed)
+
     def cell(self):
         if self.missing:
             return f"n/a ({self.why})" if self.why else "n/a"
         if isinstance(self.value, float) and math.isinf(self.value):
             return "inf" if self.value > 0 else "-inf"
+        if isinstance(self.value, (bool, np.bool_)):
+            return str(bool(self.value))
         return f"{self.value:.4g}"
 
     @property
     def verdict(self):
-        return "" if self.passed is None else (PASS if bool(self.passed) else FAIL)
+        """✔, ✘, "calibrated", "not graded" (a paper figure beside it, not a bound of this run) or ""."""
+        if self.calibrated:
+            return CALIBRATED
+        if self.graded:
+            return PASS if bool(self.passed) else FAIL
+        if self.ungraded:
+            return NOT_GRADED
+        return ""
+
+    def line(self):
+        """The KPI as the console prints it: name, value, unit, the paper's figure, the grade."""
+        paper = f"   (paper: {self.paper}" + (f"; {self.source}" if self.source else "") + ")" if self.paper else ""
+        v = self.verdict
+        return f"{self.name}: {self.cell()} {self.unit}{paper}" + (f"   {v}" if v else "")
+
+
+def tally(kpis):
+    """(number of ✔, number of ✘) over the graded KPIs (calibration targets and
+    rows without a bound of their own are not counted)."""
+    n_pass = sum(1 for k in kpis if k.graded and bool(k.passed))
+    n_fail = sum(1 for k in kpis if k.failed)
+    return n_pass, n_fail
+
+
+def anchor(i):
+    """The id of the i-th failing KPI's explanation on its page."""
+    return f"why-{i + 1}"
 
 
 def thumbnail(src, dst, width=240):
@@ -67,14 +120,24 @@ def thumbnail(src, dst, width=240):
     return Path(dst)
 
 
+def _grade_word(k):
+    if k.calibrated:
+        return CALIBRATED
+    if k.graded:
+        return "pass" if bool(k.passed) else "FAIL"
+    return NOT_GRADED if k.ungraded else ""
+
+
 def write_kpi_csv(path, kpis):
-    """The KPI table as CSV with its units: kpi, value, unit, paper, source, passed, why."""
+    """The KPI table as CSV with its units: kpi, value, unit, paper, source,
+    passed (pass, FAIL, calibrated, not graded or empty), why, and the note
+    (a ✘'s explanation, or why a paper figure is not graded)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["kpi", "value", "unit", "paper", "source", "passed", "why_no_value"])
+    w.writerow(["kpi", "value", "unit", "paper", "source", "passed", "why_no_value", "note"])
     for k in kpis:
         w.writerow([k.name, "" if k.missing else repr(float(k.value)), k.unit, k.paper, k.source,
-                    "" if k.passed is None else ("pass" if bool(k.passed) else "FAIL"), k.why])
+                    _grade_word(k), k.why, k.explain if k.failed else k.ungraded])
     return files.write_text(path, buf.getvalue())
 
 
@@ -84,35 +147,86 @@ table { border-collapse: collapse; margin: 1em 0; }
 td, th { border: 1px solid #bbb; padding: 4px 10px; vertical-align: top; }
 th { background: #eee; } td.n { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 td.pass { color: #137333; font-weight: bold; text-align: center; }
-td.fail { color: #fff; background: #c5221f; font-weight: bold; text-align: center; }
+td.fail { background: #c5221f; font-weight: bold; text-align: center; }
+td.fail a { color: #fff; }
+td.cal, td.ungraded { color: #555; font-size: 85%; }
 span.pass { color: #137333; font-weight: bold; } span.fail { color: #c5221f; font-weight: bold; }
 figure { margin: 1.5em 0; } img, video { max-width: 100%; }
 figcaption { color: #555; font-size: 90%; }
 .meta { color: #555; font-size: 90%; }
 table.summary td { font-size: 92%; }
+div.why { border-left: 4px solid #c5221f; padding: 0.2em 1em; margin: 1em 0; }
 """
 
 
-def _verdict_td(k):
-    if k.passed is None:
-        return "<td></td>"
-    return f'<td class="{"pass" if bool(k.passed) else "fail"}">{k.verdict}</td>'
+def _verdict_td(k, i=None):
+    """The grade's cell: ✔; ✘ linked to its explanation (i: its number); calibrated; not graded, why."""
+    if k.calibrated:
+        return f'<td class="cal">{CALIBRATED}</td>'
+    if k.graded:
+        if bool(k.passed):
+            return f'<td class="pass">{PASS}</td>'
+        return f'<td class="fail"><a href="#{anchor(i)}">{FAIL}</a></td>'
+    if k.ungraded:
+        return f'<td class="ungraded">{NOT_GRADED}: {html.escape(k.ungraded)}</td>'
+    return "<td></td>"
+
+
+@dataclass
+class Table:
+    """A table on a bench's page (e.g. the damping functions side by side):
+    a title, the column heads, rows of cells (numbers are formatted with fmt)."""
+    title: str
+    header: list
+    rows: list
+    note: str = ""
+    fmt: str = "{:.3g}"
+
+    def html(self):
+        def cell(c):
+            if isinstance(c, (int, float, np.integer, np.floating)) and not isinstance(c, bool):
+                x = float(c)
+                txt = "inf" if math.isinf(x) else ("n/a" if math.isnan(x) else
+                                                    (str(int(c)) if isinstance(c, (int, np.integer)) else
+                                                     self.fmt.format(x)))
+                return f"<td class=n>{html.escape(txt)}</td>"
+            return f"<td>{html.escape(str(c))}</td>"
+        head = "".join(f"<th>{html.escape(h)}</th>" for h in self.header)
+        body = "".join("<tr>" + "".join(cell(c) for c in row) + "</tr>" for row in self.rows)
+        note = f"<p class=meta>{html.escape(self.note)}</p>" if self.note else ""
+        return f"<h2>{html.escape(self.title)}</h2><table><tr>{head}</tr>{body}</table>{note}"
+
+
+def _notes_html(notes):
+    """notes: a string (a paragraph), or a list of strings and Tables."""
+    if isinstance(notes, (str, Table)):
+        notes = [notes]
+    out = []
+    for n in notes or []:
+        out.append(n.html() if isinstance(n, Table) else f"<p>{html.escape(n)}</p>")
+    return "\n".join(out)
 
 
 def write_html(out_dir, title, intro, kpis, images, notes="", sections=""):
     """One self-contained page (images next to it) with the KPI table, the KPIs
     as kpis.csv (with units) and thumb.png (the first image, small) for the index.
     A KPI without a value shows why (Kpi.why); one without a value and a reason
-    is left out of the table and named below it."""
+    is left out of the table and named below it. Each ✘ links to its
+    explanation below the table (Kpi.explain, with its figure). notes: a
+    paragraph, or a list of paragraphs and Tables."""
     out_dir = Path(out_dir)
-    rows, dropped = [], []
+    rows, dropped, whys = [], [], []
     for k in kpis:
         if k.missing and not k.why:
             dropped.append(k.name)
             continue
+        i = None
+        if k.failed:
+            i = len(whys)
+            whys.append(k)
         rows.append(f"<tr><td>{html.escape(k.name)}</td><td class=n>{html.escape(k.cell())}</td>"
                     f"<td>{html.escape(k.unit)}</td><td>{html.escape(k.paper)}</td>"
-                    f"<td>{html.escape(k.source)}</td>{_verdict_td(k)}</tr>")
+                    f"<td>{html.escape(k.source)}</td>{_verdict_td(k, i)}</tr>")
     figs = []
     for i, cap in images:
         name = html.escape(Path(i).name)
@@ -121,12 +235,25 @@ def write_html(out_dir, title, intro, kpis, images, notes="", sections=""):
         else:
             media = f'<img src="{name}" alt="{html.escape(cap)}">'
         figs.append(f"<figure>{media}<figcaption>{html.escape(cap)}</figcaption></figure>")
-    n_fail = sum(1 for k in kpis if k.passed is not None and not bool(k.passed))
-    n_pass = sum(1 for k in kpis if k.passed is not None and bool(k.passed))
-    marks = (f'<p>Against the papers: <span class="pass">{n_pass} {PASS}</span>, '
-             f'<span class="fail">{n_fail} {FAIL}</span>.</p>') if n_pass + n_fail else ""
+    n_pass, n_fail = tally(kpis)
+    n_cal = sum(1 for k in kpis if k.calibrated)
+    n_ungraded = sum(1 for k in kpis if not k.graded and not k.calibrated and k.ungraded)
+    marks = (f'<p>Against the papers\' bounds for this configuration: <span class="pass">{n_pass} {PASS}</span>, '
+             f'<span class="fail">{n_fail} {FAIL}</span>'
+             + (f"; {n_cal} calibration target{'s' if n_cal != 1 else ''} (not counted)" if n_cal else "")
+             + (f"; {n_ungraded} paper figure{'s' if n_ungraded != 1 else ''} not graded (the reason beside each)"
+                if n_ungraded else "") + ".</p>") if n_pass + n_fail + n_cal + n_ungraded else ""
     drop = (f"<p class=meta>Not computed in this run (no value): {html.escape('; '.join(dropped))}.</p>"
             if dropped else "")
+    expl = []
+    for i, k in enumerate(whys):
+        text = k.explain.strip() or "No explanation given."
+        fig = (f'<figure><img src="{html.escape(k.explain_figure)}" alt="{html.escape(k.name)}"></figure>'
+               if k.explain_figure else "")
+        expl.append(f'<div class="why" id="{anchor(i)}"><p><b>{FAIL} {html.escape(k.name)}</b>: '
+                    f'{html.escape(k.cell())} {html.escape(k.unit)} against the paper\'s {html.escape(k.paper)} '
+                    f'({html.escape(k.source)}).</p><p>{html.escape(text)}</p>{fig}</div>')
+    why_html = f"<h2>Why each {FAIL} fails</h2>\n" + "\n".join(expl) if expl else ""
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>{STYLE}</style></head><body>
@@ -134,12 +261,15 @@ def write_html(out_dir, title, intro, kpis, images, notes="", sections=""):
 <h1>{html.escape(title)}</h1>
 <p>{html.escape(intro)}</p>
 {marks}
-<table><tr><th>KPI</th><th>artibus</th><th>unit</th><th>paper</th><th>source</th><th></th></tr>
+<table><tr><th>KPI</th><th>artibus</th><th>unit</th><th>paper</th><th>source</th><th>grade</th></tr>
 {''.join(rows)}
 </table>
 {drop}
-<p class=meta>The table as CSV, with units: <a href="kpis.csv">kpis.csv</a>.</p>
-<p>{html.escape(notes)}</p>
+<p class=meta>The table as CSV, with units: <a href="kpis.csv">kpis.csv</a>. {PASS}/{FAIL}: against the paper's
+bound for the configuration that ran; "calibrated": the value we calibrated to the paper's figure (not a test);
+"not graded": the paper gives a figure, but not a bound for this configuration (the reason beside it).</p>
+{why_html}
+{_notes_html(notes)}
 {sections}
 {''.join(figs)}
 </body></html>
@@ -176,11 +306,11 @@ def run_metadata():
 def headline(kpis, n=5):
     """The KPIs the summary shows: those the paper gives a figure or a bound
     for (failing ones first), then the first others, at most n."""
-    judged = [k for k in kpis if k.passed is not None]
+    judged = [k for k in kpis if k.graded]
     judged.sort(key=lambda k: bool(k.passed))
-    paper = [k for k in kpis if k.passed is None and k.paper and not k.missing]
-    rest = [k for k in kpis if k.passed is None and not k.paper and not k.missing]
-    return (judged + paper + rest)[:n]
+    paper = [k for k in kpis if not k.graded and k.paper and not k.missing]
+    rest = [k for k in kpis if not k.graded and not k.paper and not k.missing]
+    return (judged + paper + rest)[:max(n, sum(1 for k in judged if not k.passed))]
 
 
 def write_index(out_dir, summary, pages=(), metadata=None):
@@ -198,15 +328,21 @@ def write_index(out_dir, summary, pages=(), metadata=None):
         thumb = Path(d) / "thumb.png"
         img = (f'<a href="{href}"><img src="{html.escape(str(rel / "thumb.png"))}" alt="{html.escape(name)}" '
                f'width="200"></a>') if thumb.is_file() else ""
-        n_pass = sum(1 for k in kpis if k.passed is not None and bool(k.passed))
-        n_fail = sum(1 for k in kpis if k.passed is not None and not bool(k.passed))
+        n_pass, n_fail = tally(kpis)
+        fails = {id(k): i for i, k in enumerate(k for k in kpis if k.failed and not (k.missing and not k.why))}
         total_pass += n_pass
         total_fail += n_fail
         status = (f'<span class="fail">{n_fail} {FAIL}</span> ' if n_fail else "") + \
                  (f'<span class="pass">{n_pass} {PASS}</span>' if n_pass else "") or "no bound in the papers"
         lines = []
         for k in headline(kpis):
-            mark = f' <span class="{"pass" if bool(k.passed) else "fail"}">{k.verdict}</span>' if k.verdict else ""
+            if k.failed:        # linked to its explanation on the bench's page
+                why = html.escape(f"{rel / 'index.html'}#{anchor(fails[id(k)])}")
+                mark = f' <a href="{why}"><span class="fail">{FAIL}</span></a>'
+            elif k.graded:
+                mark = f' <span class="pass">{PASS}</span>'
+            else:
+                mark = f" <i>({k.verdict})</i>" if k.verdict else ""
             paper = f" <i>(paper: {html.escape(k.paper)}" + (f"; {html.escape(k.source)}" if k.source else "") + \
                 ")</i>" if k.paper else ""
             lines.append(f"{html.escape(k.name)}: <b>{html.escape(k.cell())}</b> {html.escape(k.unit)}{paper}{mark}")
@@ -217,7 +353,7 @@ def write_index(out_dir, summary, pages=(), metadata=None):
                     f'<td>{"<br>".join(lines) or "no KPIs"}</td></tr>')
         for k in kpis:
             csv_rows.append([name, k.name, "" if k.missing else repr(float(k.value)), k.unit, k.paper, k.source,
-                             "" if k.passed is None else ("pass" if bool(k.passed) else "FAIL")])
+                             _grade_word(k)])
     links = "".join(f'<li><a href="{html.escape(h)}">{html.escape(t)}</a>: {html.escape(w)}</li>'
                     for h, t, w in pages)
     meta_html = "<br>".join(f"{html.escape(k)}: {html.escape(str(v))}" for k, v in meta.items())
@@ -226,12 +362,14 @@ def write_index(out_dir, summary, pages=(), metadata=None):
 <style>{STYLE}</style></head><body><h1>artibus benches</h1>
 <p class=meta>{meta_html}</p>
 <h2>Summary</h2>
-<p>{len(summary)} benches; against the papers' figures and bounds:
-<span class="pass">{total_pass} {PASS}</span>, <span class="fail">{total_fail} {FAIL}</span>.
+<p>{len(summary)} benches; graded against the papers' bounds, each for the configuration it belongs to:
+<span class="pass">{total_pass} {PASS}</span>, <span class="fail">{total_fail} {FAIL}</span>
+(each {FAIL} links to its explanation on the bench's page; calibration targets and paper figures that are not
+a bound of the run's configuration are not counted).
 Every KPI with its unit: <a href="summary.csv">summary.csv</a>.</p>
 {f"<ul>{links}</ul>" if links else ""}
 <table class="summary"><tr><th></th><th>bench</th><th>headline KPIs (paper; {PASS} within the paper's bound,
-{FAIL} not)</th></tr>
+{FAIL} not, linked to why)</th></tr>
 {''.join(rows)}
 </table>
 </body></html>

@@ -199,16 +199,29 @@ def birds_eye(path, traces, outlines=None, road=None, title="", every=10, envelo
     return save_figure(fig, path, dpi=110)
 
 
-def signals(path, t, panels, title=""):
-    """panels: [(ylabel, {label: values})], one axis each, shared time axis."""
+def signals(path, t, panels, title="", bounds=None):
+    """panels: [(ylabel, {label: values})], one axis each, shared time axis.
+    bounds: [(panel index, value, label)]: the papers' bounds drawn as dashed
+    lines, each labelled with its source (draw_bound)."""
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.4 * len(panels)), sharex=True, squeeze=False)
     for ax, (ylabel, series) in zip(axes[:, 0], panels):
         for (label, y), c in zip(series.items(), colours() * 3):
             ax.plot(t, y, color=c, lw=1.2, label=label)
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
+    for i, value, label in bounds or []:
+        draw_bound(axes[i, 0], value, label)
+    for ax, _ in zip(axes[:, 0], panels):
         ax.legend(loc="best", fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].set_title(title)
     fig.tight_layout()
     return save_figure(fig, path, dpi=110)
+
+
+def draw_bound(ax, value, label, horizontal=True, color="k"):
+    """A paper's bound on an axis: a dashed line at value, in the legend as
+    label (e.g. "< 1.0 m (seed 000, Fig. 9)"); labels repeated on one axis are shown once."""
+    seen = {h.get_label() for h in ax.get_lines()}
+    kw = dict(color=color, lw=0.9, ls="--", zorder=1.5, label=label if label not in seen else "_nolegend_")
+    return ax.axhline(value, **kw) if horizontal else ax.axvline(value, **kw)

@@ -30,7 +30,7 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     if report:
         from artibus.report import comparison
         from artibus.report import single_rate as single_rate_report
-        from artibus.report.pages import write_index, write_report
+        from artibus.report.pages import FAIL, PASS, tally, write_index, write_report
     if stop_time is None and not every:
         stop_time = ssp.variant_stop_time(benches[0], variants)    # None: the bench's own
     summary = []
@@ -78,7 +78,11 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
                     write_text(out_dir / "can_bus.txt", can_summary + "\n")
                 log(f"{name}: report {out_dir / 'index.html'}")
                 for k in kpis:
-                    log(f"    {k.name}: {k.cell()} {k.unit}" + (f"   (paper: {k.paper})" if k.paper else ""))
+                    log(f"    {k.line()}")
+                n_pass, n_fail = tally(kpis)
+                if n_pass + n_fail:
+                    log(f"{name}: against the papers' bounds for this configuration: {n_pass} {PASS}, "
+                        f"{n_fail} {FAIL}" + (f" (why: {out_dir / 'index.html'})" if n_fail else ""))
                 summary.append((name, out_dir, kpis))
                 if every and comparison.wanted(name):    # seed 000's comparison page reuses it
                     kept[name] = result
@@ -89,7 +93,11 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
         page = comparison.write(Path(report) / "comparison", kept)
         pages = [("comparison/index.html", comparison.TITLE, "unsteered, guided, guided + force minimisation "
                   "and pathMemory side by side")] if page else []
-        log(write_index(Path(report), summary, pages))
+        index = write_index(Path(report), summary, pages)
+        n_pass = sum(tally(k)[0] for _, _, k in summary)
+        n_fail = sum(tally(k)[1] for _, _, k in summary)
+        log(f"all benches: against the papers' bounds, each for its configuration: {n_pass} {PASS}, {n_fail} {FAIL}")
+        log(index)
     return summary
 
 

@@ -59,13 +59,14 @@ def unwrapped_phase_deg(points):
     return np.degrees(ph)
 
 
-def plot(path, responses, title, units=None, reference=None, input_unit=""):
+def plot(path, responses, title, units=None, reference=None, input_unit="", marks=None):
     """Bode plot: a column per output (gain on a log axis in the output's unit
     per the input's, a dB axis beside it; unwrapped phase below).
     responses: {output: [Point]} or {output: {series label: [Point]}} (several
     runs of one output, e.g. two steering laws); units: {output: unit};
     reference: {output: (label, frequencies Hz, complex G)} drawn as a line
-    (e.g. a closed form the measured points are checked against)."""
+    (e.g. a closed form the measured points are checked against); marks:
+    [(frequency Hz, label)] a paper's figure, a dashed vertical line on every axis."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -100,6 +101,8 @@ def plot(path, responses, title, units=None, reference=None, input_unit=""):
         ax1.set_title(out, fontsize=9)
         for ax in (ax1, ax2):
             ax.grid(True, which="both", alpha=0.3)
+            for f_mark, label in marks or []:
+                ax.axvline(f_mark, color="k", lw=0.9, ls="--", label=label)
         ax1.legend(fontsize=7)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()

@@ -97,6 +97,15 @@ void driver_sample(const Road *r, const DriverParams *p, const DriverInput *in,
     /* speed: the set point until the end of the road, then stop; PI on the
      * drive force with conditional integration (no wind-up in saturation) */
     out->vRef = out->finished ? 0.0 : driver_speed_set_point(p, f0.s);
+    if (out->finished) {
+        /* end of the road: brake to a stop and stay there. A brake only opposes
+           the motion: proportional to the speed (Kp), no integral (the PI's
+           integral, wound up while driving, overshot through zero and the bus
+           crept back); with Kp Ts / m << 1 the speed decays without changing sign */
+        m->integral = 0.0;
+        out->Fx = clamp(-p->Kp * in->v, p->FxMin, p->FxMax);
+        return;
+    }
     const double e = out->vRef - in->v;
     const double I = m->integral + p->Ki * e * p->Ts;
     const double u = p->Kp * e + I;

@@ -18,6 +18,13 @@ TEXT = ("Seed 000: 'due to the symmetric vehicle structure the vehicle handling 
         "controllers' and the driver's small asymmetries (the driver's reference point, the sampling order).")
 
 
+#: what a failure of this bench's bounds means
+EXPLAIN = ("The paper states the tracking is independent of the driving direction (a symmetric bus); our bus is "
+                    "symmetric (Bus36m.ssv), so a failure here means the backwards run differs from the forwards "
+                    "one: compare Bus36m_Circle's variant guidedForceMin (the forwards figures); it depends on the "
+                    "driver's reference point and the controllers' driving-direction handling.")
+
+
 def _axles(r):
     return {a: (r[f"Bus.xAxle[{a}]"][::5], r[f"Bus.yAxle[{a}]"][::5]) for a in range(1, 7)}
 
@@ -42,11 +49,14 @@ def kpis(r):
     swept = kpi.swept_path_width(lead[0][::20], lead[1][::20], outl[::20], bin_length=0.5, samples_per_edge=4)
     return [
         Kpi("max deviation of A3 from the A5 trace", d3, "m", "< 1.0 (steered); as A4 from A2 forwards",
-            "seed 000, Fig. 9 and sec. IV", d3 < 1.0),
+            "seed 000, Fig. 9 and sec. IV", d3 < 1.0,
+            explain=EXPLAIN),
         Kpi("max deviation of A1 from the A5 trace", d1, "m", "< 1.0 (steered); as A6 from A2 forwards",
-            "seed 000, Fig. 9 and sec. IV", d1 < 1.0),
+            "seed 000, Fig. 9 and sec. IV", d1 < 1.0,
+            explain=EXPLAIN),
         Kpi("max |lateral force| leading hinge G2 (module 3's frame)", F2, "kN", "< 4 (steered)",
-            "seed 000, Fig. 10", F2 < 4),
+            "seed 000, Fig. 10", F2 < 4,
+            explain=EXPLAIN),
         Kpi("max |lateral force| hinge G1 (module 2's frame)", F1, "kN"),
         Kpi("swept path width", swept, "m", "", "outermost leading point on 17.5 m"),
         Kpi("max |articulation angle| hinge 1", kpi.peak(r["Bus.artAngle[1]"]) * DEG, "deg"),
@@ -70,7 +80,8 @@ def figures(r, out):
         ("deviation from A5 trace [m]", {"A3": np.where(in3, np.abs(dev3), np.nan),
                                          "A1": np.where(in1, np.abs(dev1), np.nan)}),
         ("road progress [m]", {"s": r["Driver.s"][::5]}),
-    ], title="Deviation of A3 and A1 from the trace of A5 (backwards: the mirror of seed 000, Fig. 9)")
+    ], title="Deviation of A3 and A1 from the trace of A5 (backwards: the mirror of seed 000, Fig. 9)",
+        bounds=[(0, 1.0, "paper: < 1.0 m steered (seed 000, Fig. 9; independent of the direction, sec. IV)")])
     images.append(("deviation.png", "Lateral distance of the trailing axles A3 and A1 from the trace of A5."))
     report.signals(out / "forces.png", r.time, [
         ("hinge lateral force [kN]", {"G2 (leading)": np.sin(a2) * r["Bus.FjointX[2]"] / 1e3
@@ -82,7 +93,9 @@ def figures(r, out):
                             "A1 (guided)": r["Guidance.gamma6"] * DEG, "A4 (force min.)": r["ForceMin.gamma3"] * DEG,
                             "A2 (force min.)": r["ForceMin.gamma5"] * DEG}),
         ("speed [m/s]", {"vx of module 3": r["Bus.vx[3]"]}),
-    ], title="Backwards: hinge forces, articulation, steering, speed")
+    ], title="Backwards: hinge forces, articulation, steering, speed",
+        bounds=[(0, 4.0, "paper: < 4 kN with force minimisation (seed 000, Fig. 10)"),
+                (0, -4.0, "paper: < 4 kN with force minimisation (seed 000, Fig. 10)")])
     images.append(("forces.png", "Lateral hinge forces in the frame of the module ahead in the direction of travel, "
                                  "articulation angles, the steering angles by role, speed (negative: backwards)."))
     return images

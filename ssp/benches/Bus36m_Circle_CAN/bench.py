@@ -19,7 +19,7 @@ def kpis(r):
 
 
 def figures(r, out):
-    images = direct.circle_figures(r, out, direct.VARIANTS[VARIANT][0])
+    images = direct.circle_figures(r, out, direct.VARIANTS[VARIANT][0], variant=VARIANT)
     receivers, lost = can_receivers(r), can_lost(r)
     if receivers:
         report.signals(out / "fallback.png", r.time, [

@@ -3,9 +3,12 @@ end leads) with the steering on CAN: the KPIs of Bus36m_Circle_Backwards,
 what the receivers saw (each one's fallback state and each message's
 longest run without a good frame, as Bus36m_Circle_CAN) and the driving
 direction each ECU steered for (artibus.benches)."""
+import numpy as np
+
 from artibus import report
 from artibus.bench import script
 from artibus.report.benchkit import DEG, can_fallback_kpis, can_lost, can_receivers, circle_road, outlines
+from artibus.study import kpi
 
 direct = script.load("Bus36m_Circle_Backwards")
 
@@ -27,6 +30,19 @@ def figures(r, out):
                      title="36 m bus driven backwards on CAN (A6 end leads), guidance + force minimisation, 3 m/s")
     images = [("path.png", "Bird's-eye view: road (grey, followed by the outermost leading point), "
                            "body outlines every 3 s, axle traces.")]
+    dev3, in3 = kpi.lateral_distance(*ax[5], *ax[3])
+    dev1, in1 = kpi.lateral_distance(*ax[5], *ax[1])
+    G2, G1 = direct._hinge_forces(r)
+    report.signals(out / "deviation.png", r.time[::5], [
+        ("deviation from A5 trace [m]", {"A3": np.where(in3, np.abs(dev3), np.nan),
+                                         "A1": np.where(in1, np.abs(dev1), np.nan)}),
+        ("hinge lateral force [kN]", {"G2 (leading)": G2[::5] / 1e3, "G1": G1[::5] / 1e3}),
+    ], title="Backwards on CAN: deviations from the trace of A5, hinge forces (the mirror of seed 000, Figs. 9-10)",
+        bounds=[(0, 1.0, "paper: < 1.0 m steered (seed 000, Fig. 9)"),
+                (1, 4.0, "paper: < 4 kN with force minimisation (seed 000, Fig. 10)"),
+                (1, -4.0, "paper: < 4 kN with force minimisation (seed 000, Fig. 10)")])
+    images.append(("deviation.png", "Lateral distance of the trailing axles A3 and A1 from the trace of A5; the "
+                                    "hinge forces in the frame of the module ahead in the direction of travel."))
     panels = []
     steer = {f"A{a}": r[f"Bus.delta[{a}]"] * DEG for a in range(1, 7) if f"Bus.delta[{a}]" in r.names}
     if steer:

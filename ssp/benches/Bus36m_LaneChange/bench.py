@@ -15,9 +15,14 @@ def _t_after(r):
 
 
 def kpis(r):
+    e = kpi.peak(r["Driver.eLat"])
+    allowed = (LANE - WIDTH) / 2
     extra = [
-        Kpi("front axle A1: lateral error allowed by the lane", (LANE - WIDTH) / 2, "m",
-            "(lane 3.5 m - body 2.55 m) / 2", "", kpi.peak(r["Driver.eLat"]) < (LANE - WIDTH) / 2),
+        Kpi("front axle A1: max |lateral error| against what the lane allows", e, "m",
+            f"< (lane 3.5 m - body 2.55 m) / 2 = {allowed:.3f}", "ours: the lane's geometry (seed 000 gives none)",
+            e < allowed, explain="The bound is the lane's geometry, not a paper's figure. The error depends on "
+                                 "the road-follow driver's look-ahead (Driver.tNear, tFar) and steering-rate "
+                                 "limit at 50 km/h; a longer look-ahead or a longer lane change would lower it."),
         Kpi("A4 overshoot beyond the 3.5 m offset", kpi.overshoot(r["Bus.yAxle[4]"], OFFSET), "m"),
         Kpi("A6 overshoot beyond the 3.5 m offset", kpi.overshoot(r["Bus.yAxle[6]"], OFFSET), "m"),
     ]
@@ -26,4 +31,6 @@ def kpis(r):
 
 def figures(r, out):
     return road_test_figures(r, out, "Steered 36 m bus, lane change 3.5 m / 40 m at 50 km/h",
-                             lane_change_road(LENGTH, OFFSET, after=250), _t_after(r), "lane change")
+                             lane_change_road(LENGTH, OFFSET, after=250), _t_after(r), "lane change",
+                             bounds=[(4, y, "the lane allows +-0.475 m (lane 3.5 m, body 2.55 m; ours)")
+                                     for y in ((LANE - WIDTH) / 2, -(LANE - WIDTH) / 2)])
