@@ -73,11 +73,15 @@ LICENSE_FILES = {
     "artibus": ("LICENSE", "artibus-BSD-2-Clause.txt"),
     "SUNDIALS": ("licenses/SUNDIALS-BSD-3-Clause.txt", "SUNDIALS-BSD-3-Clause.txt"),
     "Eigen": ("licenses/Eigen-MPL-2.0.txt", "Eigen-MPL-2.0.txt"),
+    "GCC": ("licenses/GCC-runtime-library-exception-3.1.txt", "GCC-runtime-library-exception-3.1.txt"),
+    "mingw-w64": ("licenses/mingw-w64-runtime.txt", "mingw-w64-runtime.txt"),
 }
 LICENSE_TEXT = {
     "artibus": "BSD-2-Clause",
     "SUNDIALS": "SUNDIALS (BSD-3-Clause, linked statically)",
     "Eigen": "Eigen (MPL-2.0, header-only)",
+    "GCC": "GCC's runtime libraries (GPL-3.0 with the GCC Runtime Library Exception 3.1)",
+    "mingw-w64": "the mingw-w64 runtime (ZPL-2.1, MIT, BSD-3-Clause; win64)",
 }
 
 INCLUDE_RE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
@@ -134,7 +138,7 @@ def needs_beyond_libc(files, system):
         if os.path.basename(f) == "ode.h":
             why.append("it integrates with SUNDIALS (ode.h)")
         elif not f.endswith((".c", ".h")):
-            why.append(f"{f} is not C")
+            why.append(f"{os.path.basename(f)} is not C")
     why += [f"it includes <{inc}>" for inc in sorted(system) if "/" in inc or not inc.endswith(".h")]
     return "; ".join(why) or None
 
@@ -271,6 +275,7 @@ def inline_md(text):
             continue
         s = html.escape(part, quote=False)
         s = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", s)
+        s = re.sub(r"(?<![\w*])\*([^*\s][^*]*?)\*(?![\w*])", r"<em>\1</em>", s)
         s = re.sub(r"\[([^\]]+)\]\(([^)\s]+)\)", r'<a href="\2">\1</a>', s)
         out.append(s)
     return "".join(out)
@@ -278,7 +283,7 @@ def inline_md(text):
 
 def markdown(text):
     """A small subset of Markdown: #-headings (shifted one level down), paragraphs, - and 1.
-    lists, ``` code blocks, inline code, bold, links."""
+    lists, ``` code blocks, | tables |, inline code, bold, italics, links."""
     out, para, lst = [], [], None
     lines = text.splitlines()
 
@@ -306,6 +311,19 @@ def markdown(text):
             out.append("<pre><code>" + html.escape("\n".join(code)) + "</code></pre>")
         elif not s:
             flush()
+        elif s.startswith("|"):
+            flush()
+            rows = []
+            while i < len(lines) and lines[i].strip().startswith("|"):
+                cells = [c.strip() for c in lines[i].strip().strip("|").split("|")]
+                if not all(re.fullmatch(r":?-+:?", c) for c in cells):
+                    rows.append(cells)
+                i += 1
+            i -= 1
+            head, body = rows[0], rows[1:]
+            out.append("<table><tr>" + "".join(f"<th>{inline_md(c)}</th>" for c in head) + "</tr>"
+                       + "".join("<tr>" + "".join(f"<td>{inline_md(c)}</td>" for c in r) + "</tr>" for r in body)
+                       + "</table>")
         elif m := re.match(r"(#{1,5})\s+(.*)", s):
             flush()
             level = min(len(m.group(1)) + 1, 6)
@@ -360,8 +378,21 @@ def fmt_display(value, unit, md_units):
     return f' <span class="du">({y:.6g} {html.escape(dname)})</span>'
 
 
-def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=()):
+def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=(),
+                  papers=None):
+    """documentation/index.html: the metadata, the model's text (src/models/<Name>/README.md),
+    the references in full, the licences, every variable; written for a reader of the FMU
+    alone (for_outside: the papers by name, no repository paths)."""
     e = html.escape
+    papers = papers or {}
+    cited = {}
+
+    def outside(text):
+        return for_outside(text or "", papers, cited)
+
+    # the model's text first: its references are numbered before the variables'
+    readme_html = markdown(outside(readme)) if readme else "<p>(no model text)</p>"
+    description = outside(md.get("description", ""))
     units = {}
     for u in md.iter("Unit"):
         for d in u.findall("DisplayUnit"):
@@ -394,7 +425,12 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
                 "SUNDIALS": "SUNDIALS CVODE/ARKODE, linked statically into " + " and ".join(with_sundials)
                             + " (BSD-3-Clause)",
                 "Eigen": "Eigen 3, header-only, compiled into the binaries (MPL-2.0; its source: "
-                         "https://gitlab.com/libeigen/eigen)"}[lib]
+                         "https://gitlab.com/libeigen/eigen)",
+                "GCC": "GCC's runtime libraries libgcc and libstdc++ where linked statically "
+                       "(GPL-3.0 or later with the GCC Runtime Library Exception 3.1, which lets the "
+                       "combination be conveyed under the terms of the FMU's licences)",
+                "mingw-w64": "the mingw-w64 runtime (C runtime start-up code, winpthreads) linked "
+                             "statically into binaries/win64 (ZPL-2.1, MIT, BSD-3-Clause; public domain parts)"}[lib]
         lic_items.append(f'<li><a href="licenses/{fname}">{fname}</a>: {e(what)}</li>')
 
     sections = []
@@ -419,7 +455,7 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
                 f'<td class="num">{e(t.get("min", ""))}{fmt_display(t.get("min"), unit, dmap)}</td>',
                 f'<td class="num">{e(t.get("max", ""))}{fmt_display(t.get("max"), unit, dmap)}</td>',
                 f"<td>{e(sv.get('variability', 'continuous'))}</td>",
-                f"<td>{e(sv.get('description', ''))}</td>",
+                f"<td>{e(outside(sv.get('description', '')))}</td>",
             ]
             body.append("<tr>" + "".join(cells) + "</tr>")
         sections.append(
@@ -428,26 +464,108 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
             "<th>min</th><th>max</th><th>variability</th><th>description</th></tr>\n"
             + "\n".join(body) + "</table>")
 
-    readme_html = markdown(readme) if readme else "<p>(no model text)</p>"
     return f"""<!DOCTYPE html>
 <html lang="en">
 <head><meta charset="utf-8"><title>{e(name)} {e(version)}</title>
 <style>{CSS}</style></head>
 <body>
 <h1><img src="../model.png" alt="">{e(name)}</h1>
-<p>{e(md.get("description", ""))}</p>
+<p>{e(description)}</p>
 <table class="meta">{meta}</table>
 {readme_html}
+{references(papers, cited)}
 <h2>Licences</h2>
 <p>What this FMU contains and under which licence (the texts are in <code>documentation/licenses/</code>):</p>
 <ul>{"".join(lic_items)}</ul>
 {chr(10).join(sections)}
-<p>Generated by {e(md.get("generationTool") or "artibus")} from modelDescription/{e(name)}.xml
-and src/models/{e(name)}/README.md. Display units: value in display unit = factor &times; value + offset,
+<p>Generated by {e(md.get("generationTool") or "artibus")} from the model description and the
+model's text. Display units: value in display unit = factor &times; value + offset,
 as declared in <code>&lt;UnitDefinitions&gt;</code>.</p>
 </body>
 </html>
 """
+
+
+# ---------------------------------------------------------------------------
+# the documentation for someone outside the repository: the papers cited in full,
+# no repository paths
+
+
+def load_papers(root):
+    """src/models/papers.json: {"000": {short, authors, title, venue, year, doi, ...}}"""
+    import json
+    with open(os.path.join(root, "src", "models", "papers.json"), encoding="utf-8") as f:
+        return {k: v for k, v in json.load(f).items() if not k.startswith("_")}
+
+
+SEED_RE = re.compile(r"\b[Ss]eeds? (\d{3})\b")
+#: repository paths as the model texts and descriptions write them -> what a reader
+#: outside the repository has (the names of artibus's benches and parameter sets)
+PATH_RULES = (
+    (re.compile(r"\.venv/bin/(\w+)"), r"\1"),
+    (re.compile(r"\bfmus/(\w+\.fmu)"), r"\1"),
+    (re.compile(r"`ssp/parameters/(\w+\.ssv)`"), r"artibus's parameter set `\1`"),
+    (re.compile(r"`ssp/benches/(\w+)`"), r"artibus's bench `\1`"),
+    (re.compile(r"`ssp/can/(\w+\.dbc)`"), r"artibus's CAN database `\1`"),
+    (re.compile(r"\bssp/parameters/(\w+\.ssv)"), r"\1 (an artibus parameter set)"),
+    (re.compile(r"\bssp/benches/(\w+)"), r"\1"),
+    (re.compile(r"\bssp/can/(\w+\.dbc)"), r"\1"),
+)
+#: what no FMU's documentation may contain (tests/test_fmu_documentation.py checks the same)
+REPO_PATH_RE = re.compile(r"(?<![\w/.])(?:src|ssp|tests|scripts|docs|modelDescription|benchmarks|build[\w-]*|fmus|\.venv)/")
+
+
+def for_outside(text, papers, cited):
+    """``text`` (Markdown or plain) as a reader of the FMU alone reads it: "seed NNN" as a
+    numbered reference "ref. n" (``cited``: {paper: n}, numbered in the order of first use; the
+    references section gives each in full), repository paths as the names artibus's
+    benches and parameter sets go by."""
+    def seed(m):
+        key = m.group(1)
+        if key not in papers:
+            return m.group(0)
+        n = cited.setdefault(key, len(cited) + 1)
+        return f"ref. {n}"
+    text = SEED_RE.sub(seed, text)
+    for rx, repl in PATH_RULES:
+        text = rx.sub(repl, text)
+    return text
+
+
+def citation(p):
+    """One paper's full entry, HTML: authors, title, venue, year, DOI, as far as known."""
+    e = html.escape
+    if p.get("authors"):
+        parts = [e(p["authors"]), f"<em>{e(p['title'])}</em>", e(p.get("venue", ""))]
+    else:                                   # a text known by where it was written, not its title
+        parts = [e(p.get("venue", "")), "on " + e(p.get("subject", ""))]
+    if p.get("year"):
+        parts.append(e(p["year"]))
+    out = ", ".join(x for x in parts if x) + "."
+    if p.get("after"):
+        out += f" {e(p['after'][0].upper() + p['after'][1:])}."
+    if p.get("doi"):
+        out += f' DOI: <a href="https://doi.org/{e(p["doi"])}">{e(p["doi"])}</a>.'
+    if p.get("what"):
+        out += f" About {e(p['what'])}."
+    return out
+
+
+def references(papers, cited):
+    """The references section: each cited paper in full, in the order of its number."""
+    if not cited:
+        return ""
+    items = "".join(f'<li id="ref-{k}" value="{n}">{citation(papers[k])}</li>'
+                    for k, n in sorted(cited.items(), key=lambda kv: kv[1]))
+    return f'<h2 id="references">References</h2>\n<ol>{items}</ol>'
+
+
+def stale_input(dll, inputs):
+    """The newest of ``inputs`` (the files a binary is built from) that is newer than
+    ``dll``, or None: a DLL older than its sources is not this build's and is not packed."""
+    t = os.path.getmtime(dll)
+    newer = [f for f in inputs if os.path.isfile(f) and os.path.getmtime(f) > t]
+    return max(newer, key=os.path.getmtime) if newer else None
 
 
 # ---------------------------------------------------------------------------
@@ -549,16 +667,24 @@ def main(argv=None):
     if os.path.isdir(win_dst):
         shutil.rmtree(win_dst)
     binaries = [so]
+    files, system = closure(root, name, a.sources)
     if a.win64_dir:
         dll = os.path.join(a.win64_dir, f"{name}.dll")
         if os.path.isfile(dll):
-            if os.path.getmtime(dll) < os.path.getmtime(a.xml):
-                print(f"package_fmu.py: warning: {dll} is older than {a.xml}", file=sys.stderr)
-            copy(dll, os.path.join(win_dst, f"{name}.dll"))
-            binaries.append(dll)
+            # a DLL older than what it is built from is another build's: never packed
+            # silently beside this build's linux64 binary
+            inputs = [os.path.join(root, f) for f in files] + [a.xml] + [
+                os.path.join(root, "src", "fmi", f) for f in ("ode.c", "ode.h", "gen_vars.py")]
+            newer = stale_input(dll, inputs)
+            if newer:
+                print(f"package_fmu.py: warning: {name}: binaries/win64 left out: {dll} is older than "
+                      f"{os.path.relpath(newer, root)} (scripts/setup.sh --all-platforms rebuilds it)",
+                      file=sys.stderr)
+            else:
+                copy(dll, os.path.join(win_dst, f"{name}.dll"))
+                binaries.append(dll)
     platforms = sorted(d for d in os.listdir(os.path.join(tree, "binaries")))
 
-    files, system = closure(root, name, a.sources)
     libraries = ["artibus"]
     with_sundials = [os.path.basename(b) for b in binaries
                      if any(m in open(b, "rb").read() for m in SUNDIALS_MARKERS)]
@@ -566,6 +692,9 @@ def main(argv=None):
         libraries.append("SUNDIALS")
     if uses_eigen(root, files):
         libraries.append("Eigen")
+    libraries.append("GCC")
+    if "win64" in platforms:
+        libraries.append("mingw-w64")
     why_not = needs_beyond_libc(files, system)
 
     tree_md = parse(a.xml)
@@ -601,7 +730,8 @@ def main(argv=None):
         copy(os.path.join(root, src), os.path.join(tree, "documentation", "licenses", fname))
     readme_path = os.path.join(model_dir, "README.md")
     readme = open(readme_path, encoding="utf-8").read() if os.path.isfile(readme_path) else ""
-    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials)
+    page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials,
+                         papers=load_papers(root))
     with open(os.path.join(tree, "documentation", "index.html"), "w", encoding="utf-8") as f:
         f.write(page)
 
