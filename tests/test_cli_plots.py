@@ -162,3 +162,24 @@ def test_animation_is_at_least_800_px_wide(tmp_path):
         w = subprocess.run(["ffprobe", "-v", "error", "-select_streams", "v:0", "-show_entries", "stream=width",
                             "-of", "csv=p=0", str(f)], capture_output=True, text=True).stdout.strip()
         assert int(w) >= 800
+
+
+def test_the_main_jobs_output(tmp_path):
+    """out/ as ./run.sh leaves it: a thumbnail on the index for every bench, the demo linked,
+    every animation at least 800 px wide, and artibus plot works on a bench's results."""
+    out = ROOT / "out"
+    if not (out / "index.html").is_file():
+        pytest.skip("no out/index.html: run ./run.sh first")
+    from artibus.bench import ssp
+    index = (out / "index.html").read_text()
+    for name in ssp.bench_names():
+        if (out / name / "index.html").is_file():
+            assert f'src="{name}/thumb.png"' in index and (out / name / "thumb.png").is_file(), name
+    assert 'href="demo/index.html"' in index and (out / "demo" / "index.html").is_file()
+    for f in out.glob("*/birds_eye.gif"):
+        with Image.open(f) as im:
+            assert im.width >= 800, f
+    results = out / "Bus36m_Circle" / "results.csv"
+    if results.is_file():
+        p = artibus("plot", results, "Bus.artAngle[*]", "-o", tmp_path / "a.png")
+        assert p.returncode == 0 and (tmp_path / "a.png").is_file(), p.stderr
