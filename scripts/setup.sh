@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # What the main job (./run.sh) needs on a Debian machine, then the build:
-#   apt packages (compiler, CMake, SUNDIALS, Eigen, Python venv),
+#   apt packages (compiler, CMake, Eigen, Python venv, dpkg-dev for SUNDIALS' source),
 #   a Python venv in .venv with the artibus package (pyproject.toml),
 #   SUNDIALS built optimised (scripts/build_sundials.sh, cached outside the clone),
 #   every FMU built into fmus/ with its linux64 binary, the benches packed.
@@ -22,8 +22,10 @@ for a in "$@"; do
   esac
 done
 
-# what the main job needs; the cross toolchains only with --all-platforms
-APT_PACKAGES="cmake make g++ libsundials-dev libeigen3-dev python3 python3-venv python3-pip dpkg-dev"
+# what the main job needs; the cross toolchains only with --all-platforms. Not
+# libsundials-dev: SUNDIALS is built from Debian's source (scripts/build_sundials.sh),
+# and the binary package pulls in MPI, PETSc and hypre (some 450 MB of downloads)
+APT_PACKAGES="cmake make g++ libeigen3-dev python3 python3-venv python3-pip dpkg-dev"
 PLATFORM_APT_PACKAGES="mingw-w64"
 [ "$ALL_PLATFORMS" = 1 ] && APT_PACKAGES="$APT_PACKAGES $PLATFORM_APT_PACKAGES"
 apt_install $APT_PACKAGES
