@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole test suite: set up and build, the C checks of every FMU (also in a
+# The whole test suite: set up and build (the main job's set-up with every
+# platform's binaries and the test tools: scripts/setup_test.sh), the C checks of every FMU (also in a
 # build with AddressSanitizer and UBSan), pytest on every core, then the
 # sanitizer pass. Each phase's time is printed, and a table of them at the end.
 # Arguments go to both pytest runs (e.g. ./test.sh -m "not slow" for a quick loop:
@@ -18,7 +19,7 @@ phase() {                   # phase NAME CMD...: run CMD, print and remember its
 report() { echo "== phase times"; printf '%s\n' "${PHASES[@]}"; printf '%6d s  in all\n' "$SECONDS"; }
 trap report EXIT
 
-phase "set-up and build (scripts/setup.sh)" bash scripts/setup.sh
+phase "set-up and build, every platform and the test tools (scripts/setup_test.sh)" bash scripts/setup_test.sh
 
 phase "C checks of every FMU (release build)" \
   ctest --test-dir build --output-on-failure -j"$(nproc)"

@@ -1,5 +1,5 @@
-# The start that scripts/build_sundials.sh, scripts/build_win64.sh and
-# scripts/setup.sh share, sourced after `set -euo pipefail`:
+# The start that scripts/build_sundials.sh, scripts/build_win64.sh,
+# scripts/setup.sh and scripts/setup_test.sh share, sourced after `set -euo pipefail`:
 #   the repository's root as the working directory, its path in ROOT;
 #   CACHE           where third-party builds that do not change are kept, outside
 #                   the clone: $ARTIBUS_CACHE, default ${XDG_CACHE_HOME:-~/.cache}/artibus
@@ -10,6 +10,9 @@
 #   quiet CMD...    CMD run with its output into the file QUIET_LOG; on failure
 #                   the log's last 40 lines and "QUIET_TAG: failed: CMD" on
 #                   stderr (the caller sets QUIET_LOG and QUIET_TAG first);
+#   step WHAT CMD...  "setup: WHAT" printed, CMD run, then "setup: ... done in N s";
+#   apt_install PKG...  the Debian packages of PKG not yet installed, installed
+#                   (with sudo when not root, SUDO); prints what and how long;
 #   cache_key ARGS  12 hex digits naming a cache entry: a hash of ARGS, of every
 #                   file an argument names (a toolchain file) and of the version
 #                   of the compiler $CACHE_CC (default cc), so a change of any
@@ -40,4 +43,26 @@ cache_key() {
     done
     "${CACHE_CC:-cc}" --version 2>/dev/null | head -1
   } | sha256sum | cut -c1-12
+}
+
+step() {
+  local what="$1" t0=$SECONDS; shift
+  echo "setup: $what"
+  "$@"
+  echo "setup:   done in $((SECONDS - t0)) s"
+}
+
+SUDO=""
+[ "$(id -u)" -ne 0 ] && SUDO="sudo"
+apt_install() {
+  local p missing=""
+  for p in "$@"; do
+    dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"
+  done
+  [ -z "$missing" ] && return 0
+  _apt() {
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "$@" >/dev/null
+  }
+  step "installing the Debian packages$missing (apt; a minute or two on a fresh machine)" _apt $missing
 }

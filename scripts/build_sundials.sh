@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SUNDIALS built from Debian's source package (apt-get source, the version of
-# the installed libsundials-dev), static, Release, position-independent, with
+# the installed libsundials-dev, else the one apt offers), static, Release, position-independent, with
 # only what the FMUs use: CVODE, ARKODE and the serial vector, dense matrix and
 # dense linear solver. Debian's own static libraries are compiled without
 # optimisation (-O0); BusDynamics spends a good part of its doStep in them.
@@ -34,8 +34,12 @@ FLAGS=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_POSITION_INDEPENDENT_CODE=ON
   -DEXAMPLES_ENABLE_C=OFF -DEXAMPLES_ENABLE_CXX=OFF -DEXAMPLES_INSTALL=OFF
   -DSUNDIALS_PRECISION=double -DSUNDIALS_INDEX_SIZE=64 "$@")
 
-# 1. the source: the same Debian version as the installed libsundials-dev, once per machine
-ver="$(dpkg-query -W -f '${source:Version}' libsundials-dev)"
+# 1. the source: the same Debian version as the installed libsundials-dev, or, where it is
+# not installed (the set-up does not need it: it pulls in MPI, PETSc and hypre, some 450 MB),
+# the version apt would install; once per machine
+ver="$(dpkg-query -W -f '${source:Version}' libsundials-dev 2>/dev/null || true)"
+[ -n "$ver" ] || ver="$(apt-cache policy libsundials-dev | awk '/Candidate:/ {print $2}')"
+case "$ver" in ""|"(none)") echo "sundials: no Debian package libsundials-dev known to apt (apt-get update?)" >&2; exit 1 ;; esac
 upstream="${ver#*:}"; upstream="${upstream%-*}"
 srcroot="$CACHE/src/sundials-$ver"
 srcdir="$srcroot/sundials-$upstream"

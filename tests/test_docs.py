@@ -105,10 +105,12 @@ def test_readme_python_example_runs(tmp_path):
     missing = missing_api()
     shim = "".join(f"import artibus, {DEFINED_IN[n]} as _m; artibus.{n} = getattr(_m, {n!r})\n"
                    for n in missing if n != "sweep")
+    (tmp_path / "out").mkdir()        # as after ./run.sh, the example's plot goes to out/
     p = subprocess.run([sys.executable, "-c", shim + code[0]], capture_output=True, text=True, cwd=tmp_path,
                        timeout=300)
     assert p.returncode == 0, f"the README's Python example failed:\n{p.stdout}{p.stderr}"
     assert p.stdout.strip(), "the README's example prints its results"
+    assert (tmp_path / "out" / "artangle.png").is_file(), "the README's example plots a signal"
     if missing:
         pytest.xfail(f"the example runs, but only with artibus.{', artibus.'.join(missing)} bound by the "
                      f"test: the package does not offer them at its top yet (issue 22's public API)")
@@ -175,3 +177,100 @@ def test_shell_commands_written_as_they_run():
                     bad.append(f"{path.relative_to(ROOT)}: {s}")
     assert checked >= 40
     assert not bad, "commands not written as they run from the repository root (.venv/bin/...):\n" + "\n".join(bad)
+
+
+# --- the commands run ---------------------------------------------------------------------
+
+#: command lines of the README and the user guide that the test does not run, and why
+NOT_RUN = {
+    r"^\./(run|test)\.sh": "the scripts themselves (the main job and the whole suite)",
+    r"\bartibus run --all\b": "the main job without its set-up: ./run.sh runs it",
+    r"\bartibus calibrate\b": "minutes of bisection runs: tests/test_damping_benches.py runs it, "
+                              "tests/test_cli_plots.py checks what it writes",
+    r"tcp://HOST": "a placeholder for the user's Dask scheduler",
+    r"--design out/lhs\.yaml": "the design file the page shows below it: tests/test_sweep.py runs designs",
+    r"scripts/kc_table\.py": "sine tests at 0.01 Hz, many minutes: tests/test_kc.py checks its table",
+}
+
+GUIDE = sorted((DOCS / "guide").glob("*.md"))
+
+
+def command_lines(path):
+    """[(block's commands as one shell script, [the lines skipped with why])] of a page's
+    shell blocks, continuation lines joined."""
+    out = []
+    for block in blocks(path.read_text(encoding="utf-8"), {"sh", "bash", "shell"}):
+        lines, skipped, cur = [], [], ""
+        for raw in block.splitlines():
+            cur = f"{cur} {raw.strip()}" if cur else raw.strip()
+            if cur.endswith("\\"):
+                cur = cur[:-1].rstrip()
+                continue
+            line, cur = cur, ""
+            if not line or line.startswith("#"):
+                continue
+            why = next((w for rx, w in NOT_RUN.items() if re.search(rx, line)), None)
+            (skipped if why else lines).append((line, why) if why else line)
+        out.append((lines, skipped))
+    return out
+
+
+@pytest.fixture(scope="module")
+def docs_root(tmp_path_factory):
+    """A folder that reads as the repository root after ./run.sh (its .venv, fmus/, ssp/,
+    scripts/ linked), so the commands' outputs (out/, MyBus.ssv) land outside the checkout."""
+    d = tmp_path_factory.mktemp("root")
+    for name in (".venv", "fmus", "ssp", "scripts", "docs", "src", "modelDescription"):
+        if (ROOT / name).exists():
+            (d / name).symlink_to(ROOT / name)
+    if not (ROOT / ".venv" / "bin" / "artibus").exists():
+        pytest.skip("no .venv/bin/artibus: run ./run.sh first")
+    return d
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [README] + GUIDE, ids=lambda p: str(p.relative_to(ROOT)))
+def test_documented_commands_run(page, docs_root):
+    """Every command line of the page's shell blocks (but NOT_RUN's) runs as written from the
+    repository root after ./run.sh, a block as one script (a later line may use an earlier
+    one's output), and exits 0."""
+    ran = 0
+    for lines, skipped in command_lines(page):
+        if not lines:
+            continue
+        script = "set -e\n" + "\n".join(lines) + "\n"
+        p = subprocess.run(["bash", "-c", script], cwd=docs_root, capture_output=True, text=True, timeout=1800,
+                           env={k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "LD_PRELOAD")})
+        assert p.returncode == 0, (f"{page.relative_to(ROOT)}: a command failed (exit {p.returncode}):\n"
+                                   f"{script}\n{p.stdout[-3000:]}\n{p.stderr[-3000:]}")
+        ran += len(lines)
+    assert ran or page.name in ("papers.md", "python.md", "reports.md") or not any(
+        ls for ls, _ in command_lines(page)), page
+
+
+def test_documented_commands_cover_every_verb():
+    """The commands run above cover every verb of `artibus --help` but those NOT_RUN names."""
+    verbs = help_verbs()
+    run_lines = [ln for page in [README] + GUIDE for lines, _ in command_lines(page) for ln in lines]
+    shown = {m.group(1) for ln in run_lines for m in VERB_RE.finditer(ln)}
+    skipped_verbs = {"calibrate"}
+    missing = verbs - shown - skipped_verbs
+    assert not missing, f"no documented command runs artibus {sorted(missing)}"
+
+
+def test_notebook_is_the_readme_example_and_runs(tmp_path):
+    """docs/python-example.ipynb: the README's Python example cell by cell, executed
+    (nbclient, the set-up's Python as its kernel) without an error."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    nb = nbformat.read(DOCS / "python-example.ipynb", as_version=4)
+    code = "\n".join(c.source for c in nb.cells if c.cell_type == "code")
+    readme = blocks(README.read_text(encoding="utf-8"), {"python"})[0]
+    assert code.strip() == readme.strip(), "the notebook is not the README's example"
+    (tmp_path / "out").mkdir()
+    client = nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
+                                     resources={"metadata": {"path": str(tmp_path)}})
+    client.execute()
+    printed = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)
+    assert "deviation of A4" in printed, printed
+    assert (tmp_path / "out" / "artangle.png").is_file()

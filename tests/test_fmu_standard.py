@@ -205,7 +205,7 @@ def _fmi_sim():
     return str(local) if local.is_file() else shutil.which("fmi-sim")
 
 
-@pytest.mark.skipif(_fmi_sim() is None, reason="fmi-sim (crates.io) not installed: scripts/setup.sh builds it when cargo is present")
+@pytest.mark.skipif(_fmi_sim() is None, reason="fmi-sim (crates.io) not installed: scripts/setup_test.sh builds it when cargo is present")
 @pytest.mark.parametrize("name", FMU_NAMES)
 def test_runs_in_fmi_sim_like_in_fmpy(name, tmp_path):
     """A second importer (fmi-sim, Rust) on the default experiment gives FMPy's results."""

@@ -219,7 +219,7 @@ FMI_SIM_START = {"BusKinematics": {"testSteerAmp": 0.2}, "BusDynamics": {"testSt
                  "ArticulationDamper": {"LambdaDot": 0.2, "pct": 20.0, "tauP": 0.05}}
 
 
-@pytest.mark.skipif(_fmi_sim() is None, reason="fmi-sim (crates.io) not installed: scripts/setup.sh builds it when cargo is present")
+@pytest.mark.skipif(_fmi_sim() is None, reason="fmi-sim (crates.io) not installed: scripts/setup_test.sh builds it when cargo is present")
 @pytest.mark.parametrize("name", PLANTS)
 def test_model_exchange_in_fmi_sim(name, tmp_path):
     """A second importer (fmi-sim, Rust) runs the Model Exchange interface with

@@ -183,7 +183,7 @@ def _chromium():
 def test_screenshot_with_headless_chromium(site, page, tmp_path):
     exe = _chromium()
     if exe is None:
-        pytest.skip("chromium not installed (scripts/setup.sh installs Debian's chromium)")
+        pytest.skip("chromium not installed (scripts/setup_test.sh installs Debian's chromium)")
     root, _, _ = site
     shot = tmp_path / "shot.png"
     cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -13,8 +13,8 @@ Debian's source package, build-win64/win64/<Name>.dll, packed into binaries/win6
 - a Windows resource location (file:///Z:/...) and a Windows absolute path reach
   the model as Windows paths (RoadFollowDriver's CSV road under Wine).
 
-Skipped with the reason where the win64 build or Wine is missing (scripts/setup.sh
-installs both and builds it).
+Skipped with the reason where the win64 build or Wine is missing (scripts/setup_test.sh
+installs both and builds it: ./test.sh runs it).
 """
 import os
 import re
@@ -50,7 +50,7 @@ def _dll(name):
 
 def _need_dll(name):
     if not _dll(name).is_file():
-        pytest.skip(f"no win64 build ({_dll(name)} missing): run scripts/build_win64.sh")
+        pytest.skip(f"no win64 build ({_dll(name)} missing): run scripts/setup.sh --all-platforms")
 
 
 def _wine():
@@ -58,7 +58,7 @@ def _wine():
     if not exe and os.access("/usr/lib/wine/wine64", os.X_OK):   # Debian's wine64 package
         exe = "/usr/lib/wine/wine64"
     if not exe:
-        pytest.skip("Wine is not installed (apt package wine64; scripts/setup.sh installs it)")
+        pytest.skip("Wine is not installed (apt package wine64; scripts/setup_test.sh installs it)")
     return exe
 
 

@@ -2,17 +2,21 @@
 
   artibus run BENCH [options]          run an SSP bench (a name from `artibus list`, or an .ssp);
                                        --variant NAME selects one of its parameter-set variants
-  artibus bode BENCH --input C.V --measure C.V  gain and phase by sine tests through the co-simulation
-  artibus calibrate                    the damping controller's gains (seed 001, 5.2.2)
   artibus list [--parameters]          the benches and FMUs, one line each (--parameters: every bound value)
   artibus info BENCH|FMU               a bench's components and connections, or an FMU's variables
   artibus simulate FMU [options]       run one FMU alone, write CSV
-  artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp; --portable [--variant V]:
-                                       a pack other SSP masters run as we do (fmus/<BENCH>[_V].portable.ssp)
+  artibus check SSV...                 a vehicle parameter set's consistency (axles, hinges, loads, inertia)
+  artibus sweep BENCH --grid C.V=A,B   many cases on Dask (grid, --variant axis, --design CSV/YAML), resumable
+  artibus plot RESULTS.csv SIGNAL...   a PNG of signals of a results file, a panel per unit
+  artibus bode BENCH --input C.V --measure C.V  gain and phase by sine tests through the co-simulation
+  artibus calibrate [-o FILE.ssv]      the damping controller's gains (seed 001, 5.2.2)
   artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
+  artibus can plot LOG [--signal S]    a CAN log's frame timing and decoded signals as a PNG
   artibus replay LOG --bench BENCH     a recorded log (.csv, .blf, .asc) drives a bench; model against measured
-  artibus sweep BENCH --grid C.V=A,B  many cases on Dask (grid, --variant axis, --design CSV/YAML), resumable
-  artibus demo [--report DIR]          the main job (for now): the Urbino 18 pusher on an S-curve
+  artibus pack [BENCH...]              pack ssp/benches/<BENCH> into fmus/<BENCH>.ssp (--all-platforms:
+                                       build every platform's binaries into the FMUs first); --portable
+                                       [--variant V]: a pack other SSP masters run as we do
+  artibus demo [--report DIR]          the kinematic demo: the Urbino 18 pusher on an S-curve
 
 Throughout: -o/--output FILE is the results file a command writes (.csv, or
 .mat for run), --report DIR a directory of plots and HTML. Files are written
@@ -152,6 +156,13 @@ def cmd_list(args):
 
 def cmd_pack(args):
     from artibus.bench import ssp
+    if args.all_platforms:
+        import subprocess
+        from artibus.base import ROOT
+        # the cross builds and the FMUs with every platform's binaries (scripts/setup.sh)
+        r = subprocess.run(["bash", str(ROOT / "scripts" / "setup.sh"), "--all-platforms"])
+        if r.returncode:
+            raise ArtibusError(f"scripts/setup.sh --all-platforms failed (exit {r.returncode})")
     if not args.portable:
         if args.variant or args.output:
             raise ArtibusError("--variant and -o are for a portable pack (--portable)")
@@ -241,6 +252,29 @@ def cmd_can_decode(args):
     return 0
 
 
+def cmd_plot(args):
+    """artibus plot RESULTS.csv SIGNAL...: a PNG, a panel per unit (artibus.report.quick)."""
+    from artibus.report import quick
+    if args.output:
+        check_output(args.output, "-o")
+    png, chosen = quick.results_plot(args.results, args.signal, args.output)
+    print(f"{png}: {len(chosen)} signals ({', '.join(chosen)})")
+    return 0
+
+
+def cmd_can_plot(args):
+    """artibus can plot LOG [--signal MSG.SIG]...: frame timing and decoded signals as a PNG."""
+    from artibus.report import quick
+    if args.output:
+        check_output(args.output, "-o")
+    png, chosen, known = quick.can_plot(args.log, args.signal or (), dbc=args.dbc, out=args.output)
+    print(f"{png}: the frames' timing" + (f" and {', '.join(chosen)}" if chosen else ""))
+    if not chosen:
+        print(f"(--signal NAME adds a decoded signal; this log has {len(known)}: {', '.join(known[:8])}"
+              + (", ..." if len(known) > 8 else "") + ")")
+    return 0
+
+
 def cmd_bode(args):
     import numpy as np
     from artibus.bench import ssp
@@ -252,7 +286,9 @@ def cmd_bode(args):
                 f"--measure {args.output} names the output to measure)"
                 if args.output and not args.output.endswith(".csv") else "")
         raise ArtibusError("bode: give the output to measure, --measure COMP.VAR" + hint)
-    out = _check_output(Path(args.output or "bode.csv"))
+    if not args.output and not args.plot:
+        raise ArtibusError("bode: say where the results go: -o FILE.csv (the table) and/or --plot FILE.png")
+    out = _check_output(Path(args.output)) if args.output else None
     if args.plot:
         check_output(args.plot, "--plot")
     overrides = {**ssp.variant_overrides(args.bench, args.variant), **parse_set(args.set)}
@@ -262,8 +298,9 @@ def cmd_bode(args):
                                    step=args.step)
     units = bode.output_units(args.bench, list(args.measure) + [args.input])
     rows = bode.csv_rows(freqs, resp, args.measure, args.input, units)
-    write_text(out, "\n".join(rows) + "\n")
-    print(f"{out}: {len(freqs)} frequencies")
+    if out is not None:
+        write_text(out, "\n".join(rows) + "\n")
+        print(f"{out}: {len(freqs)} frequencies")
     for line in rows:
         print("  " + line)
     if args.plot:
@@ -275,18 +312,24 @@ def cmd_bode(args):
 
 def cmd_calibrate(args):
     """seed 001, 5.2.2: each damping option's gain for a peak damping of 13.5 %
-    on the 200 m / 100 km/h / rear-friction-0.2 lane change."""
+    on the 200 m / 100 km/h / rear-friction-0.2 lane change; printed, and
+    written as a parameter set only to -o FILE (the benches' own gains:
+    -o ssp/parameters/DampingGains.ssv)."""
     from artibus.study import damping
+    out = check_output(args.output, "-o") if args.output else None
+    if out is not None and Path(out).suffix != ".ssv":
+        raise ArtibusError(f"-o {out}: the gains are written as a parameter set, FILE.ssv")
     gains, reached = damping.calibrate(target=args.target)
     print(f"\n{'gain':6s} {'artibus':>10s} {'thesis':>8s} {'ratio':>7s}  peak damping on lc200_100")
     for name, value in gains.items():
         thesis = damping.THESIS_GAINS.get(name)
         ratio = f"{value / thesis:7.3f}" if thesis else "      -"
         print(f"{name:6s} {value:10.4g} {thesis if thesis else 'n/a':>8} {ratio}  {reached.get(name, float('nan')):.3f} %")
-    if args.dry_run:
+    if out is None or args.dry_run:
+        print("\n(written nowhere: -o FILE.ssv writes them; -o ssp/parameters/DampingGains.ssv is the benches' set)")
         return 0
     notes = "Made by `artibus calibrate`; " + ", ".join(f"{n}: {reached[n]:.3f} %" for n in reached) + "."
-    print(damping.write_gains(gains, notes=notes))
+    print(f"gains written to {damping.write_gains(gains, path=out, notes=notes)}")
     return 0
 
 
@@ -339,7 +382,8 @@ def cmd_demo(args):
         csv = Path(args.output)
     _check_output(csv)
     png, bmax = demo.s_curve(out, csv)
-    print(f"demo: {csv}\ndemo: {png}\nmax |beta[1]| = {math.degrees(bmax):.1f} deg "
+    html_page = demo.page(out, csv, [png, demo.signals_png(out)], bmax)
+    print(f"demo: {csv}\ndemo: {png}\ndemo: {html_page}\nmax |beta[1]| = {math.degrees(bmax):.1f} deg "
           f"(Urbino 18 mechanical limit 54 deg, seed 003 Table I)")
     return 0
 
@@ -409,13 +453,26 @@ def build_parser():
                         "silent:NODE, busoff:NODE[:recover[=DELAY_S]]; each may end in @T0 or @T0-T1 (s). "
                         "With --report, the fault-free run's KPIs are printed and written beside the faulty ones")
     s.set_defaults(func=cmd_run)
-    s = sub.add_parser("can", help="CAN tools: decode a log")
+    s = sub.add_parser("plot", help="a PNG of signals of a results CSV, a panel per unit")
+    s.add_argument("results", metavar="RESULTS.csv", help="a results file of artibus run or simulate")
+    s.add_argument("signal", nargs="+", metavar="SIGNAL",
+                   help="a column name, e.g. Bus.artAngle[1]; '*' matches any text (Bus.artAngle[*])")
+    s.add_argument("-o", "--output", metavar="FILE.png", help="default: RESULTS with .png")
+    s.set_defaults(func=cmd_plot)
+    s = sub.add_parser("can", help="CAN tools: decode or plot a log")
     can_sub = s.add_subparsers(dest="can_verb", required=True)
     c = can_sub.add_parser("decode", help="print or export (CSV) the signals of a .blf/.asc log")
     c.add_argument("log", help="a .blf or .asc file")
     c.add_argument("--dbc", help="default: ssp/can/Bus36m.dbc")
     c.add_argument("--csv", metavar="OUT", help="write CSV instead of printing")
     c.set_defaults(func=cmd_can_decode)
+    c = can_sub.add_parser("plot", help="a .blf/.asc log's frame timing and decoded signals as a PNG")
+    c.add_argument("log", help="a .blf or .asc file")
+    c.add_argument("--signal", action="append", metavar="MESSAGE.SIGNAL",
+                   help="a decoded signal to plot (repeatable; SIGNAL alone where unique; '*' matches any text)")
+    c.add_argument("--dbc", help="default: ssp/can/Bus36m.dbc")
+    c.add_argument("-o", "--output", metavar="FILE.png", help="default: LOG with .png")
+    c.set_defaults(func=cmd_can_plot)
     s = sub.add_parser("replay", help="drive a bench from a recorded log, compare with measured responses")
     s.add_argument("log", help="a .csv (time_s and signal columns) or a CAN log (.blf, .asc)")
     s.add_argument("--bench", required=True,
@@ -446,13 +503,16 @@ def build_parser():
     s.add_argument("--step", type=_seconds)
     s.add_argument("--variant", action="append", metavar="NAME", help="a variant of the bench (repeatable)")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
-    s.add_argument("-o", "--output", "--output-file", metavar="FILE", help="results CSV (default bode.csv)")
-    s.add_argument("--plot", help="PNG with gain and phase")
+    s.add_argument("-o", "--output", "--output-file", metavar="FILE",
+                   help="results CSV (gain, phase in deg); written only when given")
+    s.add_argument("--plot", metavar="FILE.png", help="PNG with gain and phase")
     s.set_defaults(func=cmd_bode)
-    s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), "
-                                         "written to ssp/parameters/DampingGains.ssv")
+    s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), printed; "
+                                         "-o FILE.ssv writes them")
     s.add_argument("--target", type=float, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
-    s.add_argument("--dry-run", action="store_true", help="print the gains, write nothing")
+    s.add_argument("-o", "--output", metavar="FILE.ssv",
+                   help="write the gains as a parameter set (the benches': ssp/parameters/DampingGains.ssv)")
+    s.add_argument("--dry-run", action="store_true", help="print the gains, write nothing (also without -o)")
     s.set_defaults(func=cmd_calibrate)
     s = sub.add_parser("list", help="the benches and FMUs, one line each")
     s.add_argument("--parameters", action="store_true", help="every bench's bound parameter values too")
@@ -465,6 +525,9 @@ def build_parser():
     s.add_argument("--variant", action="append", metavar="NAME",
                    help="with --portable: a variant of the bench resolved into the pack (repeatable, later ones win)")
     s.add_argument("-o", "--output", metavar="FILE", help="with --portable and one BENCH: the pack's path")
+    s.add_argument("--all-platforms", action="store_true",
+                   help="first build every platform's binaries (win64 with mingw-w64) into the FMUs "
+                        "(scripts/setup.sh --all-platforms, a few minutes the first time)")
     s.set_defaults(func=cmd_pack)
     s = sub.add_parser("info", help="show an FMU's variables or a bench's structure")
     s.add_argument("fmu", metavar="BENCH|FMU", help="a bench name, the name of a built FMU, or the path of an .ssp or .fmu")
@@ -485,7 +548,7 @@ def build_parser():
                                           "or a bench (a name or an .ssp)")
     s.add_argument("--model", choices=["BusDynamics", "BusKinematics"], help="default: from the names in the set")
     s.set_defaults(func=cmd_check)
-    s = sub.add_parser("demo", help="the main job: a demo run with results and a plot")
+    s = sub.add_parser("demo", help="the kinematic demo (Urbino 18 on an S-curve): results, plots and a page")
     s.add_argument("--report", metavar="DIR", default="out", help="directory of results and plots (default: out)")
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: DIR/BusKinematics_Urbino18_SCurve.csv)")
     s.set_defaults(func=cmd_demo)

@@ -89,11 +89,15 @@ LICENSE_FILES = {
     "artibus": ("LICENSE", "artibus-BSD-2-Clause.txt"),
     "SUNDIALS": ("licenses/SUNDIALS-BSD-3-Clause.txt", "SUNDIALS-BSD-3-Clause.txt"),
     "Eigen": ("licenses/Eigen-MPL-2.0.txt", "Eigen-MPL-2.0.txt"),
+    "GCC": ("licenses/GCC-runtime-library-exception-3.1.txt", "GCC-runtime-library-exception-3.1.txt"),
+    "mingw-w64": ("licenses/mingw-w64-runtime.txt", "mingw-w64-runtime.txt"),
 }
 LICENSE_TEXT = {
     "artibus": "BSD-2-Clause",
     "SUNDIALS": "SUNDIALS (BSD-3-Clause, linked statically)",
     "Eigen": "Eigen (MPL-2.0, header-only)",
+    "GCC": "GCC's runtime libraries (GPL-3.0 with the GCC Runtime Library Exception 3.1)",
+    "mingw-w64": "the mingw-w64 runtime (ZPL-2.1, MIT, BSD-3-Clause; win64)",
 }
 
 #: the platforms artibus builds or could build, by their FMI 3.0 platform tuple (FMI 3.0,
@@ -184,7 +188,7 @@ def needs_beyond_libc(files, system):
         if os.path.basename(f) == "ode.h":
             why.append("it integrates with SUNDIALS (ode.h)")
         elif not f.endswith((".c", ".h")):
-            why.append(f"{f} is not C")
+            why.append(f"{os.path.basename(f)} is not C")
     why += [f"it includes <{inc}>" for inc in sorted(system) if "/" in inc or not inc.endswith(".h")]
     return "; ".join(why) or None
 
@@ -321,6 +325,7 @@ def inline_md(text):
             continue
         s = html.escape(part, quote=False)
         s = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", s)
+        s = re.sub(r"(?<![\w*])\*([^*\s][^*]*?)\*(?![\w*])", r"<em>\1</em>", s)
         s = re.sub(r"\[([^\]]+)\]\(([^)\s]+)\)", r'<a href="\2">\1</a>', s)
         out.append(s)
     return "".join(out)
@@ -328,7 +333,7 @@ def inline_md(text):
 
 def markdown(text):
     """A small subset of Markdown: #-headings (shifted one level down), paragraphs, - and 1.
-    lists, ``` code blocks, inline code, bold, links."""
+    lists, ``` code blocks, | tables |, inline code, bold, italics, links."""
     out, para, lst = [], [], None
     lines = text.splitlines()
 
@@ -356,6 +361,19 @@ def markdown(text):
             out.append("<pre><code>" + html.escape("\n".join(code)) + "</code></pre>")
         elif not s:
             flush()
+        elif s.startswith("|"):
+            flush()
+            rows = []
+            while i < len(lines) and lines[i].strip().startswith("|"):
+                cells = [c.strip() for c in lines[i].strip().strip("|").split("|")]
+                if not all(re.fullmatch(r":?-+:?", c) for c in cells):
+                    rows.append(cells)
+                i += 1
+            i -= 1
+            head, body = rows[0], rows[1:]
+            out.append("<table><tr>" + "".join(f"<th>{inline_md(c)}</th>" for c in head) + "</tr>"
+                       + "".join("<tr>" + "".join(f"<td>{inline_md(c)}</td>" for c in r) + "</tr>" for r in body)
+                       + "</table>")
         elif m := re.match(r"(#{1,5})\s+(.*)", s):
             flush()
             level = min(len(m.group(1)) + 1, 6)
@@ -411,8 +429,20 @@ def fmt_display(value, unit, md_units):
 
 
 def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=(),
-                  fmi_version=None):
+                  fmi_version=None, papers=None):
+    """documentation/index.html: the metadata, the model's text (src/models/<Name>/README.md),
+    the references in full, the licences, every variable; written for a reader of the FMU
+    alone (for_outside: the papers by name, no repository paths)."""
     e = html.escape
+    papers = papers or {}
+    cited = {}
+
+    def outside(text):
+        return for_outside(text or "", papers, cited)
+
+    # the model's text first: its references are numbered before the variables'
+    readme_html = markdown(outside(readme)) if readme else "<p>(no model text)</p>"
+    description = outside(md.get("description", ""))
     units = {}
     for u in md.iter("Unit"):
         for d in u.findall("DisplayUnit"):
@@ -446,7 +476,12 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
                 "SUNDIALS": "SUNDIALS CVODE/ARKODE, linked statically into " + " and ".join(with_sundials)
                             + " (BSD-3-Clause)",
                 "Eigen": "Eigen 3, header-only, compiled into the binaries (MPL-2.0; its source: "
-                         "https://gitlab.com/libeigen/eigen)"}[lib]
+                         "https://gitlab.com/libeigen/eigen)",
+                "GCC": "GCC's runtime libraries libgcc and libstdc++ where linked statically "
+                       "(GPL-3.0 or later with the GCC Runtime Library Exception 3.1, which lets the "
+                       "combination be conveyed under the terms of the FMU's licences)",
+                "mingw-w64": "the mingw-w64 runtime (C runtime start-up code, winpthreads) linked "
+                             "statically into binaries/win64 (ZPL-2.1, MIT, BSD-3-Clause; public domain parts)"}[lib]
         lic_items.append(f'<li><a href="licenses/{fname}">{fname}</a>: {e(what)}</li>')
 
     sections = []
@@ -471,7 +506,7 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
                 f'<td class="num">{e(t.get("min", ""))}{fmt_display(t.get("min"), unit, dmap)}</td>',
                 f'<td class="num">{e(t.get("max", ""))}{fmt_display(t.get("max"), unit, dmap)}</td>',
                 f"<td>{e(sv.get('variability', 'continuous'))}</td>",
-                f"<td>{e(sv.get('description', ''))}</td>",
+                f"<td>{e(outside(sv.get('description', '')))}</td>",
             ]
             body.append("<tr>" + "".join(cells) + "</tr>")
         sections.append(
@@ -480,26 +515,108 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
             "<th>min</th><th>max</th><th>variability</th><th>description</th></tr>\n"
             + "\n".join(body) + "</table>")
 
-    readme_html = markdown(readme) if readme else "<p>(no model text)</p>"
     return f"""<!DOCTYPE html>
 <html lang="en">
 <head><meta charset="utf-8"><title>{e(name)} {e(version)}</title>
 <style>{CSS}</style></head>
 <body>
 <h1><img src="../model.png" alt="">{e(name)}</h1>
-<p>{e(md.get("description", ""))}</p>
+<p>{e(description)}</p>
 <table class="meta">{meta}</table>
 {readme_html}
+{references(papers, cited)}
 <h2>Licences</h2>
 <p>What this FMU contains and under which licence (the texts are in <code>documentation/licenses/</code>):</p>
 <ul>{"".join(lic_items)}</ul>
 {chr(10).join(sections)}
-<p>Generated by {e(md.get("generationTool") or "artibus")} from modelDescription/{e(name)}.xml
-and src/models/{e(name)}/README.md. Display units: value in display unit = factor &times; value + offset,
+<p>Generated by {e(md.get("generationTool") or "artibus")} from the model description and the
+model's text. Display units: value in display unit = factor &times; value + offset,
 as declared in <code>&lt;UnitDefinitions&gt;</code>.</p>
 </body>
 </html>
 """
+
+
+# ---------------------------------------------------------------------------
+# the documentation for someone outside the repository: the papers cited in full,
+# no repository paths
+
+
+def load_papers(root):
+    """src/models/papers.json: {"000": {short, authors, title, venue, year, doi, ...}}"""
+    import json
+    with open(os.path.join(root, "src", "models", "papers.json"), encoding="utf-8") as f:
+        return {k: v for k, v in json.load(f).items() if not k.startswith("_")}
+
+
+SEED_RE = re.compile(r"\b[Ss]eeds? (\d{3})\b")
+#: repository paths as the model texts and descriptions write them -> what a reader
+#: outside the repository has (the names of artibus's benches and parameter sets)
+PATH_RULES = (
+    (re.compile(r"\.venv/bin/(\w+)"), r"\1"),
+    (re.compile(r"\bfmus/(\w+\.fmu)"), r"\1"),
+    (re.compile(r"`ssp/parameters/(\w+\.ssv)`"), r"artibus's parameter set `\1`"),
+    (re.compile(r"`ssp/benches/(\w+)`"), r"artibus's bench `\1`"),
+    (re.compile(r"`ssp/can/(\w+\.dbc)`"), r"artibus's CAN database `\1`"),
+    (re.compile(r"\bssp/parameters/(\w+\.ssv)"), r"\1 (an artibus parameter set)"),
+    (re.compile(r"\bssp/benches/(\w+)"), r"\1"),
+    (re.compile(r"\bssp/can/(\w+\.dbc)"), r"\1"),
+)
+#: what no FMU's documentation may contain (tests/test_fmu_documentation.py checks the same)
+REPO_PATH_RE = re.compile(r"(?<![\w/.])(?:src|ssp|tests|scripts|docs|modelDescription|benchmarks|build[\w-]*|fmus|\.venv)/")
+
+
+def for_outside(text, papers, cited):
+    """``text`` (Markdown or plain) as a reader of the FMU alone reads it: "seed NNN" as a
+    numbered reference "ref. n" (``cited``: {paper: n}, numbered in the order of first use; the
+    references section gives each in full), repository paths as the names artibus's
+    benches and parameter sets go by."""
+    def seed(m):
+        key = m.group(1)
+        if key not in papers:
+            return m.group(0)
+        n = cited.setdefault(key, len(cited) + 1)
+        return f"ref. {n}"
+    text = SEED_RE.sub(seed, text)
+    for rx, repl in PATH_RULES:
+        text = rx.sub(repl, text)
+    return text
+
+
+def citation(p):
+    """One paper's full entry, HTML: authors, title, venue, year, DOI, as far as known."""
+    e = html.escape
+    if p.get("authors"):
+        parts = [e(p["authors"]), f"<em>{e(p['title'])}</em>", e(p.get("venue", ""))]
+    else:                                   # a text known by where it was written, not its title
+        parts = [e(p.get("venue", "")), "on " + e(p.get("subject", ""))]
+    if p.get("year"):
+        parts.append(e(p["year"]))
+    out = ", ".join(x for x in parts if x) + "."
+    if p.get("after"):
+        out += f" {e(p['after'][0].upper() + p['after'][1:])}."
+    if p.get("doi"):
+        out += f' DOI: <a href="https://doi.org/{e(p["doi"])}">{e(p["doi"])}</a>.'
+    if p.get("what"):
+        out += f" About {e(p['what'])}."
+    return out
+
+
+def references(papers, cited):
+    """The references section: each cited paper in full, in the order of its number."""
+    if not cited:
+        return ""
+    items = "".join(f'<li id="ref-{k}" value="{n}">{citation(papers[k])}</li>'
+                    for k, n in sorted(cited.items(), key=lambda kv: kv[1]))
+    return f'<h2 id="references">References</h2>\n<ol>{items}</ol>'
+
+
+def stale_input(dll, inputs):
+    """The newest of ``inputs`` (the files a binary is built from) that is newer than
+    ``dll``, or None: a DLL older than its sources is not this build's and is not packed."""
+    t = os.path.getmtime(dll)
+    newer = [f for f in inputs if os.path.isfile(f) and os.path.getmtime(f) > t]
+    return max(newer, key=os.path.getmtime) if newer else None
 
 
 # ---------------------------------------------------------------------------
@@ -565,10 +682,11 @@ def binaries_folder(platform, fmi_version="2"):
     return FMI2_FOLDERS.get(platform, platform) if fmi_version == "2" else platform
 
 
-def add_binaries(tree, name, platform_dirs, fmi_version="2", older_than=None):
+def add_binaries(tree, name, platform_dirs, fmi_version="2", inputs=(), root=""):
     """binaries/<folder>/<name>.<ext> of each cross-built platform whose folder (platform_dirs:
     {tuple: dir}, empty dirs skipped) holds <name>.<ext>; a platform without it gets no folder
-    (an old one is removed). A binary older than the file older_than is warned about. Returns
+    (an old one is removed). A binary older than any of ``inputs`` (the files it is built
+    from) is another build's: left out, with a warning naming both (stale_input). Returns
     the binaries copied."""
     copied = []
     for platform, src_dir in sorted(platform_dirs.items()):
@@ -579,8 +697,12 @@ def add_binaries(tree, name, platform_dirs, fmi_version="2", older_than=None):
         src = os.path.join(src_dir, fname) if src_dir else ""
         if not src or not os.path.isfile(src):
             continue
-        if older_than and os.path.getmtime(src) < os.path.getmtime(older_than):
-            print(f"package_fmu.py: warning: {src} is older than {older_than}", file=sys.stderr)
+        newer = stale_input(src, inputs)
+        if newer:
+            print(f"package_fmu.py: warning: {name}: binaries/{binaries_folder(platform, fmi_version)} left out: "
+                  f"{src} is older than {os.path.relpath(newer, root or '.')} (scripts/setup.sh "
+                  "--all-platforms rebuilds it)", file=sys.stderr)
+            continue
         copy(src, os.path.join(dst, fname))
         copied.append(src)
     return copied
@@ -652,10 +774,13 @@ def main(argv=None):
             sys.exit(f"package_fmu.py: --platform-dir {item!r}: not TUPLE=DIR with TUPLE one of "
                      f"{', '.join(p for p in SHARED_LIBRARY_EXT if p != a.platform)}")
         platform_dirs[platform] = d or platform_dirs.get(platform, "")
-    binaries = [own] + add_binaries(tree, name, platform_dirs, a.fmi_version, older_than=a.xml)
-    platforms = sorted(d for d in os.listdir(os.path.join(tree, "binaries")))
-
     files, system = closure(root, name, a.sources, a.fmi_version)
+    # a cross build's binary older than what it is built from is another build's: never
+    # packed silently beside this build's own binary
+    inputs = [os.path.join(root, f) for f in files] + [a.xml] + [
+        os.path.join(root, "src", "fmi", f) for f in ("ode.c", "ode.h", "gen_vars.py")]
+    binaries = [own] + add_binaries(tree, name, platform_dirs, a.fmi_version, inputs, root)
+    platforms = sorted(d for d in os.listdir(os.path.join(tree, "binaries")))
     libraries = ["artibus"]
     with_sundials = [os.path.basename(b) for b in binaries
                      if any(m in open(b, "rb").read() for m in SUNDIALS_MARKERS)]
@@ -663,6 +788,9 @@ def main(argv=None):
         libraries.append("SUNDIALS")
     if uses_eigen(root, files):
         libraries.append("Eigen")
+    libraries.append("GCC")
+    if "win64" in platforms:
+        libraries.append("mingw-w64")
     why_not = needs_beyond_libc(files, system)
     if a.fmi_version == "3":
         why_not = ("the FMI 3.0 build ships binaries only for now: its sources/buildDescription.xml "
@@ -714,7 +842,8 @@ def main(argv=None):
     readme_path = os.path.join(model_dir, "README.md")
     readme = open(readme_path, encoding="utf-8").read() if os.path.isfile(readme_path) else ""
     page = documentation(md, name, readme, libraries, platforms, c_files, version, why_not, with_sundials,
-                         fmi_version="3.0" if a.fmi_version == "3" else None)
+                         fmi_version="3.0" if a.fmi_version == "3" else None,
+                         papers=load_papers(root))
     with open(os.path.join(tree, "documentation", "index.html"), "w", encoding="utf-8") as f:
         f.write(page)
 

@@ -10,21 +10,25 @@ from artibus.report.plots import colours, plt
 
 
 def animation_writer():
-    """(writer class, suffix): Pillow's GIF writer, else ffmpeg's MP4, else (None, None)."""
+    """(writer class, suffix): ffmpeg's MP4 through matplotlib (where ffmpeg is installed:
+    small files, full colour), else Pillow's GIF, else (None, None)."""
     from matplotlib import animation
+    if animation.writers.is_available("ffmpeg"):
+        return animation.FFMpegWriter, ".mp4"
     try:
         import PIL  # noqa: F401
         return animation.PillowWriter, ".gif"
     except ImportError:
-        pass
-    if animation.writers.is_available("ffmpeg"):
-        return animation.FFMpegWriter, ".mp4"
-    return None, None
+        return None, None
 
 
-def animate(path, t, outlines=None, traces=None, links=None, road=None, title="", frames=100, dpi=50, fps=12):
-    """The bird's-eye view as a GIF (Pillow) or, without Pillow, an MP4
-    (matplotlib's FFMpegWriter): ``frames`` instants evenly over ``t``;
+#: the animation's size: 8 x 5.5 in at 100 dpi, 800 x 550 px (title, legend and clock readable)
+FIGSIZE, DPI = (8.0, 5.5), 100
+
+
+def animate(path, t, outlines=None, traces=None, links=None, road=None, title="", frames=100, dpi=DPI, fps=12):
+    """The bird's-eye view, 800 px wide, as an MP4 (matplotlib's FFMpegWriter, where
+    ffmpeg is installed) or a GIF (Pillow): ``frames`` instants evenly over ``t``;
     outlines [time, corners, 2] (groups of 4 per module) and links [time,
     points, 2] (a polyline per instant, e.g. the axles of a kinematic model)
     move, traces {label: (x, y)} grow. The whole manoeuvre in view when it is
@@ -54,7 +58,7 @@ def animate(path, t, outlines=None, traces=None, links=None, road=None, title=""
     allx, ally = allx[np.isfinite(allx)], ally[np.isfinite(ally)]
     w, h = np.ptp(allx), np.ptp(ally)
     follow = pts is not None and not (0.3 <= (h / w if w > 0 else 1.0) <= 3.3)
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=dpi)
+    fig, ax = plt.subplots(figsize=FIGSIZE, dpi=dpi)
     scenery = []        # drawn with the moving parts in a window that follows
     if road is not None:
         scenery += ax.plot(road[0], road[1], color="0.8", lw=5, solid_capstyle="round", zorder=0, animated=follow)
@@ -76,9 +80,9 @@ def animate(path, t, outlines=None, traces=None, links=None, road=None, title=""
     if lk is not None:
         link_line = ax.plot([], [], "k.-", lw=1.5, ms=6, zorder=4, animated=True)[0]
         moving.append(link_line)
-    clock = ax.text(0.01, 0.98, "", transform=ax.transAxes, va="top", fontsize=9, animated=True)
+    clock = ax.text(0.01, 0.98, "", transform=ax.transAxes, va="top", fontsize=11, animated=True)
     moving.append(clock)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(title, fontsize=11)
     m = 0.04 * max(w, h, 1.0)
     if follow:
         size = max(np.ptp(pts[0, :, 0]), np.ptp(pts[0, :, 1]), 5.0)
@@ -96,7 +100,7 @@ def animate(path, t, outlines=None, traces=None, links=None, road=None, title=""
         ax.grid(True, alpha=0.3)
         ax.set_aspect("equal", adjustable="box")
     if traces:
-        ax.legend(handles=list(lines.values()), loc="lower right", fontsize=7, ncol=2)
+        ax.legend(handles=list(lines.values()), loc="lower right", fontsize=9, ncol=2)
     fig.tight_layout()
     canvas = fig.canvas
     # following: the limits' ratio is the axes box's, so x and y are at equal scale

@@ -1,10 +1,14 @@
-"""``artibus demo``, the main job (for now): the Urbino 18 Electric (seed 003,
-Table I) pushed at 3 m/s through an S-curve (25 deg left, 25 deg right,
-straight), BusKinematics alone; its results, bird's-eye view and signals."""
+"""``artibus demo``: the Urbino 18 Electric (seed 003, Table I) pushed at 3 m/s
+through an S-curve (25 deg left, 25 deg right, straight), BusKinematics alone;
+its results, bird's-eye view and signals, and a page showing them (``page``),
+which the index of ``artibus run --all --report DIR`` links as DIR/demo/."""
+import html
 import math
+from pathlib import Path
 
 import numpy as np
 
+from artibus import files
 from artibus.base import fmu_path
 from artibus.bench.parameters import read_parameters
 from artibus.fmu import simulate
@@ -36,3 +40,38 @@ def s_curve(out, csv):
             [("steering gammaF [deg]", {"gammaF": np.degrees([gammaF(t) for t in result.time])}),
              ("joint angle [deg]", {"beta[1]": np.degrees(result["beta[1]"])})], title="S-curve")
     return png, max(abs(result["beta[1]"]))
+
+
+def signals_png(out):
+    return Path(out) / "BusKinematics_Urbino18_SCurve_signals.png"
+
+
+MARK = '<meta name="generator" content="artibus demo">'
+TITLE = "The kinematic demo: Urbino 18 pusher on an S-curve"
+
+
+def page(out, csv, pngs, bmax):
+    """OUT/index.html showing the demo's plots and linking its results (OUT/demo.html
+    where OUT already holds another page's index.html, e.g. a run's index). Returns its path."""
+    out = Path(out)
+    target = out / "index.html"
+    if target.is_file() and MARK not in target.read_text(encoding="utf-8", errors="replace"):
+        target = out / "demo.html"
+    e = html.escape
+    rel = lambda p: e(str(Path(p).resolve().relative_to(out.resolve())) if Path(p).resolve().is_relative_to(
+        out.resolve()) else str(Path(p).resolve()))
+    figs = "".join(f'<figure><img src="{rel(p)}" alt="{e(Path(p).stem)}"></figure>' for p in pngs)
+    text = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">{MARK}<title>{e(TITLE)}</title>
+<style>body {{ font-family: sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em; }}
+img {{ max-width: 100%; }}</style></head><body>
+<p><a href="../index.html">all benches</a></p>
+<h1>{e(TITLE)}</h1>
+<p>BusKinematics alone (Michałek, Patkowski and Gawron's modular kinematic model, seed 003) with the
+Urbino 18 Electric's data (Table I), pushed at 3 m/s: steering 25 deg left, 25 deg right, then straight.
+Largest joint angle |beta[1]| = {math.degrees(bmax):.1f} deg (the Urbino 18's mechanical limit: 54 deg).
+Results: <a href="{rel(csv)}">{e(Path(csv).name)}</a>.</p>
+{figs}
+</body></html>
+"""
+    return files.write_text(target, text)

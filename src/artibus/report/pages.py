@@ -277,7 +277,9 @@ bound for the configuration that ran; "calibrated": the value we calibrated to t
     write_kpi_csv(out_dir / "kpis.csv", kpis)
     pngs = [Path(i) for i, _ in images if Path(i).suffix == ".png"]
     if pngs:
-        src = pngs[0] if pngs[0].is_absolute() else out_dir / pngs[0]
+        # an image is named as given (relative to the working directory, as write_report
+        # names them) or relative to the page's folder
+        src = pngs[0] if pngs[0].is_absolute() or pngs[0].is_file() else out_dir / pngs[0]
         if src.is_file():
             thumbnail(src, out_dir / "thumb.png")
     return files.write_text(out_dir / "index.html", page)

@@ -93,6 +93,9 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
         page = comparison.write(Path(report) / "comparison", kept)
         pages = [("comparison/index.html", comparison.TITLE, "unsteered, guided, guided + force minimisation "
                   "and pathMemory side by side")] if page else []
+        from artibus.report import demo
+        if (Path(report) / "demo" / "index.html").is_file():     # `artibus demo --report REPORT/demo`
+            pages.append(("demo/index.html", demo.TITLE, "BusKinematics alone, its results and plots"))
         index = write_index(Path(report), summary, pages)
         n_pass = sum(tally(k)[0] for _, _, k in summary)
         n_fail = sum(tally(k)[1] for _, _, k in summary)

@@ -135,10 +135,10 @@ def output_units(bench, names):
 
 def csv_rows(frequencies, responses, outputs, input, units):
     """The lines of ``artibus bode``'s CSV: a header (each output's gain in its
-    unit per the input's, its phase in rad), then a row per frequency."""
+    unit per the input's, its phase in deg as the plot shows it), then a row per frequency."""
     per = lambda o: f"{units.get(o, '-')} per {units.get(input, '-')}"    # noqa: E731 (gain's unit)
-    rows = ["frequency [Hz]," + ",".join(f"{o} gain [{per(o)}],{o} phase [rad]" for o in outputs)]
+    rows = ["frequency [Hz]," + ",".join(f"{o} gain [{per(o)}],{o} phase [deg]" for o in outputs)]
     for k, f in enumerate(frequencies):
-        rows.append(f"{f:.6g}," + ",".join(f"{responses[o][k].gain:.8g},{responses[o][k].phase:.8g}"
+        rows.append(f"{f:.6g}," + ",".join(f"{responses[o][k].gain:.8g},{math.degrees(responses[o][k].phase):.8g}"
                                            for o in outputs))
     return rows

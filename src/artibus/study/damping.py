@@ -120,7 +120,8 @@ def read_gains(path=GAINS_FILE):
 def write_gains(gains, path=GAINS_FILE, notes=""):
     """DampingGains.ssv, written whole to a temporary file and renamed."""
     path = Path(path)
-    rows = "\n".join(f'    <ssv:Parameter name="{k}"><ssv:Real value="{v!r}"/></ssv:Parameter>'
+    # rounded to 6 significant digits: the bisection's tolerance is 1e-6 in log(K)
+    rows = "\n".join(f'    <ssv:Parameter name="{k}"><ssv:Real value="{float(f"{v:.6g}")!r}"/></ssv:Parameter>'
                      f'  <!-- thesis: {THESIS_GAINS[k] if THESIS_GAINS[k] is not None else "not given"} -->'
                      for k, v in gains.items())
     text = f'''<?xml version="1.0" encoding="UTF-8"?>
@@ -156,7 +157,8 @@ def calibrate(target=TARGET_PCT, case="lc200_100", tol=0.01, log=print):
     reached = {}
     for function in ("option1", "option2", "option3", "revised"):
         name = GAINS[function]
-        k0 = gains.get(name) or THESIS_GAINS[name] or 80.0
+        # from the thesis's gain, not the file's: the same gains whatever the file held
+        k0 = THESIS_GAINS[name] or 80.0
 
         def f(logk):
             return peak_pct(function, {**gains, name: math.exp(logk)}, case) - target

@@ -52,11 +52,37 @@ def rerun_command(manifest, row):
     return " ".join(shlex.quote(p) for p in parts)
 
 
-def study(out, kpi=None, worst=10, largest=True):
+def _has_values(rows, col):
+    return any(r["status"] == STATUS_OK and r.get(col) is not None and math.isfinite(r[col]) for r in rows)
+
+
+def _short_cases(manifest):
+    """Why a KPI may have no value in any case: the cases stop before the bench's own stop
+    time (a KPI that needs the whole manoeuvre, the circle or the lane change, has none then)."""
+    stop = manifest.get("stop_time")
+    if stop is None:
+        return ""
+    try:
+        from artibus.bench import ssp
+        own = ssp.read(ssp.ssp_path(manifest.get("run", manifest["bench"]))).stop_time
+    except Exception:       # the bench moved or cannot be read: say what is known
+        own = None
+    if own is not None and stop >= own:
+        return ""
+    return (f"every case stops at {stop:g} s" + (f", before the bench's own {own:g} s" if own else "")
+            + ": a KPI that needs the whole manoeuvre has no value then (give --stop-time "
+            + (f">= {own:g}" if own else "longer") + " or --kpi one that has values)")
+
+
+def study(out, kpi=None, worst=10, largest=True, log=None):
     """study.png (a KPI over two swept parameters, a panel per value of a
     third; or its distribution for Latin hypercube / Monte Carlo) and
     worst.txt (the cases with the largest KPI, and every failed case, each
-    with the command that re-runs it alone). Returns the files written."""
+    with the command that re-runs it alone). A KPI without a value in any case
+    is said so (with why, where the cases are shorter than the bench) and the
+    plot shows the first KPI that has values instead, or no plot is drawn when
+    none has any: never an empty frame. ``log(line)`` is told that note (the
+    command line prints it). Returns the files written."""
     import pyarrow.parquet as pq
     out = Path(out)
     manifest = json.loads((out / MANIFEST).read_text())
@@ -68,6 +94,18 @@ def study(out, kpi=None, worst=10, largest=True):
              f"{sum(r['status'] == STATUS_FAILED for r in rows)} failed"
              + (f", {sum(r['status'] == STATUS_TERMINATED for r in rows)} ended early by an FMU"
                 if any(r['status'] == STATUS_TERMINATED for r in rows) else "") + f" ({out / TABLE})", ""]
+    n_ok = sum(r["status"] in _RAN for r in rows)
+    if col is not None and n_ok and not _has_values(rows, col):
+        why = _short_cases(manifest)
+        other = next((c for c in kpi_columns(table) if _has_values(rows, c)), None)
+        note = (f"KPI {col!r} has no value in any of the {n_ok} cases" + (f" ({why})" if why else "")
+                + (f"; the study plot shows {other!r} instead" if other else "; no KPI has a value: no study plot"))
+        lines[1:1] = [note, ""]
+        if log is not None:
+            log(note)
+        col = other
+        if col is None and (out / PLOT).exists():
+            (out / PLOT).unlink()     # an earlier run's plot is not this run's
     if col is not None:
         ok = [r for r in rows if r["status"] in _RAN and r.get(col) is not None and math.isfinite(r[col])]
         ok.sort(key=lambda r: r[col], reverse=largest)

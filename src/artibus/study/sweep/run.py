@@ -180,5 +180,5 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
     table = assemble(out, keys, rows)
     res = SweepResult(table, out, len(unique), skipped, failed, wall)
     if plot:
-        study(out, kpi=kpi)
+        study(out, kpi=kpi, log=(lambda line: print(f"sweep: {line}", file=progress)) if progress else None)
     return res
