@@ -276,10 +276,8 @@ def cmd_can_plot(args):
 
 
 def cmd_bode(args):
-    import numpy as np
     from artibus.bench import ssp
     from artibus.bench.parameters import parse_set
-    from artibus.files import write_text
     from artibus.study import bode
     if not args.measure:
         hint = (f" (-o/--output is the results file now, as in every command: "
@@ -292,21 +290,9 @@ def cmd_bode(args):
     if args.plot:
         check_output(args.plot, "--plot")
     overrides = {**ssp.variant_overrides(args.bench, args.variant), **parse_set(args.set)}
-    freqs = np.geomspace(args.fmin, args.fmax, args.n) if args.n > 1 else [args.fmin]
-    resp = bode.frequency_response(args.bench, args.input, args.measure, freqs, args.amplitude,
-                                   periods=args.periods, settle=args.settle, overrides=overrides,
-                                   step=args.step)
-    units = bode.output_units(args.bench, list(args.measure) + [args.input])
-    rows = bode.csv_rows(freqs, resp, args.measure, args.input, units)
-    if out is not None:
-        write_text(out, "\n".join(rows) + "\n")
-        print(f"{out}: {len(freqs)} frequencies")
-    for line in rows:
-        print("  " + line)
-    if args.plot:
-        bode.plot(args.plot, resp, f"{args.bench}: {', '.join(args.measure)} / {args.input}", units=units,
-                  input_unit=units.get(args.input, ""))
-        print(args.plot)
+    bode.measure(args.bench, args.input, args.measure, args.fmin, args.fmax, args.n, args.amplitude,
+                 periods=args.periods, settle=args.settle, overrides=overrides, step=args.step,
+                 out=out, plot_path=args.plot, log=print)
     return 0
 
 
@@ -320,11 +306,7 @@ def cmd_calibrate(args):
     if out is not None and Path(out).suffix != ".ssv":
         raise ArtibusError(f"-o {out}: the gains are written as a parameter set, FILE.ssv")
     gains, reached = damping.calibrate(target=args.target)
-    print(f"\n{'gain':6s} {'artibus':>10s} {'thesis':>8s} {'ratio':>7s}  peak damping on lc200_100")
-    for name, value in gains.items():
-        thesis = damping.THESIS_GAINS.get(name)
-        ratio = f"{value / thesis:7.3f}" if thesis else "      -"
-        print(f"{name:6s} {value:10.4g} {thesis if thesis else 'n/a':>8} {ratio}  {reached.get(name, float('nan')):.3f} %")
+    print("\n" + damping.gains_table(gains, reached))
     if out is None or args.dry_run:
         print("\n(written nowhere: -o FILE.ssv writes them; -o ssp/parameters/DampingGains.ssv is the benches' set)")
         return 0

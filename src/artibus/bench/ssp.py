@@ -35,16 +35,11 @@ from pathlib import Path
 from lxml import etree
 
 from artibus.base import ROOT, ArtibusError, fmu_dir
+from artibus.bench.ssd import (MAPPINGS, NS, _component_sources, _compose, _depth,  # noqa: F401
+                               _sources_inside_components, map_transformation, model_description)
 from artibus.bench.units import declared_unit, fmu_units, ssp_units, to_unit
 
 BENCH_DIR = ROOT / "ssp" / "benches"
-NS = {
-    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
-    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
-    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
-    "ssm": "http://ssp-standard.org/SSP1/SystemStructureParameterMapping",
-    "artibus": "urn:artibus",
-}
 #: a bench's variants: <bench folder>/variants/<name>.ssv, packed as variants/<name>.ssv
 VARIANT_DIR = "variants"
 #: in a variant: <Rebind from="resources/A.ssv" to="resources/B.ssv"/> binds B wherever the bench binds A
@@ -263,43 +258,6 @@ def _rebound(ssp, old, new, where):
     before = read(ssp)
     return {f"{path}.{k}": v for path in paths for k, v in bench.components[path].parameters.items()
             if before.components[path].parameters.get(k) != v}     # what the other set changes, only
-
-
-MAPPINGS = {"BooleanMappingTransformation": "Boolean", "IntegerMappingTransformation": "Integer",
-            "EnumerationMappingTransformation": "Enumeration"}
-
-
-def map_transformation(element, where):
-    """SSP 1.0's mapping transformation on a Connection or a MappingEntry
-    (ssc:Boolean-, Integer- or EnumerationMappingTransformation, a table of
-    MapEntry source -> target): (kind, {source: target}) or None."""
-    for kind, name in MAPPINGS.items():
-        el = element.find(f"ssc:{kind}", NS)
-        if el is None:
-            continue
-        table = {}
-        for e in el.findall("ssc:MapEntry", NS):
-            src, dst = e.get("source"), e.get("target")
-            if name == "Boolean":
-                src, dst = src in ("true", "1"), dst in ("true", "1")
-            elif name == "Integer":
-                src, dst = int(src), int(dst)
-            if src in table:
-                raise ArtibusError(f"{where}: {kind}: MapEntry source=\"{e.get('source')}\" is given twice")
-            table[src] = dst
-        return name, table
-    return None
-
-
-def _compose(first, second, line):
-    """Two mapping transformations one after the other (through a system's connector)."""
-    if first is None or second is None:
-        return first or second
-    if first[0] != second[0]:
-        raise ArtibusError(f"line {line}: a {first[0]} mapping followed by a {second[0]} mapping")
-    table = {k: second[1].get(v, v) for k, v in first[1].items()}
-    table.update({k: v for k, v in second[1].items() if k not in first[1]})
-    return first[0], table
 
 
 @dataclass
@@ -620,56 +578,3 @@ def read(ssp):
                 x = then[0] * x + then[1]
             c.parameters[var] = x
     return bench
-
-
-def _sources_inside_components(ssp, where):
-    """An error naming a ParameterBinding or ParameterMapping whose source lies
-    inside the component's FMU (sourceBase="component"): not read by the runner."""
-    try:
-        with zipfile.ZipFile(ssp) as z:
-            root = etree.fromstring(z.read("SystemStructure.ssd"))
-    except Exception:
-        return
-    for el in root.iter(tag=etree.Element):
-        if el.get("sourceBase") == "component":
-            raise ArtibusError(f"{where}:{el.sourceline}: <{etree.QName(el).localname} source=\"{el.get('source')}\" "
-                               f"sourceBase=\"component\">: a source inside the component's FMU is not read by "
-                               f"the artibus runner (pack it into the .ssp and give its path there)")
-
-
-def _depth(prefix):
-    return 0 if not prefix else prefix.count(".") + 1
-
-
-_MD_CACHE = {}
-
-
-def _component_sources(ssp):
-    """{component path: its source in the .ssp} from the .ssd alone."""
-    with zipfile.ZipFile(ssp) as z:
-        root = etree.fromstring(z.read("SystemStructure.ssd"))
-    out = {}
-
-    def walk(system, prefix):
-        for el in system.findall("ssd:Elements/*", NS):
-            path = f"{prefix}.{el.get('name')}" if prefix else el.get("name")
-            if etree.QName(el).localname == "Component":
-                out[path] = el.get("source")
-            elif etree.QName(el).localname == "System":
-                walk(el, path)
-    walk(root.find("ssd:System", NS), "")
-    return out
-
-
-def model_description(ssp, source):
-    """The model description of the FMU ``source`` inside the .ssp (FMPy's, read once a pack)."""
-    from fmpy import read_model_description
-    st = Path(ssp).stat()
-    key = (str(ssp), st.st_mtime_ns, st.st_size, source)
-    if key not in _MD_CACHE:
-        with zipfile.ZipFile(ssp) as z, zipfile.ZipFile(z.open(source)) as fmu, \
-                tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
-            xml = Path(tmp) / "modelDescription.xml"
-            xml.write_bytes(fmu.read("modelDescription.xml"))
-            _MD_CACHE[key] = read_model_description(str(xml), validate=False)
-    return _MD_CACHE[key]

@@ -142,3 +142,27 @@ def csv_rows(frequencies, responses, outputs, input, units):
         rows.append(f"{f:.6g}," + ",".join(f"{responses[o][k].gain:.8g},{math.degrees(responses[o][k].phase):.8g}"
                                            for o in outputs))
     return rows
+
+
+def measure(bench, input, outputs, fmin, fmax, n, amplitude, periods=4, settle=None, overrides=None,
+            step=None, out=None, plot_path=None, log=print):
+    """`artibus bode`: the frequency response of ``outputs`` to ``input`` at ``n``
+    frequencies from ``fmin`` to ``fmax`` (log-spaced), the table written to
+    ``out`` (CSV, only when given) and printed, the plot to ``plot_path``.
+    Returns the table's rows."""
+    from artibus.files import write_text
+    freqs = np.geomspace(fmin, fmax, n) if n > 1 else [fmin]
+    resp = frequency_response(bench, input, outputs, freqs, amplitude, periods=periods, settle=settle,
+                              overrides=overrides, step=step)
+    units = output_units(bench, list(outputs) + [input])
+    rows = csv_rows(freqs, resp, outputs, input, units)
+    if out is not None:
+        write_text(out, "\n".join(rows) + "\n")
+        log(f"{out}: {len(freqs)} frequencies")
+    for line in rows:
+        log("  " + line)
+    if plot_path:
+        plot(plot_path, resp, f"{bench}: {', '.join(outputs)} / {input}", units=units,
+             input_unit=units.get(input, ""))
+        log(plot_path)
+    return rows
