@@ -25,6 +25,10 @@ def lane_change_road(length, offset, before=25.0, after=50.0):
 
 
 def fit_radius(x, y):
+    """The radius of the circle fitted to the points (x, y) by least squares; NaN
+    with fewer than three points (a run too short for the stretch it fits)."""
+    if len(x) < 3:
+        return math.nan
     A = np.column_stack([2 * x, 2 * y, np.ones_like(x)])
     (cx, cy, c), *_ = np.linalg.lstsq(A, x ** 2 + y ** 2, rcond=None)
     return math.sqrt(c + cx ** 2 + cy ** 2)

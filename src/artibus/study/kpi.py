@@ -332,7 +332,9 @@ def oscillation(t, x, t_from=None):
 
 
 def peak(x):
-    return float(np.max(np.abs(np.asarray(x, float))))
+    """max |x|; NaN with no sample (a run too short for the stretch the KPI looks at)."""
+    x = np.asarray(x, float)
+    return float(np.max(np.abs(x))) if x.size else float("nan")
 
 
 #: below this speed, m/s, the bus stands (peak_while_moving)

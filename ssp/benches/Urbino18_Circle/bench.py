@@ -21,7 +21,8 @@ def kpis(r):
     steady = (s > 25 + 0.6 * arc) & (s < 25 + arc - 5)
     R0 = fit_radius(r["Bus.x[0]"][steady], r["Bus.y[0]"][steady])
     R1 = fit_radius(r["Bus.x[1]"][steady], r["Bus.y[1]"][steady])
-    R1_kin = math.sqrt(R0 ** 2 + Lh1 ** 2 - L1 ** 2)
+    r1_sq = R0 ** 2 + Lh1 ** 2 - L1 ** 2           # negative (or NaN) only from a run too short for the fit
+    R1_kin = math.sqrt(r1_sq) if r1_sq >= 0 else math.nan
     on_circle = (s > 30) & (s < 25 + arc)
     return [
         Kpi("front axle: max |lateral error| on the circle", kpi.peak(r["Driver.eLat"][on_circle]), "m"),
