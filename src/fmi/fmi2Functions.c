@@ -451,6 +451,42 @@ static uint64_t state_sum(const FmuState *s) {
     return fnv1a(fnv1a(1469598103934665603ull, s->guid, sizeof s->guid), &s->v, sizeof s->v);
 }
 
+/* the first error message of model_check_parameters on a scratch instance,
+   '%%' and '##' (doubled by vlog) single again */
+static void capture_error(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                          fmi2String category, fmi2String message, ...) {
+    (void)name; (void)category;
+    char *why = env;
+    if (status < fmi2Error || !why || why[0] || !message) return;
+    size_t o = 0;
+    for (const char *p = message; *p && o < 511; p++) {
+        if ((*p == '%' || *p == '#') && p[1] == *p) p++;
+        why[o++] = *p;
+    }
+    why[o] = '\0';
+}
+
+/* model_check_parameters on the parameters of state v, its message in why[512] */
+static bool params_valid(ModelInstance *comp, const FmuState *s, char *why) {
+    ModelInstance *scratch = fmu_calloc(comp, 1, sizeof *scratch);
+    if (!scratch) {
+        snprintf(why, 512, "out of memory");
+        return false;
+    }
+    scratch->v = s->v;
+    scratch->cb = comp->cb;
+    scratch->cb.logger = capture_error;
+    scratch->cb.componentEnvironment = why;
+    scratch->instanceName = comp->instanceName;
+    scratch->type = comp->type;
+    scratch->stopTime = INFINITY;
+    why[0] = '\0';
+    const fmi2Status st = model_check_parameters(scratch);
+    comp->cb.freeMemory(scratch);
+    if (st > fmi2Warning && !why[0]) snprintf(why, 512, "its parameters are not consistent");
+    return st <= fmi2Warning;
+}
+
 static fmi2Status check_state(ModelInstance *comp, const char *fn, const FmuState *s) {
     if (!s || s->magic != FMUSTATE_MAGIC || s->size != sizeof(FmuState) ||
         memchr(s->guid, '\0', sizeof s->guid) == NULL || strcmp(s->guid, MODEL_GUID) != 0)
@@ -496,8 +532,12 @@ static fmi2Status check_state(ModelInstance *comp, const char *fn, const FmuStat
     /* before initialisation model_init sets the ModelState from the variables
        before any use of it (refresh, fmi2ExitInitializationMode): not checked */
     char why[512] = "";
-    if (!(st & (S_INSTANTIATED | S_INIT_MODE)) &&
-        !model_state_valid(&s->v.d, &s->v.s, s->v.time, why, sizeof why))
+    if (st & (S_INSTANTIATED | S_INIT_MODE)) return fmi2OK;
+    /* the parameters as model_init checks them (the same function), then the
+       model's own states */
+    if (!params_valid(comp, s, why))
+        return log_error(comp, "%s: the state's parameters are not valid: %s", fn, why);
+    if (!model_state_valid(&s->v.d, &s->v.s, s->v.time, why, sizeof why))
         return log_error(comp, "%s: the state is not valid: %s", fn, why[0] ? why : "(no reason given)");
     return fmi2OK;
 }

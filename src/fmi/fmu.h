@@ -81,6 +81,16 @@ typedef struct ModelInstance {
  * fmi2ExitInitializationMode. Must be cheap and idempotent. */
 fmi2Status model_init(ModelInstance *comp);
 
+/* The invariants on the parameters that model_init enforces beyond their
+ * declared ranges (a far look-ahead point beyond the near one, a speed table
+ * that increases, a mass matrix that is positive definite, ...). Reads v.d
+ * only; on a violation logs why (log_error, naming the variables and values)
+ * and returns fmi2Error. model_init calls it first; the layer calls it on
+ * every state restored after initialisation (on a scratch copy, its message
+ * becomes the restore's), so that no state holds parameters model_init would
+ * have refused: one function, so the two cannot drift apart. */
+fmi2Status model_check_parameters(ModelInstance *comp);
+
 /* Compute all outputs from the state and the current inputs. */
 void model_outputs(ModelInstance *comp);
 
