@@ -3,6 +3,7 @@ user error, and where the built FMUs are. The package's modules import these
 from here, never from ``artibus`` itself (which re-exports them), so that the
 package's root is in no import cycle."""
 import os
+import re
 from pathlib import Path
 
 __version__ = "0.1.0"
@@ -32,3 +33,34 @@ def fmu_path(name):
             raise ArtibusError(f"{name}: no such FMU; did you mean {' or '.join(close)}?")
         raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
     return path
+
+
+# one strict number syntax for every value a user writes (--set, .ssv, a
+# design, a CSV): Python's float() and int() also take "1_5" (as 15), "0x1A",
+# other scripts' digits (U+0660..) and surrounding whitespace of any kind
+_REAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                    r"|[+-]?(?:inf|infinity|nan)", re.IGNORECASE)
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+def parse_real(text):
+    """A decimal number (``-1.5``, ``2e-3``, ``.5``; ``inf`` and ``nan`` for
+    the caller to refuse or keep) from ``text``, surrounding spaces and tabs
+    allowed; ValueError otherwise: no underscores, no hex, no other digits."""
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        return float(text)
+    s = str(text).strip(" \t\r\n")
+    if not _REAL.fullmatch(s):
+        raise ValueError(f"{text!r} is not a decimal number")
+    return float(s)
+
+
+def parse_integer(text):
+    """A decimal integer (``-3``, ``+12``), surrounding spaces allowed;
+    ValueError otherwise (no underscores, no hex, no fraction)."""
+    if isinstance(text, int) and not isinstance(text, bool):
+        return text
+    s = str(text).strip(" \t\r\n")
+    if not _INTEGER.fullmatch(s):
+        raise ValueError(f"{text!r} is not a decimal integer")
+    return int(s)

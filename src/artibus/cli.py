@@ -25,19 +25,34 @@ import signal
 import sys
 from pathlib import Path
 
-from artibus.base import ArtibusError, __version__, fmu_dir, fmu_path
+from artibus.base import ArtibusError, __version__, fmu_dir, fmu_path, parse_integer, parse_real
 from artibus.files import check_output, make_dir
 
 
 def _seconds(text):
     """--stop-time, --step: a finite number > 0 (a one-line usage error otherwise, never a traceback)."""
     try:
-        x = float(text)
+        x = parse_real(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
     if not math.isfinite(x) or x <= 0:
         raise argparse.ArgumentTypeError(f"{text}: expected a finite time > 0 s")
     return x
+
+
+def _real(text):
+    """a number option (artibus.base.parse_real's syntax: no "1_5", no hex)"""
+    try:
+        return parse_real(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a decimal number") from None
+
+
+def _integer(text):
+    try:
+        return parse_integer(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a decimal integer") from None
 
 
 class Terminated(KeyboardInterrupt):
@@ -189,6 +204,8 @@ def cmd_replay(args):
                         overrides=parse_set(args.set), steering_map_name=args.steering_map,
                         variants=args.variant)
     r = rep.result
+    for w in rep.warnings:
+        print(f"artibus: warning: {w}", file=sys.stderr)
     runner.save(r, out)
     print(f"replay of {args.log} into {args.bench}: {out}: {len(r.rows)} rows, {r.time[-1] - r.time[0]:g} s")
     for inp, (sig, unit) in rep.drive.items():
@@ -211,7 +228,11 @@ def cmd_can_decode(args):
     from artibus import can
     if args.csv:
         check_output(args.csv, "--csv")
-    rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc")
+    unknown = {}
+    rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc", unknown)
+    if unknown:
+        print(f"artibus: warning: {sum(unknown.values())} frame(s) with an identifier the DBC does not know, "
+              f"skipped: {', '.join(f'0x{i:03X} ({n})' for i, n in sorted(unknown.items()))}", file=sys.stderr)
     header = "time_s,message,signal,value,unit,e2e"
     lines = [f"{t:.6f},{m},{s},{v!r},{u},{e}" for t, m, s, v, u, e in rows]
     if args.csv:
@@ -411,12 +432,12 @@ def build_parser():
     s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")
     s.add_argument("--measure", action="append", metavar="COMP.VAR",
                    help="an output to measure (repeatable)")
-    s.add_argument("--fmin", type=float, default=0.05, help="lowest frequency, Hz")
-    s.add_argument("--fmax", type=float, default=5.0, help="highest frequency, Hz")
-    s.add_argument("--n", type=int, default=12, help="frequencies, log-spaced")
-    s.add_argument("--amplitude", type=float, default=0.01, help="sine amplitude, in the input's unit")
-    s.add_argument("--periods", type=int, default=4, help="periods fitted after the transient")
-    s.add_argument("--settle", type=float, help="time given to the transient, s")
+    s.add_argument("--fmin", type=_real, default=0.05, help="lowest frequency, Hz")
+    s.add_argument("--fmax", type=_real, default=5.0, help="highest frequency, Hz")
+    s.add_argument("--n", type=_integer, default=12, help="frequencies, log-spaced")
+    s.add_argument("--amplitude", type=_real, default=0.01, help="sine amplitude, in the input's unit")
+    s.add_argument("--periods", type=_integer, default=4, help="periods fitted after the transient")
+    s.add_argument("--settle", type=_real, help="time given to the transient, s")
     s.add_argument("--step", type=_seconds)
     s.add_argument("--variant", action="append", metavar="NAME", help="a variant of the bench (repeatable)")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
@@ -425,7 +446,7 @@ def build_parser():
     s.set_defaults(func=cmd_bode)
     s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), "
                                          "written to ssp/parameters/DampingGains.ssv")
-    s.add_argument("--target", type=float, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
+    s.add_argument("--target", type=_real, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
     s.add_argument("--dry-run", action="store_true", help="print the gains, write nothing")
     s.set_defaults(func=cmd_calibrate)
     s = sub.add_parser("list", help="the benches and FMUs, one line each")
@@ -462,12 +483,12 @@ def build_parser():
     s.add_argument("--design", metavar="FILE", help="the cases from a .csv (a case a row) or .yaml "
                                                     "(grid, lhs or montecarlo with a seed)")
     s.add_argument("-o", "--out", default=None, help="output folder (default: sweep-<BENCH>)")
-    s.add_argument("--stop-time", type=float, help="every case's stop time (default: the bench's)")
-    s.add_argument("--step", type=float, help="base communication step, s")
+    s.add_argument("--stop-time", type=_seconds, help="every case's stop time (default: the bench's)")
+    s.add_argument("--step", type=_seconds, help="base communication step, s")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE", help="a parameter of every case")
     s.add_argument("--keep-series", action="store_true", help="keep each case's time series (series/<key>.parquet)")
     s.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler (tcp://host:8786)")
-    s.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    s.add_argument("--workers", type=_integer, help="local worker processes (default: one per core)")
     s.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
     s.add_argument("--kpi", help="the KPI of the study plot and the worst cases (default: the bench's first)")
     s.set_defaults(func=cmd_sweep)
@@ -488,7 +509,9 @@ def main(argv=None):
     except KeyboardInterrupt as e:     # Ctrl-C (SIGINT) or SIGTERM: one line, 130 or 143
         sig = signal.Signals(getattr(e, "signum", signal.SIGINT))
         partial = getattr(e, "partial", None)
-        if partial is not None:
+        if getattr(e, "written", None) is not None:
+            what = f"the finished run's results are complete in {e.written}"
+        elif partial is not None:
             what = f"partial results up to t = {e.partial_time:g} s in {partial}"
         elif getattr(e, "partial_error", None):
             what = f"partial results not saved: {e.partial_error}"

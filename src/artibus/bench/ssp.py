@@ -28,7 +28,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from artibus.base import ROOT, ArtibusError, fmu_dir
+from artibus.base import ROOT, ArtibusError, fmu_dir, parse_integer, parse_real
 
 BENCH_DIR = ROOT / "ssp" / "benches"
 NS = {
@@ -125,6 +125,20 @@ def _sources(bench):
     return ssd_file, files
 
 
+def _number(el, attr, default, where, integer=False):
+    """Attribute ``attr`` of element ``el`` as a number (the strict syntax of
+    artibus.base.parse_real), ``default`` when absent; ArtibusError naming the
+    file, line, element, attribute and value otherwise."""
+    text = el.get(attr)
+    if text is None:
+        return default
+    try:
+        return parse_integer(text) if integer else parse_real(text)
+    except ValueError:
+        raise ArtibusError(f"{where}:{el.sourceline}: <{etree.QName(el).localname} {attr}=\"{text}\">: "
+                           f"not {'an integer' if integer else 'a number'}") from None
+
+
 def variants(ssp):
     """The names of a packed bench's variants (see the module's docstring)."""
     with zipfile.ZipFile(ssp) as z:
@@ -147,7 +161,7 @@ def variant_stop_time(ssp, names):
             for v in etree.fromstring(z.read(ref)).iterfind(".//artibus:Variant", NS):
                 if v.get("stopTime") is not None:
                     try:
-                        stop = float(v.get("stopTime"))
+                        stop = parse_real(v.get("stopTime"))
                     except ValueError:
                         stop = math.nan
                     if not stop > 0:
@@ -269,7 +283,7 @@ def map_transformation(element, where):
             if name == "Boolean":
                 src, dst = src in ("true", "1"), dst in ("true", "1")
             elif name == "Integer":
-                src, dst = int(src), int(dst)
+                src, dst = _number(e, "source", None, where, True), _number(e, "target", None, where, True)
             if src in table:
                 raise ArtibusError(f"{where}: {kind}: MapEntry source=\"{e.get('source')}\" is given twice")
             table[src] = dst
@@ -332,6 +346,14 @@ def read(ssp):
 
     ssp = str(ssp)
     where = f"{ssp}/SystemStructure.ssd"
+    from artibus.files import check_archive
+    try:
+        with zipfile.ZipFile(ssp) as z:   # its members checked before any is read (a second .ssd, a link)
+            check_archive(z, ssp)
+            if "SystemStructure.ssd" not in z.namelist():
+                raise ArtibusError(f"{ssp}: no SystemStructure.ssd in it (not an SSP archive)")
+    except (zipfile.BadZipFile, OSError) as e:
+        raise ArtibusError(f"{ssp}: not a readable SSP archive (a zip file): {e}") from None
     try:
         ssd = read_ssd(ssp, validate=True)
     except Exception as e:
@@ -343,8 +365,8 @@ def read(ssp):
     bench = Bench(name=ssd.name, file=where, components={}, connections=[])
     de = root.find("ssd:DefaultExperiment", NS)
     if de is not None:
-        bench.start_time = float(de.get("startTime", 0.0))
-        bench.stop_time = float(de.get("stopTime")) if de.get("stopTime") else None
+        bench.start_time = _number(de, "startTime", 0.0, where)
+        bench.stop_time = _number(de, "stopTime", None, where)
 
     xml_systems = {}
 
@@ -410,7 +432,7 @@ def read(ssp):
                 if kind == "LinearTransformation":
                     if not isinstance(value, float):
                         raise ArtibusError(f"{head}: a LinearTransformation needs a Real, got {value!r}")
-                    value = float(tr.get("factor", 1.0)) * value + float(tr.get("offset", 0.0))
+                    value = _number(tr, "factor", 1.0, file) * value + _number(tr, "offset", 0.0, file)
                 elif kind in MAPPINGS:
                     mkind, table = map_transformation(e, head)
                     ok = {"Boolean": isinstance(value, bool),
@@ -444,7 +466,7 @@ def read(ssp):
                 c.connectors = [k.name for k in el.connectors]
                 ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
                 if ann is not None and ann.get("stepSize"):
-                    c.step = float(ann.get("stepSize"))
+                    c.step = _number(ann, "stepSize", None, where)
                     if not c.step > 0:
                         raise ArtibusError(f"{where}:{ann.sourceline}: Component '{path}': "
                                            f"stepSize = {ann.get('stepSize')} must be > 0")
@@ -501,8 +523,8 @@ def read(ssp):
                 raise ArtibusError(f"{label}: '{n[1] or 'the system'}' declares no connector '{n[2]}'")
         # (FMPy's reader looks for the transformation in the wrong namespace: read it here)
         lt = xc.find("ssc:LinearTransformation", NS)
-        factor = float(lt.get("factor", 1.0)) if lt is not None else 1.0
-        offset = float(lt.get("offset", 0.0)) if lt is not None else 0.0
+        factor = _number(lt, "factor", 1.0, where) if lt is not None else 1.0
+        offset = _number(lt, "offset", 0.0, where) if lt is not None else 0.0
         mapping = map_transformation(xc, label)
         route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
         if route is not None:

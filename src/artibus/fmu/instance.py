@@ -3,10 +3,11 @@ FMU2Slave with a log of its own, the process's memory callbacks
 (artibus.fmu.memory) and model descriptions read once per content."""
 import shutil
 
-from fmpy import extract, read_model_description
+from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 from artibus.base import ArtibusError
+from artibus.files import extract_archive
 
 
 def _callbacks(log):
@@ -119,10 +120,12 @@ class Fmu:
         self.instance_name = instance_name
         self._dir = None
         try:
-            self._dir = extract(self.path)
+            self._dir = str(extract_archive(self.path, prefix="artibus-fmu-"))   # checked first
             self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                    modelIdentifier=self.md.coSimulation.modelIdentifier,
                                    instanceName=instance_name)
+        except ArtibusError:     # the archive refused or not unpacked (its folder removed)
+            raise
         except Exception as e:   # a missing or broken binary
             if self._dir:
                 shutil.rmtree(self._dir, ignore_errors=True)

@@ -23,14 +23,13 @@
 import math
 import shutil
 import sys
-import tempfile
 import time as _time
-import zipfile
 
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
+from artibus.files import extract_archive
 from artibus.bench import ssp as ssp_mod
 from artibus.fmu import Result, SimulationError
 from artibus.runner.core import _core_stepper
@@ -78,10 +77,9 @@ class Simulation(_Setup):
         where = self.bench.file
         if step is not None and not step > 0:
             raise ArtibusError(f"--step {step}: the communication step must be > 0")
-        self._tmp = tempfile.mkdtemp(prefix="artibus-")
+        self._tmp = None
         try:
-            with zipfile.ZipFile(self.ssp) as z:
-                z.extractall(self._tmp)
+            self._tmp = str(extract_archive(self.ssp))     # checked first (artibus.files)
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
                         set(cut or ()))
         except BaseException:
@@ -330,7 +328,8 @@ class Simulation(_Setup):
             self.can.close()
         for u in getattr(self, "units", []):
             u.fmu.close()
-        shutil.rmtree(self._tmp, ignore_errors=True)
+        if getattr(self, "_tmp", None):
+            shutil.rmtree(self._tmp, ignore_errors=True)
 
     def __enter__(self):
         return self
