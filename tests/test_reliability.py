@@ -468,3 +468,10 @@ def test_a_routed_message_missing_from_the_dbc_is_a_named_error_at_set_up(tmp_pa
             z.writestr(n, data)
     with pytest.raises(ArtibusError, match="has no message 'SensorG1_Angle'"):
         Simulation(out)
+
+
+def test_simulate_refuses_results_that_cannot_fit_in_memory():
+    """The probe: `simulate`, unlike `run`, started a run whose table could not fit."""
+    from artibus.fmu import simulate
+    with pytest.raises(ArtibusError, match="more than half the memory available"):
+        simulate(fmu_path("TypesTest"), stop_time=1e13, step=1e-3)
