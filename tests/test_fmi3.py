@@ -448,3 +448,38 @@ def test_fmi3_win64_cosimulation_equals_x86_64_linux(name, fmi3_run, tmp_path):
     assert set(win) == set(lin) == {o.split("=", 1)[1] for o in outs}
     for k, a in lin.items():
         assert abs(win[k] - a) <= 1e-12 * max(abs(a), abs(win[k])), f"{name}.{k}: {a!r} (linux) vs {win[k]!r} (win64)"
+
+
+def test_restored_state_parameters_checked_as_model_init_does(slave):
+    """fmu_core.c runs model_check_parameters on every restored state for FMI 3.0 too
+    (tests/test_state_fuzzer.py's probe, through fmi3DeserializeFMUState): a
+    RoadFollowDriver state whose lookFar0 = -1e308 (inside its declared range
+    [-inf, 1000], behind the near look-ahead point) with a recomputed checksum
+    (FNV-1a over the GUID field and the body) is refused, naming lookFar0"""
+    import struct
+    from test_state_fuzzer import HEADER, with_checksum
+    s = slave("RoadFollowDriver")
+    vr = s.vr["lookFar0"]
+    v = next(x for x in s.md.modelVariables if x.name == "lookFar0")
+    start = float(v.start)
+
+    def serialized():
+        st = s.fmu.getFMUState()
+        data = bytes(s.fmu.serializeFMUState(st))
+        s.fmu.freeFMUState(st)
+        return data
+
+    base = np.frombuffer(serialized(), dtype=np.uint8)
+    s.fmu.setFloat64([vr], [start - 0.4375])
+    moved = np.frombuffer(serialized(), dtype=np.uint8)
+    s.fmu.setFloat64([vr], [start])
+    off = HEADER + int(np.flatnonzero(base[HEADER:] != moved[HEADER:])[0]) // 8 * 8
+    s.fmu.enterInitializationMode(startTime=0.0)
+    s.fmu.exitInitializationMode()
+    h = float(s.md.defaultExperiment.stepSize or 0.01)
+    for k in range(10):
+        s.fmu.doStep(k * h, h)
+    bad = bytearray(serialized())
+    struct.pack_into("<d", bad, off, -1e308)
+    msg = s.error(s.fmu.deserializeFMUState, with_checksum(bad))
+    assert "fmi3DeserializeFMUState" in msg and "parameters are not valid" in msg and "lookFar0" in msg, msg

@@ -272,9 +272,12 @@ def test_interrupt_while_simulating_keeps_partial_results(tmp_path, long_bench, 
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_interrupt_while_writing_leaves_no_torn_file(tmp_path, long_bench, sig):
+def test_interrupt_while_writing_finishes_the_write(tmp_path, long_bench, sig):
     """Issue 15: a signal while the CSV was written left a truncated CSV under the
-    final name. Now: the final name absent, no temporary file, no temporary directory."""
+    final name; issue 28: then the finished run was discarded ("nothing written").
+    Now: the write finishes, the complete results under the final name (whole
+    rows, every base step) with their units, the message says so; no temporary
+    file, no temporary directory."""
     out = tmp_path / "out" / "r.csv"
     out.parent.mkdir()
     proc, tmpdir = _run_in_background(tmp_path, long_bench, out, 20000)
@@ -283,8 +286,12 @@ def test_interrupt_while_writing_leaves_no_torn_file(tmp_path, long_bench, sig):
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + sig, err
-    assert err.strip() == f"artibus: stopped by {signal.Signals(sig).name}; nothing written"
-    assert list(out.parent.iterdir()) == []
+    assert err.strip() == (f"artibus: stopped by {signal.Signals(sig).name}; the finished run's results "
+                           f"are complete in {out}")
+    assert sorted(p.name for p in out.parent.iterdir()) == [out.name, runner.units_path(out).name]
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert table[0, 0] == 0.0 and table[-1, 0] == pytest.approx(20000)
+    np.testing.assert_allclose(np.diff(table[:, 0]), 0.05, rtol=1e-6)
     assert list(tmpdir.iterdir()) == []
 
 
@@ -314,8 +321,8 @@ def test_results_too_large_for_memory_refused_before_the_run(tmp_path, long_benc
     """A run whose result table cannot fit (10^11 base steps) is one line before
     it starts, not a MemoryError or the OOM killer later."""
     with pytest.raises(ArtibusError, match=r"3 columns of results would take 2\.4 GB, more than half"):
-        runner_results._check_room(100_000_000, 3, "b.ssd", available=4_000_000_000)
-    runner_results._check_room(100_000_000, 3, "b.ssd", available=8_000_000_000)
+        runner_results.check_room(100_000_000, 3, "b.ssd", available=4_000_000_000)
+    runner_results.check_room(100_000_000, 3, "b.ssd", available=8_000_000_000)
     t0 = time.perf_counter()
     r = artibus("run", str(long_bench), "--step", "1e-9", "--stop-time", "100", "-o", str(tmp_path / "r.csv"),
                 cwd=tmp_path, timeout=120)

@@ -1,8 +1,12 @@
 """What every part of artibus uses: the version, the repository's root, the
-user error, and where the built FMUs are. The package's modules import these
+user error, where the built FMUs are, the strict number syntax and the
+command line's number options built on it. The package's modules import these
 from here, never from ``artibus`` itself (which re-exports them), so that the
 package's root is in no import cycle."""
+import math
 import os
+import re
+from argparse import ArgumentTypeError
 from pathlib import Path
 
 __version__ = "0.1.0"
@@ -32,3 +36,63 @@ def fmu_path(name):
             raise ArtibusError(f"{name}: no such FMU; did you mean {' or '.join(close)}?")
         raise ArtibusError(f"{path}: FMU not built (run the set-up command of the README)")
     return path
+
+
+# one strict number syntax for every value a user writes (--set, .ssv, a
+# design, a CSV): Python's float() and int() also take "1_5" (as 15), "0x1A",
+# other scripts' digits (U+0660..) and surrounding whitespace of any kind
+_REAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                    r"|[+-]?(?:inf|infinity|nan)", re.IGNORECASE)
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+def parse_real(text):
+    """A decimal number (``-1.5``, ``2e-3``, ``.5``; ``inf`` and ``nan`` for
+    the caller to refuse or keep) from ``text``, surrounding spaces and tabs
+    allowed; ValueError otherwise: no underscores, no hex, no other digits."""
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        return float(text)
+    s = str(text).strip(" \t\r\n")
+    if not _REAL.fullmatch(s):
+        raise ValueError(f"{text!r} is not a decimal number")
+    return float(s)
+
+
+def parse_integer(text):
+    """A decimal integer (``-3``, ``+12``), surrounding spaces allowed;
+    ValueError otherwise (no underscores, no hex, no fraction)."""
+    if isinstance(text, int) and not isinstance(text, bool):
+        return text
+    s = str(text).strip(" \t\r\n")
+    if not _INTEGER.fullmatch(s):
+        raise ValueError(f"{text!r} is not a decimal integer")
+    return int(s)
+
+
+# the command line's option types (argparse's type=, artibus.cli): a one-line
+# usage error naming the value, never a traceback
+def arg_seconds(text):
+    """--stop-time, --step: a finite number > 0 (a one-line usage error otherwise, never a traceback)."""
+    try:
+        x = parse_real(text)
+    except ValueError:
+        raise ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(x) or x <= 0:
+        raise ArgumentTypeError(f"{text}: expected a finite time > 0 s")
+    return x
+
+
+def arg_real(text):
+    """A number option (artibus.base.parse_real's syntax: no "1_5", no hex)"""
+    try:
+        return parse_real(text)
+    except ValueError:
+        raise ArgumentTypeError(f"{text!r} is not a decimal number") from None
+
+
+def arg_integer(text):
+    """An integer option (parse_integer's syntax)."""
+    try:
+        return parse_integer(text)
+    except ValueError:
+        raise ArgumentTypeError(f"{text!r} is not a decimal integer") from None

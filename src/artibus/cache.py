@@ -24,7 +24,6 @@ import pickle
 import shutil
 import tempfile
 import time
-import zipfile
 from pathlib import Path
 
 DEFAULT_MB = 500
@@ -87,17 +86,23 @@ def _key(path):
 
 
 def extract(archive, dest):
-    """Every member of the zip ``archive`` into the directory ``dest``."""
-    with zipfile.ZipFile(archive) as z:
-        z.extractall(dest)
+    """Every member of the zip ``archive`` into the directory ``dest``, the
+    archive checked first (artibus.files.extract_archive: member count and
+    unpacked size, links, duplicates, paths that leave the folder):
+    ArtibusError naming the archive and the member otherwise."""
+    from artibus.files import extract_archive
+    extract_archive(archive, dest)
 
 
 def unpacked(archive):
     """(directory, temporary): the zip ``archive`` unpacked. From the cache
     (temporary False: the caller leaves it as it is) or, with the cache off
     or not writable, into a new temporary directory (temporary True: the
-    caller removes it). Errors of the archive itself (not a zip, a broken
-    member) are raised as zipfile/OS errors, as zipfile.extractall raises them."""
+    caller removes it). The archive is checked before it is unpacked
+    (``extract``): an archive refused, not a zip, with a broken member or
+    that does not fit on the disk is an ArtibusError naming it, and nothing
+    of it is left in the cache. An entry is only ever made by ``extract``, so
+    an archive found in the cache was checked when it was added."""
     base = root()
     if base is not None:
         try:

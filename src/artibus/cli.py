@@ -30,19 +30,8 @@ import signal
 import sys
 from pathlib import Path
 
-from artibus.base import ArtibusError, __version__, fmu_dir, fmu_path
+from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds, fmu_dir, fmu_path
 from artibus.files import check_output, make_dir
-
-
-def _seconds(text):
-    """--stop-time, --step: a finite number > 0 (a one-line usage error otherwise, never a traceback)."""
-    try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
-    if not math.isfinite(x) or x <= 0:
-        raise argparse.ArgumentTypeError(f"{text}: expected a finite time > 0 s")
-    return x
 
 
 class Terminated(KeyboardInterrupt):
@@ -213,6 +202,8 @@ def cmd_replay(args):
                         overrides=parse_set(args.set), steering_map_name=args.steering_map,
                         variants=args.variant)
     r = rep.result
+    for w in rep.warnings:
+        print(f"artibus: warning: {w}", file=sys.stderr)
     runner.save(r, out)
     print(f"replay of {args.log} into {args.bench}: {out}: {len(r.rows)} rows, {r.time[-1] - r.time[0]:g} s")
     for inp, (sig, unit) in rep.drive.items():
@@ -236,7 +227,11 @@ def cmd_can_decode(args):
     from artibus import can
     if args.csv:
         check_output(args.csv, "--csv")
-    rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc")
+    unknown = {}
+    rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc", unknown)
+    if unknown:
+        print(f"artibus: warning: {sum(unknown.values())} frame(s) with an identifier the DBC does not know, "
+              f"skipped: {', '.join(f'0x{i:03X} ({n})' for i, n in sorted(unknown.items()))}", file=sys.stderr)
     header = "time_s,message,signal,value,unit,e2e"
     lines = [f"{t:.6f},{m},{s},{v!r},{u},{e}" for t, m, s, v, u, e in rows]
     if args.csv:
@@ -410,8 +405,8 @@ def build_parser():
     s.add_argument("bench", nargs="?", help="a bench name (see `artibus list`) or the path of an .ssp")
     s.add_argument("--all", action="store_true", help="run every bench")
     s.add_argument("--report", metavar="DIR", help="write plots and an HTML page with the KPIs to DIR")
-    s.add_argument("--stop-time", type=_seconds, help="default: the bench's DefaultExperiment")
-    s.add_argument("--step", type=_seconds, help="base communication step, s")
+    s.add_argument("--stop-time", type=arg_seconds, help="default: the bench's DefaultExperiment")
+    s.add_argument("--step", type=arg_seconds, help="base communication step, s")
     s.add_argument("--single-rate", action="store_true",
                    help="every component at the one (base) step, as a master without multi-rate steps runs it")
     s.add_argument("--ssv", action="append", help="parameter file with names COMPONENT.VARIABLE")
@@ -467,7 +462,7 @@ def build_parser():
     s.add_argument("--dbc", help="for a CAN log: default the bench's DBC, else ssp/can/Bus36m.dbc")
     s.add_argument("--steering-map", help="a parameter set c[0..3] (seed 003 App. A), default the bench's")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
-    s.add_argument("--stop-time", type=_seconds, help="default: the end of the driving signals")
+    s.add_argument("--stop-time", type=arg_seconds, help="default: the end of the driving signals")
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default <log>_replay.csv)")
     s.add_argument("--report", metavar="DIR", help="plots of model against measured and errors.csv")
     s.set_defaults(func=cmd_replay)
@@ -476,13 +471,13 @@ def build_parser():
     s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")
     s.add_argument("--measure", action="append", metavar="COMP.VAR",
                    help="an output to measure (repeatable)")
-    s.add_argument("--fmin", type=float, default=0.05, help="lowest frequency, Hz")
-    s.add_argument("--fmax", type=float, default=5.0, help="highest frequency, Hz")
-    s.add_argument("--n", type=int, default=12, help="frequencies, log-spaced")
-    s.add_argument("--amplitude", type=float, default=0.01, help="sine amplitude, in the input's unit")
-    s.add_argument("--periods", type=int, default=4, help="periods fitted after the transient")
-    s.add_argument("--settle", type=float, help="time given to the transient, s")
-    s.add_argument("--step", type=_seconds)
+    s.add_argument("--fmin", type=arg_real, default=0.05, help="lowest frequency, Hz")
+    s.add_argument("--fmax", type=arg_real, default=5.0, help="highest frequency, Hz")
+    s.add_argument("--n", type=arg_integer, default=12, help="frequencies, log-spaced")
+    s.add_argument("--amplitude", type=arg_real, default=0.01, help="sine amplitude, in the input's unit")
+    s.add_argument("--periods", type=arg_integer, default=4, help="periods fitted after the transient")
+    s.add_argument("--settle", type=arg_real, help="time given to the transient, s")
+    s.add_argument("--step", type=arg_seconds)
     s.add_argument("--variant", action="append", metavar="NAME", help="a variant of the bench (repeatable)")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
     s.add_argument("-o", "--output", "--output-file", metavar="FILE",
@@ -491,7 +486,7 @@ def build_parser():
     s.set_defaults(func=cmd_bode)
     s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), printed; "
                                          "-o FILE.ssv writes them")
-    s.add_argument("--target", type=float, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
+    s.add_argument("--target", type=arg_real, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
     s.add_argument("-o", "--output", metavar="FILE.ssv",
                    help="write the gains as a parameter set (the benches': ssp/parameters/DampingGains.ssv)")
     s.add_argument("--dry-run", action="store_true", help="print the gains, write nothing (also without -o)")
@@ -518,8 +513,8 @@ def build_parser():
     s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU")
     s.add_argument("--ssv", help="parameter set: name in ssp/parameters or path of an .ssv")
     s.add_argument("--set", action="append", metavar="NAME=VALUE", help="set a parameter")
-    s.add_argument("--stop-time", type=_seconds)
-    s.add_argument("--step", type=_seconds)
+    s.add_argument("--stop-time", type=arg_seconds)
+    s.add_argument("--step", type=arg_seconds)
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: <FMU>.csv)")
     s.add_argument("--fmi", choices=["2", "3"], default="2",
                    help="run the FMI 3.0 build of a built FMU (fmus/fmi3/<Name>.fmu; default 2)")
@@ -543,12 +538,12 @@ def build_parser():
     s.add_argument("--design", metavar="FILE", help="the cases from a .csv (a case a row) or .yaml "
                                                     "(grid, lhs or montecarlo with a seed)")
     s.add_argument("-o", "--out", default=None, help="output folder (default: sweep-<BENCH>)")
-    s.add_argument("--stop-time", type=float, help="every case's stop time (default: the bench's)")
-    s.add_argument("--step", type=float, help="base communication step, s")
+    s.add_argument("--stop-time", type=arg_seconds, help="every case's stop time (default: the bench's)")
+    s.add_argument("--step", type=arg_seconds, help="base communication step, s")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE", help="a parameter of every case")
     s.add_argument("--keep-series", action="store_true", help="keep each case's time series (series/<key>.parquet)")
     s.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler (tcp://host:8786)")
-    s.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    s.add_argument("--workers", type=arg_integer, help="local worker processes (default: one per core)")
     s.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
     s.add_argument("--kpi", help="the KPI of the study plot and the worst cases (default: the bench's first)")
     s.set_defaults(func=cmd_sweep)
@@ -569,7 +564,9 @@ def main(argv=None):
     except KeyboardInterrupt as e:     # Ctrl-C (SIGINT) or SIGTERM: one line, 130 or 143
         sig = signal.Signals(getattr(e, "signum", signal.SIGINT))
         partial = getattr(e, "partial", None)
-        if partial is not None:
+        if getattr(e, "written", None) is not None:
+            what = f"the finished run's results are complete in {e.written}"
+        elif partial is not None:
             what = f"partial results up to t = {e.partial_time:g} s in {partial}"
         elif getattr(e, "partial_error", None):
             what = f"partial results not saved: {e.partial_error}"

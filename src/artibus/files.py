@@ -16,6 +16,10 @@ A full disk (ENOSPC, EDQUOT) becomes an ArtibusError naming the file.
 import contextlib
 import errno
 import os
+import secrets
+import signal
+import stat
+import threading
 from pathlib import Path
 
 from artibus.base import ArtibusError
@@ -38,6 +42,32 @@ def _disk_error(path, e):
     return None
 
 
+def _kind(mode):
+    """what a file that is not a regular one is, in words"""
+    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def not_regular(path):
+    """None if ``path`` is a new name or a regular file (through a symbolic
+    link too), else what it is ("a character device", "a FIFO", ...)."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return None
+    except OSError:
+        return None          # e.g. a dangling link: the rename replaces the link
+    return None if stat.S_ISREG(st.st_mode) else _kind(st.st_mode)
+
+
+class KeptTemporary(ArtibusError):
+    """The complete file could not take its final name; it is kept under ``self.kept``."""
+
+
 @contextlib.contextmanager
 def atomic_path(path, fsync=True):
     """Yields a temporary path beside ``path``; when the block ends without an
@@ -55,7 +85,13 @@ def atomic_path(path, fsync=True):
                 os.fsync(fd)
             finally:
                 os.close(fd)
+        what = not_regular(path)
+        if what is not None:       # a device, a FIFO, a directory: never replaced by the rename
+            raise KeptTemporary(f"{path}: is {what}, not replaced; the complete file is kept as {tmp}")
         os.replace(tmp, path)
+    except KeptTemporary as e:
+        e.kept = tmp
+        raise
     except BaseException as e:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
@@ -80,6 +116,35 @@ def atomic_write(path, mode="w", encoding="utf-8", newline=None, fsync=True):
                 os.fsync(f.fileno())
 
 
+@contextlib.contextmanager
+def signals_held(written=None):
+    """SIGINT and SIGTERM held while the block runs, so that a final write
+    finishes, then delivered: the interrupt (KeyboardInterrupt, or the
+    command line's SIGTERM one) is raised after the block, with
+    ``e.written = written`` (what is complete on disk, for the message).
+    Outside the main thread (no handlers there) the block just runs."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got, old = [], {}
+
+    def hold(signum, frame):
+        got.append(signum)
+    for s in (signal.SIGINT, signal.SIGTERM):
+        old[s] = signal.signal(s, hold)
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h if h is not None else signal.SIG_DFL)
+    if got:
+        try:
+            signal.raise_signal(got[0])
+        except KeyboardInterrupt as e:
+            e.written = written
+            raise
+
+
 def write_text(path, text, encoding="utf-8"):
     """Path.write_text, atomically."""
     with atomic_write(path, encoding=encoding) as f:
@@ -96,11 +161,15 @@ def write_bytes(path, data):
 
 def check_output(path, what="-o"):
     """An output file's place checked before a run, so that a long run's
-    results are not lost at the end: ``path`` must not be a directory, its
-    directory must exist and take a new file. ArtibusError otherwise."""
+    results are not lost at the end: ``path`` must be a new name or a regular
+    file (not a directory, a device, a FIFO or a socket), its directory must
+    exist and take a new file. ArtibusError otherwise."""
     path = Path(path)
     if path.is_dir():
         raise ArtibusError(f"{what} {path}: is a directory (give a file name, e.g. {path / 'results.csv'})")
+    kind = not_regular(path)
+    if kind is not None:
+        raise ArtibusError(f"{what} {path}: is {kind}: the output is a regular file or a new name")
     parent = path.parent
     if not parent.exists():
         raise ArtibusError(f"{what} {path}: directory {parent} does not exist")
@@ -131,3 +200,99 @@ def make_dir(path, what="--report"):
     if not Path(path).is_dir():
         raise ArtibusError(f"{what} {path}: not a directory")
     return Path(path)
+
+
+# --- archives (.ssp, .fmu): checked as a whole before anything is unpacked ----------
+
+#: limits of what an archive may unpack to, checked before extraction; the
+#: environment variables override them (docs/guide: "Limits")
+MAX_UNPACKED_MB = 2048          # $ARTIBUS_MAX_UNPACKED_MB: total size of the members, MiB
+MAX_MEMBERS = 20000             # $ARTIBUS_MAX_MEMBERS: number of members
+
+
+def _limit(env, default):
+    text = os.environ.get(env)
+    if text is None or not text.strip():
+        return default
+    from artibus.base import parse_integer
+    try:
+        value = parse_integer(text)
+    except ValueError:
+        raise ArtibusError(f"${env} = {text!r}: expected a whole number") from None
+    if value <= 0:
+        raise ArtibusError(f"${env} = {text!r}: expected a number > 0")
+    return value
+
+
+def check_archive(z, label):
+    """The members of the open ZipFile ``z`` checked before anything is read
+    from it: none a symbolic link, an absolute path, a path with a drive or a
+    backslash or one that leaves the folder (``..``), none given twice (also
+    as a file and a folder of the same name); their count and total
+    unpacked size within MAX_MEMBERS and MAX_UNPACKED_MB. ArtibusError naming
+    ``label`` and the member otherwise."""
+    members = z.infolist()
+    max_members = _limit("ARTIBUS_MAX_MEMBERS", MAX_MEMBERS)
+    max_bytes = _limit("ARTIBUS_MAX_UNPACKED_MB", MAX_UNPACKED_MB) * 2 ** 20
+    if len(members) > max_members:
+        raise ArtibusError(f"{label}: {len(members)} members, more than the limit of {max_members} "
+                           f"($ARTIBUS_MAX_MEMBERS)")
+    seen, dirs, total = {}, set(), 0
+    for m in members:
+        name = m.filename
+        mode = m.external_attr >> 16
+        if stat.S_ISLNK(mode):
+            raise ArtibusError(f"{label}: member '{name}' is a symbolic link (not allowed in an archive here)")
+        parts = name.rstrip("/").split("/")
+        if (not name or name.startswith("/") or "\\" in name or ":" in parts[0] or "\0" in name
+                or any(p in ("..",) for p in parts)):
+            raise ArtibusError(f"{label}: member '{name}' is not a relative path inside the archive")
+        key = "/".join(p for p in parts if p not in ("", "."))
+        if key in seen:
+            raise ArtibusError(f"{label}: member '{name}' is given twice (also as '{seen[key]}')")
+        seen[key] = name
+        for i in range(1, len(parts)):
+            dirs.add("/".join(p for p in parts[:i] if p not in ("", ".")))
+        total += m.file_size
+        if total > max_bytes:
+            raise ArtibusError(f"{label}: its members unpack to more than the limit of "
+                               f"{max_bytes // 2 ** 20} MiB ($ARTIBUS_MAX_UNPACKED_MB), at member '{name}'")
+    for key, name in seen.items():
+        if key in dirs and not name.endswith("/"):
+            raise ArtibusError(f"{label}: member '{name}' is a file and also a folder of other members")
+    return members
+
+
+def extract_archive(path, dest=None, prefix="artibus-", members=None):
+    """The archive ``path`` (a zip: .ssp, .fmu) checked (check_archive), then
+    unpacked into ``dest`` or a new temporary folder, whose path is returned;
+    ``members``: only these names. On any failure (a bad member, a full disk)
+    the temporary folder is removed and the error names the archive."""
+    import shutil
+    import tempfile
+    import zipfile
+    path = Path(path)
+    made = dest is None
+    try:
+        z = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, OSError) as e:
+        raise ArtibusError(f"{path}: not a readable zip archive: {e}") from None
+    target = None
+    try:
+        with z:
+            check_archive(z, str(path))
+            target = Path(tempfile.mkdtemp(prefix=prefix)) if made else Path(dest)
+            z.extractall(target, members=members)
+        return target
+    except BaseException as e:
+        if made and target is not None:
+            shutil.rmtree(target, ignore_errors=True)
+        if isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT):
+            raise ArtibusError(f"{path}: no space left on device while unpacking it into "
+                               f"{target.parent if made and target else target} (a larger TMPDIR?); "
+                               f"nothing of it is left there") from None
+        if isinstance(e, OSError):
+            raise ArtibusError(f"{path}: cannot unpack it into {target}: {e}") from None
+        if isinstance(e, (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplementedError)):
+            raise ArtibusError(f"{path}: a member cannot be unpacked: {e}") from None
+        raise

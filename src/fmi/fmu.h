@@ -96,6 +96,9 @@ typedef struct ModelInstance {
                                or restored */
     bool dirty;             /* outputs must be recalculated before a get */
     void *solver;           /* model-owned resources (CVODE memory, tables) */
+    char *capture;          /* non-NULL on the layer's scratch instance that checks
+                               a state's parameters: the first error message goes
+                               here (512 bytes), nothing to the importer */
 } ModelInstance;
 
 #define D (&comp->v.d)      /* the variables, in a model's functions */
@@ -106,6 +109,16 @@ typedef struct ModelInstance {
  * Called in initialization mode whenever an output is read, and at
  * fmi2ExitInitializationMode. Must be cheap and idempotent. */
 Status model_init(ModelInstance *comp);
+
+/* The invariants on the parameters that model_init enforces beyond their
+ * declared ranges (a far look-ahead point beyond the near one, a speed table
+ * that increases, a mass matrix that is positive definite, ...). Reads v.d
+ * only; on a violation logs why (log_error, naming the variables and values)
+ * and returns Error. model_init calls it first; the layer (fmu_core.c) calls it on
+ * every state restored after initialisation (on a scratch copy, its message
+ * becomes the restore's), so that no state holds parameters model_init would
+ * have refused: one function, so the two cannot drift apart. */
+Status model_check_parameters(ModelInstance *comp);
 
 /* Compute all outputs from the state and the current inputs. */
 void model_outputs(ModelInstance *comp);

@@ -45,6 +45,13 @@ static void vlog(ModelInstance *comp, Status status, LogCategory cat, const char
     if (!comp) return;
     char buf[1024];
     vsnprintf(buf, sizeof buf, fmt, ap);
+    if (comp->capture) {    /* a scratch instance (params_valid): keep the first error */
+        if (status >= Error && !comp->capture[0]) {
+            buf[511] = '\0';
+            memcpy(comp->capture, buf, strlen(buf) + 1);
+        }
+        return;
+    }
     layer_log(comp, status, cat, buf);
 }
 
@@ -337,6 +344,26 @@ static uint64_t state_sum(const FmuState *s) {
     return fnv1a(fnv1a(1469598103934665603ull, s->guid, sizeof s->guid), &s->v, sizeof s->v);
 }
 
+/* model_check_parameters on the parameters of state s, on a scratch instance
+   whose first error message lands in why[512] */
+static bool params_valid(ModelInstance *comp, const FmuState *s, char *why) {
+    ModelInstance *scratch = layer_calloc(comp, 1, sizeof *scratch);
+    if (!scratch) {
+        snprintf(why, 512, "out of memory");
+        return false;
+    }
+    scratch->v = s->v;
+    scratch->instanceName = comp->instanceName;
+    scratch->type = comp->type;
+    scratch->stopTime = INFINITY;
+    scratch->capture = why;
+    why[0] = '\0';
+    const Status st = model_check_parameters(scratch);
+    layer_free(comp, scratch);
+    if (st > Warning && !why[0]) snprintf(why, 512, "its parameters are not consistent");
+    return st <= Warning;
+}
+
 static Status check_state(ModelInstance *comp, const char *fn, const FmuState *s) {
     if (!s || s->magic != FMUSTATE_MAGIC || s->size != sizeof(FmuState) ||
         memchr(s->guid, '\0', sizeof s->guid) == NULL || strcmp(s->guid, MODEL_GUID) != 0)
@@ -383,8 +410,12 @@ static Status check_state(ModelInstance *comp, const char *fn, const FmuState *s
     /* before initialisation model_init sets the ModelState from the variables
        before any use of it (refresh, exit from initialization mode): not checked */
     char why[512] = "";
-    if (!(st & (S_INSTANTIATED | S_INIT_MODE)) &&
-        !model_state_valid(&s->v.d, &s->v.s, s->v.time, why, sizeof why))
+    if (st & (S_INSTANTIATED | S_INIT_MODE)) return OK;
+    /* the parameters as model_init checks them (the same function), then the
+       model's own states */
+    if (!params_valid(comp, s, why))
+        return log_error(comp, "%s: the state's parameters are not valid: %s", fn, why);
+    if (!model_state_valid(&s->v.d, &s->v.s, s->v.time, why, sizeof why))
         return log_error(comp, "%s: the state is not valid: %s", fn, why[0] ? why : "(no reason given)");
     return OK;
 }

@@ -10,7 +10,7 @@ import math
 from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssv
 
-from artibus.base import ArtibusError, ROOT
+from artibus.base import ArtibusError, ROOT, parse_integer, parse_real
 
 PARAMETER_DIR = ROOT / "ssp" / "parameters"
 
@@ -90,9 +90,9 @@ def parse_set(items):
 
 def typed(type_, text):
     if type_ == "Real":
-        return float(text)
+        return parse_real(text)
     if type_ == "Integer":
-        return int(text)
+        return parse_integer(text)
     if type_ == "Enumeration":      # an item's name (SSP 1.0), or its value: see coerce
         return text
     if type_ == "Boolean":
@@ -117,7 +117,7 @@ def coerce(v, value, finite=True):
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
             raise ValueError(f"a Real is a number, not {type(value).__name__} {value!r}")
         try:
-            x = float(text if text is not None else value)
+            x = parse_real(text if text is not None else value)
         except ValueError:
             raise ValueError("not a number") from None
         if finite and not math.isfinite(x):
@@ -160,12 +160,12 @@ def _integer(value, text):
         k = value
     elif isinstance(value, float) or text is not None:
         try:
-            k = int(text) if text is not None else None
+            k = parse_integer(text) if text is not None else None
         except ValueError:
             k = None
         if k is None:
             try:
-                x = float(text if text is not None else value)
+                x = parse_real(text if text is not None else value)
             except ValueError:
                 raise ValueError("not an integer") from None
             if not (math.isfinite(x) and x.is_integer()):

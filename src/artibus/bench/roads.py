@@ -28,6 +28,7 @@ SOURCE = ROOT / "src" / "models" / "RoadFollowDriver" / "roads.c"
 MAX_POINTS = 20000          # ROAD_MAX_POINTS in roads.h
 RAW_MAX = 200000            # ROAD_RAW_MAX in roads.h
 ERRLEN = 512
+LINE_MAX = 4096             # ROAD_LINE_MAX in roads.h: a longer CSV line is refused
 
 DEFAULTS = dict(before=25.0, after=50.0, laneLength=25.0, laneOffset=3.25, R=17.5,
                 isoWidth=2.55, step=0.02)
@@ -91,17 +92,18 @@ def generate(kind, **params):
     err = ctypes.create_string_buffer(ERRLEN)
     n = _library().road_generate(int(kind), ctypes.byref(p), _ptr(x), _ptr(y), RAW_MAX, err, ERRLEN)
     if n < 0:
-        raise ArtibusError(err.value.decode())
+        raise ArtibusError(err.value.decode(errors="replace"))
     return x[:n].copy(), y[:n].copy()
 
 
 def read_csv(path):
-    """A CSV road read by the FMU's reader: (x, y), or ArtibusError with file, line and value."""
+    """A CSV road read by the FMU's reader: (x, y), or ArtibusError with file, line and value
+    (a line longer than LINE_MAX characters is refused, never split)."""
     x, y = np.zeros(RAW_MAX), np.zeros(RAW_MAX)
     err = ctypes.create_string_buffer(ERRLEN)
     n = _library().road_read_csv(os.fsencode(path), _ptr(x), _ptr(y), RAW_MAX, err, ERRLEN)
     if n < 0:
-        raise ArtibusError(err.value.decode())
+        raise ArtibusError(err.value.decode(errors="replace"))
     return x[:n].copy(), y[:n].copy()
 
 
@@ -112,7 +114,7 @@ def resample(x, y, ds=0.1):
     r = _Road()
     err = ctypes.create_string_buffer(ERRLEN)
     if _library().road_resample(_ptr(x), _ptr(y), len(x), float(ds), ctypes.byref(r), err, ERRLEN):
-        raise ArtibusError(err.value.decode())
+        raise ArtibusError(err.value.decode(errors="replace"))
     n = r.n
     return Road(*(np.array(getattr(r, k)[:n]) for k in ("s", "x", "y", "psi")), r.length, r.ds)
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from artibus.base import ArtibusError
+from artibus.base import ArtibusError, parse_integer, parse_real
 
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -19,6 +19,20 @@ NS = {
 }
 MAPPINGS = {"BooleanMappingTransformation": "Boolean", "IntegerMappingTransformation": "Integer",
             "EnumerationMappingTransformation": "Enumeration"}
+
+
+def _number(el, attr, default, where, integer=False):
+    """Attribute ``attr`` of element ``el`` as a number (the strict syntax of
+    artibus.base.parse_real), ``default`` when absent; ArtibusError naming the
+    file, line, element, attribute and value otherwise."""
+    text = el.get(attr)
+    if text is None:
+        return default
+    try:
+        return parse_integer(text) if integer else parse_real(text)
+    except ValueError:
+        raise ArtibusError(f"{where}:{el.sourceline}: <{etree.QName(el).localname} {attr}=\"{text}\">: "
+                           f"not {'an integer' if integer else 'a number'}") from None
 
 
 def map_transformation(element, where):
@@ -35,7 +49,7 @@ def map_transformation(element, where):
             if name == "Boolean":
                 src, dst = src in ("true", "1"), dst in ("true", "1")
             elif name == "Integer":
-                src, dst = int(src), int(dst)
+                src, dst = _number(e, "source", None, where, True), _number(e, "target", None, where, True)
             if src in table:
                 raise ArtibusError(f"{where}: {kind}: MapEntry source=\"{e.get('source')}\" is given twice")
             table[src] = dst
@@ -99,9 +113,13 @@ def model_description(ssp, source):
     st = Path(ssp).stat()
     key = (str(ssp), st.st_mtime_ns, st.st_size, source)
     if key not in _MD_CACHE:
-        with zipfile.ZipFile(ssp) as z, zipfile.ZipFile(z.open(source)) as fmu, \
-                tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
-            xml = Path(tmp) / "modelDescription.xml"
-            xml.write_bytes(fmu.read("modelDescription.xml"))
-            _MD_CACHE[key] = read_model_description(str(xml), validate=False)
+        try:
+            with zipfile.ZipFile(ssp) as z, zipfile.ZipFile(z.open(source)) as fmu, \
+                    tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
+                xml = Path(tmp) / "modelDescription.xml"
+                xml.write_bytes(fmu.read("modelDescription.xml"))
+                _MD_CACHE[key] = read_model_description(str(xml), validate=False)
+        except Exception as e:      # not a zip, no modelDescription.xml, not FMI XML: named, no traceback
+            raise ArtibusError(f"{ssp}: {source}: not an FMU whose modelDescription.xml can be read "
+                               f"({type(e).__name__}: {e})") from None
     return _MD_CACHE[key]

@@ -34,9 +34,10 @@ from pathlib import Path
 
 from lxml import etree
 
-from artibus.base import ROOT, ArtibusError, fmu_dir
+from artibus.base import ROOT, ArtibusError, fmu_dir, parse_real
 from artibus.bench.ssd import (MAPPINGS, NS, _component_sources, _compose, _depth,  # noqa: F401
-                               _sources_inside_components, map_transformation, model_description)
+                               _number, _sources_inside_components, map_transformation,
+                               model_description)
 from artibus.bench.units import declared_unit, fmu_units, ssp_units, to_unit
 
 BENCH_DIR = ROOT / "ssp" / "benches"
@@ -149,7 +150,7 @@ def variant_stop_time(ssp, names):
             for v in etree.fromstring(z.read(ref)).iterfind(".//artibus:Variant", NS):
                 if v.get("stopTime") is not None:
                     try:
-                        stop = float(v.get("stopTime"))
+                        stop = parse_real(v.get("stopTime"))
                     except ValueError:
                         stop = math.nan
                     if not stop > 0:
@@ -305,6 +306,14 @@ def read(ssp):
 
     ssp = str(ssp)
     where = f"{ssp}/SystemStructure.ssd"
+    from artibus.files import check_archive
+    try:
+        with zipfile.ZipFile(ssp) as z:   # its members checked before any is read (a second .ssd, a link)
+            check_archive(z, ssp)
+            if "SystemStructure.ssd" not in z.namelist():
+                raise ArtibusError(f"{ssp}: no SystemStructure.ssd in it (not an SSP archive)")
+    except (zipfile.BadZipFile, OSError) as e:
+        raise ArtibusError(f"{ssp}: not a readable SSP archive (a zip file): {e}") from None
     try:
         ssd = read_ssd(ssp, validate=True)
     except Exception as e:
@@ -317,8 +326,8 @@ def read(ssp):
     bench = Bench(name=ssd.name, file=where, components={}, connections=[])
     de = root.find("ssd:DefaultExperiment", NS)
     if de is not None:
-        bench.start_time = float(de.get("startTime", 0.0))
-        bench.stop_time = float(de.get("stopTime")) if de.get("stopTime") else None
+        bench.start_time = _number(de, "startTime", 0.0, where)
+        bench.stop_time = _number(de, "stopTime", None, where)
 
     xml_systems = {}
 
@@ -410,7 +419,7 @@ def read(ssp):
                 if kind == "LinearTransformation":
                     if not isinstance(value, float):
                         raise ArtibusError(f"{head}: a LinearTransformation needs a Real, got {value!r}")
-                    factor, offset = float(tr.get("factor", 1.0)), float(tr.get("offset", 0.0))
+                    factor, offset = _number(tr, "factor", 1.0, file), _number(tr, "offset", 0.0, file)
                     if src in given and not suppress:
                         later = (factor, offset)         # after the unit's conversion
                     else:
@@ -454,7 +463,7 @@ def read(ssp):
                 c.connectors = [k.name for k in el.connectors]
                 ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
                 if ann is not None and ann.get("stepSize"):
-                    c.step = float(ann.get("stepSize"))
+                    c.step = _number(ann, "stepSize", None, where)
                     if not c.step > 0:
                         raise ArtibusError(f"{where}:{ann.sourceline}: Component '{path}': "
                                            f"stepSize = {ann.get('stepSize')} must be > 0")
@@ -502,8 +511,8 @@ def read(ssp):
                 raise ArtibusError(f"{label}: '{n[1] or 'the system'}' declares no connector '{n[2]}'")
         # (FMPy's reader looks for the transformation in the wrong namespace: read it here)
         lt = xc.find("ssc:LinearTransformation", NS)
-        factor = float(lt.get("factor", 1.0)) if lt is not None else 1.0
-        offset = float(lt.get("offset", 0.0)) if lt is not None else 0.0
+        factor = _number(lt, "factor", 1.0, where) if lt is not None else 1.0
+        offset = _number(lt, "offset", 0.0, where) if lt is not None else 0.0
         mapping = map_transformation(xc, label)
         route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
         if route is not None:

@@ -43,6 +43,20 @@ def load_dbc(path, label=None):
         raise ArtibusError(f"{label}: not a valid DBC: {e}") from None
     if not db.messages:
         raise ArtibusError(f"{label}: the DBC defines no message")
+    # cantools keeps both of two messages with one identifier or name (the
+    # last wins its look-ups, with a logged warning only): refused here
+    ids, names = {}, {}
+    for m in db.messages:
+        if m.frame_id in ids:
+            raise ArtibusError(f"{label}: messages {ids[m.frame_id]} and {m.name} have the same identifier "
+                               f"0x{m.frame_id:03X}")
+        if m.name in names:
+            raise ArtibusError(f"{label}: two messages are named {m.name} (0x{names[m.name]:03X} and "
+                               f"0x{m.frame_id:03X})")
+        ids[m.frame_id], names[m.name] = m.name, m.frame_id
+    attr = db.dbc.attributes.get("Baudrate") if db.dbc else None
+    if attr is not None and not (isinstance(attr.value, int) and 0 < attr.value <= 1_000_000):
+        raise ArtibusError(f"{label}: Baudrate {attr.value!r}: expected a bit rate in bit/s (1 .. 1000000)")
     for m in db.messages:
         head = f"{label}: message {m.name} (0x{m.frame_id:03X})"
         if m.is_extended_frame or m.is_fd:
@@ -60,7 +74,10 @@ def load_dbc(path, label=None):
         attr = m.dbc.attributes.get("E2EDataID") if m.dbc else None
         if attr is None:
             raise ArtibusError(f"{head}: no E2EDataID attribute (the data ID of its CRC)")
-        if not m.cycle_time:
+        if not (isinstance(attr.value, int) and 0 <= attr.value <= 255):
+            raise ArtibusError(f"{head}: E2EDataID {attr.value!r}: expected an integer 0 .. 255 "
+                               f"(the data ID of its CRC, E2E profile 2)")
+        if not (isinstance(m.cycle_time, int) and m.cycle_time > 0):
             raise ArtibusError(f"{head}: no GenMsgCycleTime (the network sends cyclically)")
     return db
 

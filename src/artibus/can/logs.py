@@ -1,5 +1,7 @@
 """CAN logs: the frames of a .blf or .asc log (python-can's readers), decoded
 through the DBC with the receivers' E2E check of each frame (``decode_log``)."""
+import math
+import re
 from pathlib import Path
 
 from artibus.base import ArtibusError
@@ -7,7 +9,10 @@ from artibus.can.dbc import load_dbc
 
 
 def read_log(path):
-    """The CAN frames of a .blf or .asc log (python-can's readers)."""
+    """The CAN frames of a .blf or .asc log (python-can's readers), in time
+    order. Refused with an error naming the file and the frame: a log the
+    library cannot read (its error wrapped, with the frame it stopped at), a
+    time stamp that is NaN or infinite, time that goes backwards."""
     import can
     path = Path(path)
     if not path.is_file():
@@ -15,27 +20,66 @@ def read_log(path):
     suffix = path.suffix.lower()
     if suffix not in (".blf", ".asc"):
         raise ArtibusError(f"{path}: a CAN log is .blf or .asc")
-    reader = can.BLFReader(str(path)) if suffix == ".blf" else can.ASCReader(str(path))
+    if suffix == ".asc":
+        _check_asc_stamps(path)
+    frames, k, last = [], 0, -math.inf
     try:
-        return [m for m in reader if not m.is_error_frame and not m.is_remote_frame]
-    except Exception as e:
-        raise ArtibusError(f"{path}: cannot read the log: {e}") from None
+        with (can.BLFReader(str(path)) if suffix == ".blf" else can.ASCReader(str(path))) as reader:
+            for k, m in enumerate(reader, start=1):
+                t = m.timestamp
+                if not math.isfinite(t):
+                    raise ArtibusError(f"{path}: frame {k} (ID 0x{m.arbitration_id:03X}): time stamp {t} "
+                                       f"is not a finite number")
+                if t < last:
+                    raise ArtibusError(f"{path}: frame {k} (ID 0x{m.arbitration_id:03X}): time {t:.6f} s "
+                                       f"is before the previous frame's {last:.6f} s (the log's time goes "
+                                       f"backwards)")
+                last = t
+                if not m.is_error_frame and not m.is_remote_frame:
+                    frames.append(m)
+    except ArtibusError:
+        raise
+    except Exception as e:      # python-can's parse errors (BLFParseError, struct.error, ValueError, ...)
+        at = f"frame {k + 1}" + (f", after t = {last:.6f} s" if k else ", the first")
+        raise ArtibusError(f"{path}: cannot read the log at {at}: {type(e).__name__}: {e}") from None
+    return frames
 
 
-def decode_log(path, dbc):
+_ASC_FRAME = re.compile(r"\s*(\S+)\s+(\d+|CANFD)\s+[0-9A-Fa-f]+x?\s+(Rx|Tx)\b")
+_ASC_STAMP = re.compile(r"[0-9]+(\.[0-9]*)?")
+
+
+def _check_asc_stamps(path):
+    """python-can's ASC reader skips, without a word, a frame line whose time
+    stamp is not a plain number (nan, inf, -1.0): refused here, naming the line"""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            for n, line in enumerate(f, start=1):
+                m = _ASC_FRAME.match(line)
+                if m and not _ASC_STAMP.fullmatch(m.group(1)):
+                    raise ArtibusError(f"{path}, line {n}: time stamp {m.group(1)!r} is not a finite "
+                                       f"number of seconds (a frame line)")
+    except OSError as e:
+        raise ArtibusError(f"{path}: cannot read the log: {e.strerror or e}") from None
+
+
+def decode_log(path, dbc, unknown=None):
     """Rows (time s, message, signal, value, unit, e2e) of every frame of a log
     that the DBC knows; e2e is 'ok', or why a receiver checking every frame of
     the log would reject it (never use it): 'crc', 'repeated' (counter equal
     to the last), 'sequence' (counter ahead by more than the cycles elapsed
     since the last good frame, from the timestamps and the cycle time) -- the
-    check of ``Network._deliver``."""
+    check of ``Network._deliver``. unknown: a dict that receives {identifier:
+    frames} of the frames whose identifier the DBC does not know (skipped)."""
     from cantools.autosar.end_to_end import compute_profile2_crc
     db = load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
     rows, last, good = [], {}, {}
     for frame in read_log(path):
         try:
             m = db.get_message_by_frame_id(frame.arbitration_id)
-        except KeyError:
+        except KeyError:        # skipped, as every log viewer does; counted for the caller's warning
+            if unknown is not None:
+                unknown[frame.arbitration_id] = unknown.get(frame.arbitration_id, 0) + 1
             continue
         data = bytes(frame.data)
         if len(data) != m.length:

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus.base import ROOT, ArtibusError
+from artibus.base import ROOT, ArtibusError, parse_real
 from artibus.bench.units import declared_unit
 from artibus.can.dbc import COUNTER_SIGNAL, CRC_SIGNAL, UNITS, _conversion, load_dbc
 from artibus.can.logs import decode_log
@@ -71,7 +71,11 @@ def read_csv_log(path):
     path = Path(path)
     if not path.is_file():
         raise ArtibusError(f"{path}: no such file")
-    lines = [l for l in path.read_text().splitlines() if l.strip() and not l.lstrip().startswith("#")]
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as e:
+        raise ArtibusError(f"{path}: not a text file (UTF-8): byte {e.start}: {e.reason}") from None
+    lines = [l for l in text.splitlines() if l.strip() and not l.lstrip().startswith("#")]
     if not lines:
         raise ArtibusError(f"{path}: no header row")
     header = [h.strip() for h in lines[0].split(",")]
@@ -85,7 +89,7 @@ def read_csv_log(path):
         for i, c in enumerate(cells):
             c = c.strip()
             try:
-                cols[i].append(float(c) if c else math.nan)
+                cols[i].append(parse_real(c) if c else math.nan)
             except ValueError:
                 raise ArtibusError(f"{path}: data row {n - 1}, column {header[i]}: '{c}' is not a number") from None
     t = np.array(cols[0])
@@ -99,13 +103,18 @@ def read_csv_log(path):
     return out
 
 
-def read_can_log(path, dbc):
+def read_can_log(path, dbc, warnings=None):
     """{Signal and Message.Signal: Series} of the frames of a .blf/.asc log that
     pass the E2E check, each valid from the start of its cycle; a message's
     alive counter only as Message.AliveCounter (the counter of each accepted
     frame, what a route of it delivers)."""
     db = load_dbc(dbc) if not hasattr(dbc, "messages") else dbc
-    rows = decode_log(path, db)
+    unknown = {}
+    rows = decode_log(path, db, unknown)
+    if unknown and warnings is not None:
+        ids = ", ".join(f"0x{i:03X} ({n})" for i, n in sorted(unknown.items())[:8])
+        warnings.append(f"{path}: {sum(unknown.values())} frame(s) with an identifier the DBC does not "
+                        f"know, skipped: {ids}{', ...' if len(unknown) > 8 else ''}")
     data = {}
     for t, msg, sig, v, unit, e2e in rows:
         if e2e != "ok" or sig == CRC_SIGNAL:
@@ -122,13 +131,15 @@ def read_can_log(path, dbc):
     return out
 
 
-def read_log(path, dbc=None):
+def read_log(path, dbc=None, warnings=None):
+    """{signal: Series} of a CSV, .blf or .asc log; warnings: a list that
+    receives what was skipped (frames of identifiers the DBC does not know)."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".csv":
         return read_csv_log(path)
     if suffix in (".blf", ".asc"):
-        return read_can_log(path, dbc or ROOT / "ssp" / "can" / "Bus36m.dbc")
+        return read_can_log(path, dbc or ROOT / "ssp" / "can" / "Bus36m.dbc", warnings)
     raise ArtibusError(f"{path}: a log is .csv, .blf or .asc")
 
 
@@ -237,6 +248,7 @@ class Replay:
     drive: dict
     label: str = "model"  # what the run is (e.g. "prediction model")
     base: object = None   # (label, result, errors) of the bench as it stands, when a derived input ran
+    warnings: list = field(default_factory=list)   # what the reader skipped, a log shorter than the run
 
 
 def _route_profile(b):
@@ -280,9 +292,11 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
         raise ArtibusError(f"replay into {name}: no driving signal: give --map SIGNAL=COMP.INPUT "
                            f"(benches with a replay profile: {', '.join(PROFILES)}, or a CAN log into a "
                            f"bench that routes connections over CAN)")
+    warnings = []
     if dbc is None and b.can is not None and can_log:
-        dbc = _bench_dbc(bench_ssp, b)
-    log = read_log(log_path, dbc)
+        log = read_log(log_path, _bench_dbc(bench_ssp, b), warnings)
+    else:
+        log = read_log(log_path, dbc, warnings)
     # every driving signal must be in the log, every input a Real input of the bench
     for inp, (sig, unit) in drive.items():
         if sig not in log or len(log[sig].time) == 0:
@@ -311,6 +325,10 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
     # the last sample holds for its period (a CAN message's cycle)
     t_end = min(log[s].time[-1] + log[s].period for s, _ in drive.values())
     stop = stop_time if stop_time is not None else t_end
+    if stop > t_end + 1e-9:
+        short = min(drive.values(), key=lambda d: log[d[0]].time[-1] + log[d[0]].period)[0]
+        warnings.append(f"{log_path}: the log ends at t = {t_end:g} s (signal {short}), before the stop "
+                        f"time {stop:g} s: its last samples are held from there on")
     cmap = None
     if profile.steering is not None:
         cmap = steering_map(steering_map_name or profile.steering[1])
@@ -359,16 +377,20 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
                         stimuli={k: f for k, f in stimuli.items() if k not in dict(derived)}, cut=cut) as sim:
             r0 = sim.run(stop_time=stop)
         base = ("model", r0, compare(r0, log, profile))
-    return Replay(result, errors, log, profile, drive, label, base)
+    return Replay(result, errors, log, profile, drive, label, base, warnings)
 
 
 def _bench_dbc(bench_ssp, b):
+    """The bench's DBC, loaded from the .ssp (no file left behind)."""
     import tempfile
     import zipfile
-    tmp = Path(tempfile.mkdtemp(prefix="artibus-replay-"))
-    with zipfile.ZipFile(bench_ssp) as z:
-        z.extract(b.can["source"], tmp)
-    return tmp / b.can["source"]
+    source = b.can["source"]
+    with zipfile.ZipFile(bench_ssp) as z, tempfile.TemporaryDirectory(prefix="artibus-replay-") as tmp:
+        if source not in z.namelist():
+            raise ArtibusError(f"{bench_ssp}: <Can source=\"{source}\">: no such member")
+        f = Path(tmp) / Path(source).name
+        f.write_bytes(z.read(source))
+        return load_dbc(f, f"{bench_ssp}/{source}")
 
 
 def _to_si(unit):

@@ -188,6 +188,9 @@ class Fmu:
                 self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                        modelIdentifier=self.md.coSimulation.modelIdentifier,
                                        instanceName=instance_name)
+        except ArtibusError:     # the archive refused or not unpacked (artibus.cache removed its copy)
+            self._remove_dir()
+            raise
         except Exception as e:   # a missing or broken binary
             self._remove_dir()
             raise ArtibusError(f"{self.path}: {self.md.modelName}'s binary cannot be loaded: {e}") from None

@@ -72,6 +72,8 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         if outputs is None:
             outputs = [v.name for v in fmu.md.modelVariables if v.causality == "output"]
         types = [fmu.var(n).type for n in outputs]
+        from artibus.runner.results import check_room      # as `run` does: refused before it starts
+        check_room(int(round((stop_time - start_time) / step)) + 1, len(outputs) + 1, path)
         strings = [n for n, t in zip(outputs, types) if t == "String"]
         result = Result(["time"] + list(outputs))
         result.strings = {n: [] for n in strings}

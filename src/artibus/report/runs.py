@@ -55,14 +55,20 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
             except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
                 runner.save_partial(e, out)
                 raise
-            print_warnings((u.path, u.fmu.log) for u in sim.units)
-            if result.terminated is not None:   # an FMU's own end (fmi2Terminated): a normal end, said once
-                log(f"{name}: {result.terminated}")
-            can_summary = None
-            if sim.can is not None:
-                can_summary = sim.can.summary(result.time[-1] - result.time[0])
-                log(can_summary)
-            runner.save(result, out)
+            try:
+                print_warnings((u.path, u.fmu.log) for u in sim.units)
+                if result.terminated is not None:   # an FMU's own end (fmi2Terminated): a normal end, said once
+                    log(f"{name}: {result.terminated}")
+                can_summary = None
+                if sim.can is not None:
+                    can_summary = sim.can.summary(result.time[-1] - result.time[0])
+                    log(can_summary)
+                runner.save(result, out)
+            except KeyboardInterrupt as e:      # the run had finished: its results are never discarded
+                if getattr(e, "written", None) is None:
+                    e.result = result
+                    runner.save_partial(e, out)
+                raise
             span = result.time[-1] - result.time[0]
             log(f"{name}: {out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
                 f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")

@@ -1,5 +1,5 @@
 """A run's results in memory and on disk: the room its table needs
-(``_check_room``), CSV or MATLAB files with their units (``save``,
+(``check_room``), CSV or MATLAB files with their units (``save``,
 ``units_path``, ``read_units``) and where the results of a run stopped midway
 go (``partial_path``, ``save_partial``)."""
 from pathlib import Path
@@ -21,7 +21,7 @@ def _available_memory():
     return None
 
 
-def _check_room(rows, cols, where, available=None):
+def check_room(rows, cols, where, available=None):
     """The results are a table of rows x cols doubles in memory (every base
     step, every recorded signal): a run whose table would take more than half
     the memory available is refused before it starts, saying what to change,
@@ -39,7 +39,9 @@ def save(result, path):
     """CSV, or MATLAB .mat (one variable per signal, names made MATLAB-safe),
     written to a temporary name beside ``path`` and renamed (artibus.files):
     ``path`` is the complete file or is left as it was, never torn by a
-    Ctrl-C, a SIGTERM or a full disk.
+    Ctrl-C, a SIGTERM or a full disk. A Ctrl-C or SIGTERM while it writes is
+    held until the file (and its units) are complete, then raised with
+    ``e.written = path``.
 
     Units (Result.units): a CSV keeps its one header line of names; the units go
     to the sidecar ``units_path(path)`` (``out.csv`` -> ``out.units.csv``: a CSV
@@ -47,10 +49,18 @@ def save(result, path):
     order, "" for none), written after the results (an interrupt in between
     leaves the results without their units, never units without results). A .mat holds a struct
     ``units`` with a field per signal (the signal's MATLAB-safe name) holding its
-    unit; a signal whose safe name is ``units`` is saved as ``units_``."""
+    unit; a signal whose safe name is ``units`` is saved as ``units_``.
+    Returns ``path``."""
+    from artibus.files import signals_held
+    path = Path(path)
+    with signals_held(written=path):     # a Ctrl-C or SIGTERM now is taken after the write
+        _save(result, path)
+    return path
+
+
+def _save(result, path):
     import csv
     from artibus.files import atomic_path
-    path = Path(path)
     units = getattr(result, "units", None) or {}
     with atomic_path(path) as tmp:
         if path.suffix == ".mat":

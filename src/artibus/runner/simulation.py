@@ -39,7 +39,7 @@ from artibus.bench import ssp as ssp_mod
 from artibus.fmu import Result, SimulationError, Termination, terminated
 from artibus.runner.core import _core_stepper
 from artibus.runner.plan import _Plan
-from artibus.runner.results import _check_room
+from artibus.runner.results import check_room
 from artibus.runner.setup import _Setup
 from artibus.runner.unit import _last_message
 
@@ -272,7 +272,7 @@ class Simulation(_Setup):
         rec = self._Recorder(self.names, self._rec)
         h = self.base_step
         n = int(round((stop - start) / h))
-        _check_room(n + 1, len(self.names), self.bench.file)
+        check_room(n + 1, len(self.names), self.bench.file)
         t = start
         current = stepping = None
         plan = _Plan(self.order, n)

@@ -7,6 +7,7 @@
  * tauP is solved exactly over the step (no solver). The dissipated energy is
  * integrated exactly over each step with the inputs held. */
 #include <math.h>
+#include <string.h>
 
 #include "fmu.h"
 #include "damper.h"
@@ -18,20 +19,27 @@ static double valve_pressure(ModelInstance *comp) {
     return D->tauP > 0.0 ? S->pValve : damper_pset(&S->par, D->pct);
 }
 
-Status model_init(ModelInstance *comp) {
-    DamperParams *p = &S->par;
-    p->R = D->R;
-    p->Xrear = D->Xrear;
-    p->Yrear = D->Yrear;
-    p->Ap = D->Ap;
-    p->pMax = D->pMax;
-    p->v0 = D->v0;
-    p->LambdaStop = D->LambdaStop;
-    p->kStop = D->kStop;
-    p->cStop = D->cStop;
-    p->bothWays = D->bothWays ? 1 : 0;
+/* the damper's parameters from the variables */
+static DamperParams damper_params(const ModelData *d) {
+    DamperParams p;
+    memset(&p, 0, sizeof p);
+    p.R = d->R;
+    p.Xrear = d->Xrear;
+    p.Yrear = d->Yrear;
+    p.Ap = d->Ap;
+    p.pMax = d->pMax;
+    p.v0 = d->v0;
+    p.LambdaStop = d->LambdaStop;
+    p.kStop = d->kStop;
+    p.cStop = d->cStop;
+    p.bothWays = d->bothWays ? 1 : 0;
+    return p;
+}
+
+Status model_check_parameters(ModelInstance *comp) {
+    const DamperParams p = damper_params(D);
     double Lshort, at;
-    const int side = damper_check(p, &Lshort, &at);
+    const int side = damper_check(&p, &Lshort, &at);
     if (side)
         return log_error(comp, "geometry R = %g m, Xrear = %g m, Yrear = %g m: the %s cylinder would be "
                                "%g m long at Lambda = %g rad (%g deg), shorter than %g m (or through zero "
@@ -39,6 +47,13 @@ Status model_init(ModelInstance *comp) {
                          D->R, D->Xrear, D->Yrear, side > 0 ? "left" : "right", Lshort, at,
                          at * 180.0 / M_PI, DAMPER_L_MIN, DAMPER_CHECK_MARGIN,
                          D->LambdaStop + DAMPER_CHECK_MARGIN, D->LambdaStop);
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    S->par = damper_params(D);
+    const DamperParams *p = &S->par;
     S->pValve = damper_pset(p, D->pct);      /* the valve settled at the initial command */
     S->Ediss = 0.0;
     S->warned = 0;
@@ -88,8 +103,13 @@ void model_free(ModelInstance *comp) { (void)comp; }
 
 /* FMU state: parameters (from model_init), valve pressure, dissipated energy */
 bool model_state_valid(const ModelData *d, const ModelState *s, double time, char *why, size_t n) {
-    (void)d; (void)time;
+    (void)time;
     const DamperParams *p = &s->par;
+    const DamperParams q = damper_params(d);      /* the parameters model_init copied */
+    if (p->R != q.R || p->Xrear != q.Xrear || p->Yrear != q.Yrear || p->Ap != q.Ap || p->pMax != q.pMax ||
+        p->v0 != q.v0 || p->LambdaStop != q.LambdaStop || p->kStop != q.kStop || p->cStop != q.cStop ||
+        p->bothWays != q.bothWays)
+        return STATE_INVALID("the damper's parameters are not those of its variables");
     if (!finite_all(&p->R, (size_t)(&p->cStop - &p->R) + 1) || !isfinite(s->pValve) || !isfinite(s->Ediss))
         return STATE_INVALID("a parameter, the valve pressure or the energy is not finite");
     if ((p->bothWays != 0 && p->bothWays != 1) || (s->warned != 0 && s->warned != 1))

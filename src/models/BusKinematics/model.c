@@ -54,11 +54,16 @@ static Status check_inputs(ModelInstance *comp, double t) {
     return OK;
 }
 
-Status model_init(ModelInstance *comp) {
+Status model_check_parameters(ModelInstance *comp) {
     if (D->k > D->N)
         return log_error(comp, "k = %d: the driving axle must be on a segment 0..N = 0..%d", D->k, D->N);
     if (D->j > D->N)
         return log_error(comp, "j = %d: the distinguished segment must be 0..N = 0..%d", D->j, D->N);
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
     if (check_inputs(comp, comp->v.time)) return Error;
 
     /* the initial state: tractor pose and joint angles, then the pose of j */

@@ -18,7 +18,7 @@ static DcInputs inputs(ModelInstance *comp) {
     return in;
 }
 
-Status model_init(ModelInstance *comp) {
+static DcParams dc_params(ModelInstance *comp) {
     DcParams p = { .f1 = D->f1, .b1 = D->b1, .b11 = D->b11, .f2 = D->f2, .b2 = D->b2,
                    .m2 = D->m2, .Crear = D->Crear, .option = D->option,
                    .K1 = D->K1, .K2 = D->K2, .K3 = D->K3, .Krev = D->Krev,
@@ -29,7 +29,13 @@ Status model_init(ModelInstance *comp) {
         p.KcSpeed[i] = D->KcSpeed[i + 1];
         p.KcGain[i] = D->KcGain[i + 1];
     }
-    const int bad = dc_setup(&S->c, &p);
+    return p;
+}
+
+Status model_check_parameters(ModelInstance *comp) {
+    const DcParams p = dc_params(comp);
+    DcController scratch;
+    const int bad = dc_setup(&scratch, &p);
     if (bad == -14)
         return log_error(comp, "parameter pctFloor = %g %% is above pctMax = %g %%: the floor must "
                                "lie within the range of the request", D->pctFloor, D->pctMax);
@@ -44,6 +50,13 @@ Status model_init(ModelInstance *comp) {
                                "(seed 001, eq. 2.3)", D->f2, D->b2);
     if (bad) return log_error(comp, "parameter %s is not valid for the damping controller",
                               dc_param_name(bad));
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    const DcParams p = dc_params(comp);
+    if (dc_setup(&S->c, &p)) return log_error(comp, "the damping controller's set-up failed");
     S->t0 = comp->v.time;
     S->k = 0;
     const DcInputs in = inputs(comp);

@@ -39,13 +39,26 @@ static unsigned sample(ModelInstance *comp, double t) {
     return fm_sample(&S->f, gamma1_at(comp, t), d1, d2, D->gamma4, D->gamma6);
 }
 
-Status model_init(ModelInstance *comp) {
+static FmParams fm_params(ModelInstance *comp) {
     const FmParams p = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lA3 = D->lA3, .lg2 = D->lg2,
                          .l3 = D->l3, .lA5 = D->lA5, .gamma3Max = D->gamma3Max,
                          .gamma5Max = D->gamma5Max };
-    const int bad = fm_setup(&S->f, &p);
+    return p;
+}
+
+Status model_check_parameters(ModelInstance *comp) {
+    const FmParams p = fm_params(comp);
+    __typeof__(comp->v.s.f) scratch;
+    const int bad = fm_setup(&scratch, &p);
     if (bad) return log_error(comp, "parameter %s is not valid for the force minimisation "
                                     "(lengths must be > 0, 0 < limit < pi/2)", fm_param_name(bad));
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    const FmParams p = fm_params(comp);
+    if (fm_setup(&S->f, &p)) return log_error(comp, "the force minimisation's set-up failed");
     S->t0 = comp->v.time;
     S->k = 0;
     sample(comp, comp->v.time);              /* the outputs of the initial inputs */

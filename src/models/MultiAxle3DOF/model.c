@@ -51,7 +51,7 @@ static void steering(ModelInstance *comp, double t, double delta[]) {
         delta[1] += D->testSteerAmp;
 }
 
-Status model_init(ModelInstance *comp) {
+Status model_check_parameters(ModelInstance *comp) {
     MaVehicle veh;
     MaMass mm;
     make_vehicle(comp, &veh);
@@ -63,6 +63,15 @@ Status model_init(ModelInstance *comp) {
         return log_error(comp, "K_phi = %g N m/rad must exceed m_b g h_b = %g N m/rad, or the body "
                                "rolls over under its own weight (eq. 2, third row)",
                          D->K_phi, D->m_b * MA_G * D->h_b);
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    MaVehicle veh;
+    MaMass mm;
+    make_vehicle(comp, &veh);
+    ma_prepare(&veh, &mm);
     D->w_r = D->v = D->p = D->phi = D->psi = D->x = D->y = 0.0;
     comp->v.s.warnedSpeed = 0;
     log_event(comp, "n = %d axles, M = %g kg, sum m_i l_i = %g kg m, I_ZZ = %g kg m2, I_XX = %g kg m2",

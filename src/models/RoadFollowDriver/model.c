@@ -137,7 +137,7 @@ static void sample(ModelInstance *comp, const Road *road, const DriverParams *p)
     }
 }
 
-Status model_init(ModelInstance *comp) {
+Status model_check_parameters(ModelInstance *comp) {
     if (D->nSpeed == 1)
         return log_error(comp, "nSpeed = 1: a speed profile needs 2..10 points (0: constant vSet)");
     for (int k = 2; k <= D->nSpeed; k++)
@@ -152,7 +152,11 @@ Status model_init(ModelInstance *comp) {
                          D->lookFar0, D->tFar, D->lookNear0, D->tNear);
     if (!(D->FxMin <= D->FxMax))
         return log_error(comp, "FxMin = %g N is above FxMax = %g N", D->FxMin, D->FxMax);
+    return OK;
+}
 
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
     Work *w = comp->solver;
     if (!w) {
         w = comp->solver = malloc(sizeof(Work));

@@ -146,23 +146,43 @@ static const char *skip_sep(const char *p) {
     return p;
 }
 
+/* a decimal number: strtod also takes hex floats (0x1p3), refused here as
+   everywhere in artibus (inf and nan are read, then refused as not finite
+   with their own message); *end = p if none */
+static double decimal(const char *p, char **end) {
+    const double v = strtod(p, end);
+    for (const char *q = p; q < *end; q++)
+        if (*q == 'x' || *q == 'X') {
+            *end = (char *)p;
+            return 0.0;
+        }
+    return v;
+}
+
 int road_read_csv(const char *path, double *x, double *y, int cap, char *err, size_t errlen) {
     FILE *f = fopen(path, "r");
     if (!f) return fail(err, errlen, "road file '%s': cannot open: %s", path, strerror(errno));
-    char line[1024];
+    char line[ROAD_LINE_MAX + 2];     /* the characters, the newline, the terminator */
     int n = 0, lineno = 0, prevline = 0, content = 0;
     while (fgets(line, sizeof line, f)) {
         lineno++;
+        /* a line longer than the buffer is refused, never split (its tail would
+           be read as a line of its own) */
+        if (!strchr(line, '\n') && !feof(f)) {
+            fclose(f);
+            return fail(err, errlen, "road file '%s', line %d: longer than %d characters (the "
+                                     "reader's limit)", path, lineno, ROAD_LINE_MAX);
+        }
         char *hash = strchr(line, '#');
         if (hash) *hash = '\0';
         const char *p = skip_sep(line);
         if (!*p) continue;
         content++;
         char *end;
-        const double xv = strtod(p, &end);
+        const double xv = decimal(p, &end);
         const int xok = end != p;
         p = skip_sep(end);
-        const double yv = xok ? strtod(p, &end) : 0.0;
+        const double yv = xok ? decimal(p, &end) : 0.0;
         const int yok = xok && end != p;
         if (!yok) {
             if (content == 1) continue;          /* a header line */

@@ -22,6 +22,7 @@ static inline int road_int(double x) {
     return x != x ? 0 : x > 1e9 ? 1000000000 : x < -1e9 ? -1000000000 : (int)x;
 }
 #define ROAD_ERRLEN     512
+#define ROAD_LINE_MAX   4096     /* characters of a CSV line (a longer one is refused) */
 
 enum { ROAD_CSV = 0, ROAD_LANE_CHANGE = 1, ROAD_CIRCLE = 2, ROAD_ISO3888 = 3 };
 

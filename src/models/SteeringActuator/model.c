@@ -13,13 +13,27 @@
 
 static const char *const MODE_NAME[] = { "normal", "holding", "ramping to straight", "at the safe angle" };
 
-Status model_init(ModelInstance *comp) {
+static ActParams act_params(ModelInstance *comp) {
     const ActParams p = { .Tact = D->Tact, .rateMax = D->rateMax, .nStale = D->nStale, .nRecover = D->nRecover,
                           .tHold = D->tHold, .rampRate = D->rampRate, .Ts = D->Ts };
+    return p;
+}
+
+Status model_check_parameters(ModelInstance *comp) {
+    const ActParams p = act_params(comp);
     const double cmd[2] = { D->cmd[1], D->cmd[2] };
-    const int bad = act_setup(&S->a, &p, cmd, D->alive);
+    __typeof__(comp->v.s.a) scratch;
+    const int bad = act_setup(&scratch, &p, cmd, D->alive);
     if (bad) return log_error(comp, "parameter %s is not valid for the steering actuator (Tact, rateMax >= 0, "
                                     "Ts > 0, nRecover >= 1, rampRate > 0)", act_param_name(bad));
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    const ActParams p = act_params(comp);
+    const double cmd[2] = { D->cmd[1], D->cmd[2] };
+    if (act_setup(&S->a, &p, cmd, D->alive)) return log_error(comp, "the actuator's set-up failed");
     S->t0 = comp->v.time;
     S->k = 0;
     S->mode = CF_NORMAL;

@@ -26,7 +26,7 @@ static EcuInputs inputs(ModelInstance *comp) {
     return in;
 }
 
-Status model_init(ModelInstance *comp) {
+static EcuParams ecu_params(ModelInstance *comp) {
     const EcuParams p = {
         .module = D->module,
         .tg = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lg2 = D->lg2, .l3 = D->l3,
@@ -35,11 +35,25 @@ Status model_init(ModelInstance *comp) {
                 .lA5 = D->lA5, .gamma3Max = D->gamma3Max, .gamma5Max = D->gamma5Max },
         .nStale = D->nStale, .nRecover = D->nRecover, .tHold = D->tHold, .rampRate = D->rampRate,
         .vDir = D->vDir };
+    return p;
+}
+
+Status model_check_parameters(ModelInstance *comp) {
+    const EcuParams p = ecu_params(comp);
     const EcuInputs in = inputs(comp);
-    const int bad = ecu_setup(&S->e, &p, &in);
+    __typeof__(comp->v.s.e) scratch;
+    const int bad = ecu_setup(&scratch, &p, &in);
     if (bad) return log_error(comp, "parameter %s is not valid for the steering ECU (module 1, 2 or 3, lengths "
                                     "and Ts > 0, S >= 0, 0 < limit < pi/2, nRecover >= 1, rampRate > 0)",
                               ecu_param_name(bad));
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    const EcuParams p = ecu_params(comp);
+    const EcuInputs in = inputs(comp);
+    if (ecu_setup(&S->e, &p, &in)) return log_error(comp, "the ECU's set-up failed");
     S->t0 = comp->v.time;
     S->k = 0;
     S->fault = 0;

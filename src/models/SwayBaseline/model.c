@@ -10,7 +10,7 @@
 
 #define S (&comp->v.s)
 
-Status model_init(ModelInstance *comp) {
+static SbParams sb_params(ModelInstance *comp) {
     SbParams p = { .nGround = D->nGround, .vSSC = D->vSSC, .LambdaDotSSC = D->LambdaDotSSC,
                    .tHold = D->tHold, .pctSSC = D->pctSSC, .LambdaEP0 = D->LambdaEP0,
                    .LambdaEP1 = D->LambdaEP1, .pctEP = D->pctEP, .pctMax = D->pctMax, .Ts = D->Ts };
@@ -18,7 +18,13 @@ Status model_init(ModelInstance *comp) {
         p.groundSpeed[i] = D->groundSpeed[i + 1];
         p.groundPct[i] = D->groundPct[i + 1];
     }
-    const int bad = sb_setup(&S->b, &p);
+    return p;
+}
+
+Status model_check_parameters(ModelInstance *comp) {
+    const SbParams p = sb_params(comp);
+    __typeof__(comp->v.s.b) scratch;
+    const int bad = sb_setup(&scratch, &p);
     if (bad == -2)
         return log_error(comp, "parameter groundSpeed[1..nGround] (nGround = %d) is not strictly increasing",
                          D->nGround);
@@ -26,6 +32,13 @@ Status model_init(ModelInstance *comp) {
         return log_error(comp, "parameter LambdaEP1 = %g rad must be above LambdaEP0 = %g rad",
                          D->LambdaEP1, D->LambdaEP0);
     if (bad) return log_error(comp, "parameter %s is not valid for the sway baseline", sb_param_name(bad));
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    const SbParams p = sb_params(comp);
+    if (sb_setup(&S->b, &p)) return log_error(comp, "the sway baseline's set-up failed");
     S->t0 = comp->v.time;
     S->k = 0;
     SbBaseline first = S->b;                 /* the outputs of the initial inputs (sample 0 is */

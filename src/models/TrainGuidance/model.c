@@ -24,6 +24,8 @@
  * the fault output still flags). */
 #include <math.h>
 
+#include <stdlib.h>
+
 #include "fmu.h"
 #include "leading_hinges.h"
 #include "guidance.h"
@@ -39,16 +41,34 @@ static void hinges(ModelInstance *comp, double *d1, double *d2) {
     leading_hinges(D->backwards, D->dPsi[1], D->dPsi[2], d1, d2);
 }
 
-Status model_init(ModelInstance *comp) {
+static TgParams tg_params(ModelInstance *comp) {
     const TgParams p = { .l1 = D->l1, .lg1 = D->lg1, .l2 = D->l2, .lg2 = D->lg2, .l3 = D->l3,
                          .S4 = D->S4, .S6 = D->S6, .Ts = D->Ts,
                          .gamma4Max = D->gamma4Max, .gamma6Max = D->gamma6Max };
-    const int bad = tg_setup(&S->g, &p);
+    return p;
+}
+
+Status model_check_parameters(ModelInstance *comp) {
+    const TgParams p = tg_params(comp);
+    __typeof__(comp->v.s.g) g;
+    const int bad = tg_setup(&g, &p);
     if (bad) return log_error(comp, "parameter %s is not valid for the guidance (lengths and Ts "
                                     "must be > 0, S >= 0, 0 < limit < pi/2)", tg_param_name(bad));
-    tg_reset(&S->g, gamma1_at(comp, comp->v.time));  /* starts in the steady state of gamma1 */
-    if (tg_pm_setup(&S->pm, &S->g, D->kPath))
+    __typeof__(comp->v.s.pm) *pm = malloc(sizeof *pm);
+    if (!pm) return log_error(comp, "out of memory");
+    const int badPath = tg_pm_setup(pm, &g, D->kPath);
+    free(pm);
+    if (badPath)
         return log_error(comp, "parameter %s = %g is not valid (finite, 0 .. 1000 1/m)", tg_pm_param_name(), D->kPath);
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    const TgParams p = tg_params(comp);
+    if (tg_setup(&S->g, &p)) return log_error(comp, "the guidance's set-up failed");
+    tg_reset(&S->g, gamma1_at(comp, comp->v.time));  /* starts in the steady state of gamma1 */
+    if (tg_pm_setup(&S->pm, &S->g, D->kPath)) return log_error(comp, "the path memory's set-up failed");
     double d1, d2;
     hinges(comp, &d1, &d2);
     tg_pm_reset(&S->pm, &S->g, d1, d2);              /* the trace: the bus as it stands */

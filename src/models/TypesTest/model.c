@@ -13,9 +13,13 @@ static Status check(ModelInstance *comp) {
     return OK;
 }
 
+Status model_check_parameters(ModelInstance *comp) {
+    return check(comp);
+}
+
 Status model_init(ModelInstance *comp) {
     comp->v.s.steps = 0;
-    return check(comp);
+    return model_check_parameters(comp);
 }
 
 void model_outputs(ModelInstance *comp) {

@@ -35,12 +35,12 @@ static const char *PREPARE_ERROR[] = {
     "K(u) is undefined: its denominator vanishes at every speed",
 };
 
-Status model_init(ModelInstance *comp) {
-    ModelState *s = &comp->v.s;
+Status model_check_parameters(ModelInstance *comp) {
     ZsVehicle veh;
     make_vehicle(comp, &veh);
+    ZsGains gains;
     int axle = 0;
-    const int e = zs_prepare(&veh, &s->gains, &axle);
+    const int e = zs_prepare(&veh, &gains, &axle);
     if (e != ZS_OK) {
         if (axle)
             return log_error(comp, "axle %d (l[%d] = %g m, k[%d] = %g N/rad, steerable[%d] = %d): %s",
@@ -48,6 +48,15 @@ Status model_init(ModelInstance *comp) {
                              PREPARE_ERROR[e]);
         return log_error(comp, "n = %d: %s", D->n, PREPARE_ERROR[e]);
     }
+    return OK;
+}
+
+Status model_init(ModelInstance *comp) {
+    if (model_check_parameters(comp)) return Error;
+    ModelState *s = &comp->v.s;
+    ZsVehicle veh;
+    make_vehicle(comp, &veh);
+    if (zs_prepare(&veh, &s->gains, NULL) != ZS_OK) return log_error(comp, "the gains' set-up failed");
     s->t0 = comp->v.time;
     s->kNext = 0;
     s->warned = 0;

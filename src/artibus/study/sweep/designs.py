@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus.base import ArtibusError
+from artibus.base import ArtibusError, parse_integer, parse_real
 
 MAX_CASES = 1_000_000
 
@@ -99,11 +99,11 @@ def typed_value(info, name, value, where):
         if v.type == "Real":
             if isinstance(text, bool):
                 raise ValueError
-            return float(text)
+            return parse_real(text)
         if v.type in ("Integer", "Enumeration"):
             if isinstance(text, bool):
                 raise ValueError
-            x = float(text)
+            x = parse_real(text)
             if not x == int(x):
                 raise ValueError
             return int(x)
@@ -133,7 +133,7 @@ def parse_values(text, where):
         if len(parts) != 3:
             raise ArtibusError(f"{where}: malformed range {text!r} (expected START:STOP:STEP)")
         try:
-            a, b, s = (float(p) for p in parts)
+            a, b, s = (parse_real(p) for p in parts)
         except ValueError:
             raise ArtibusError(f"{where}: malformed range {text!r} (START, STOP, STEP must be numbers)") from None
         if not all(math.isfinite(x) for x in (a, b, s)) or not s > 0 or b < a:
@@ -186,20 +186,20 @@ def _distribution(name, spec, where):
     kind = spec.get("distribution", "uniform")
     try:
         if kind == "uniform":
-            lo, hi = float(spec["low"]), float(spec["high"])
+            lo, hi = parse_real(spec["low"]), parse_real(spec["high"])
             if not hi > lo:
                 raise ValueError("high must be above low")
             return stats.uniform(loc=lo, scale=hi - lo)
         if kind == "normal":
-            return stats.norm(loc=float(spec["mean"]), scale=float(spec["std"]))
+            return stats.norm(loc=parse_real(spec["mean"]), scale=parse_real(spec["std"]))
         if kind == "lognormal":       # the logarithm's mean and std
-            return stats.lognorm(s=float(spec["std"]), scale=math.exp(float(spec["mean"])))
+            return stats.lognorm(s=parse_real(spec["std"]), scale=math.exp(parse_real(spec["mean"])))
         if kind == "truncnormal":
-            m, s = float(spec["mean"]), float(spec["std"])
-            lo, hi = float(spec["low"]), float(spec["high"])
+            m, s = parse_real(spec["mean"]), parse_real(spec["std"])
+            lo, hi = parse_real(spec["low"]), parse_real(spec["high"])
             return stats.truncnorm((lo - m) / s, (hi - m) / s, loc=m, scale=s)
         if kind == "triangular":
-            lo, mode, hi = float(spec["low"]), float(spec["mode"]), float(spec["high"])
+            lo, mode, hi = parse_real(spec["low"]), parse_real(spec["mode"]), parse_real(spec["high"])
             return stats.triang(c=(mode - lo) / (hi - lo), loc=lo, scale=hi - lo)
     except KeyError as e:
         raise ArtibusError(f"{where}: parameter '{name}': distribution {kind} needs {e.args[0]}") from None
@@ -225,9 +225,16 @@ def read_design(path):
     where = str(p)
     if not p.is_file():
         raise ArtibusError(f"{where}: no such design file")
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ArtibusError(f"{where}: not a text file (UTF-8): byte {e.start}: {e.reason}") from None
     if p.suffix.lower() == ".csv":
-        with p.open(newline="") as f:
-            rows = list(csv.reader(f))
+        import io
+        try:
+            rows = list(csv.reader(io.StringIO(text, newline="")))
+        except csv.Error as e:
+            raise ArtibusError(f"{where}: not a valid CSV file: {e}") from None
         rows = [r for r in rows if r and any(c.strip() for c in r)]
         if len(rows) < 2:
             raise ArtibusError(f"{where}: a header of parameter names and at least one case expected")
@@ -242,7 +249,7 @@ def read_design(path):
         raise ArtibusError(f"{where}: a design file is .csv or .yaml")
     import yaml
     try:
-        spec = yaml.safe_load(p.read_text())
+        spec = yaml.safe_load(text)
     except yaml.YAMLError as e:
         raise ArtibusError(f"{where}: not valid YAML: {e}") from None
     if not isinstance(spec, dict):
@@ -274,8 +281,8 @@ def read_design(path):
     if variants:
         raise ArtibusError(f"{where}: variants: an axis of a grid only (for {method}, run one sweep per variant)")
     try:
-        n = int(spec.get("n"))
-        seed = int(spec.get("seed"))
+        n = parse_integer(spec.get("n"))
+        seed = parse_integer(spec.get("seed"))
     except (TypeError, ValueError):
         raise ArtibusError(f"{where}: {method} needs n (the number of cases) and seed (integers)") from None
     if not 0 < n <= MAX_CASES:

@@ -13,8 +13,8 @@ from artibus.study.sweep.cluster import _Chunks, _client, _Progress, _scatter
 from artibus.study.sweep.designs import (Design, _product_lists, bench_info, build_cases, case_key, parse_values,
                                          read_design, typed_value)
 from artibus.study.sweep.plots import study
-from artibus.study.sweep.store import (CASES_DIR, MANIFEST, SERIES_DIR, STATUS_FAILED, _case_row,
-                                       _parquet_bytes, _table, _write_bytes, _write_text, assemble)
+from artibus.study.sweep.store import (CASES_DIR, MANIFEST, SERIES_DIR, STATUS_FAILED, FolderLock, _case_row,
+                                       _parquet_bytes, _table, _write_bytes, _write_text, assemble, read_case)
 from artibus.study.sweep.worker import release, run_cases
 
 
@@ -79,106 +79,111 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
     if keep_series:
         (out / SERIES_DIR).mkdir(exist_ok=True)
 
-    def finished(k):
-        f = out / CASES_DIR / f"{k}.parquet"
-        if not f.is_file():
-            return False
-        has_series = not keep_series or (out / SERIES_DIR / f"{k}.parquet").is_file()
-        if has_series and not retry_failed:
-            return True
-        import pyarrow.parquet as pq
-        failed = pq.read_table(f, columns=["status"])["status"][0].as_py() == STATUS_FAILED
-        if retry_failed:
-            return not failed and has_series
-        return failed                         # a failed case has no series
+    with FolderLock(out):                             # one sweep at a time in a folder
+        def finished(k):
+            f = out / CASES_DIR / f"{k}.parquet"
+            if not f.is_file():
+                return False
+            row = read_case(f)
+            if row is None:                       # torn or corrupt: run again
+                if progress:
+                    print(f"sweep: {f}: cannot be read; the case is run again", file=progress)
+                return False
+            has_series = not keep_series or (out / SERIES_DIR / f"{k}.parquet").is_file()
+            if has_series and not retry_failed:
+                return True
+            failed = row["status"] == STATUS_FAILED
+            if retry_failed:
+                return not failed and has_series
+            return failed                         # a failed case has no series
 
-    todo = [i for i, k in enumerate(keys) if not finished(k)]
-    seen, unique = set(), []
-    for i in todo:                                    # the same values twice: run once
-        if keys[i] not in seen:
-            seen.add(keys[i])
-            unique.append(i)
-    manifest = {"bench": info.name, "run": str(bench), "method": d.method, "seed": d.seed, "stop_time": stop_time, "step": step,
-                "fixed": fixed,
-                "axes": [[n, [str(v) for v in vs]] for n, vs in d.axes] if d.method == "grid" else [],
-                "parameters": sorted({k for c in all_cases for k in c}), "keys": keys,
-                "argv": argv}
-    _write_text(out / MANIFEST, json.dumps(manifest, indent=1, default=str))
-    skipped = len(keys) - len(unique)
-    t0 = time.perf_counter()
-    failed = 0
-    rows = {}                                         # key -> its row, of the cases run now
-    if unique:
-        cluster = None
-        own = client is None
-        if own:
-            client, cluster = _client(scheduler, workers)
-        try:
-            data = _scatter(client, info)
-            cases_dir, series_dir = os.fspath(out / CASES_DIR), os.fspath(out / SERIES_DIR)
-            bar = _Progress(len(unique), skipped, progress) if progress else None
-            chunks = _Chunks(unique, client)
-            running = {}
-            tries = collections.Counter()             # a case's tasks lost with a dead worker
-            lost = collections.Counter()              # of them, cancelled: the bench's copy lost
-
-            def submit():
-                items = chunks.next()
-                f = client.submit(run_cases, info.name, info.ssp_hash, str(info.ssp), data,
-                                  [(keys[i], i, all_cases[i]) for i in items], fixed, stop_time, step, keep_series,
-                                  key=f"artibus-cases-{keys[items[0]]}-{len(items)}-{tries[items[0]]}", pure=False, retries=0)
-                running[f] = items
-                return f
-
-            from dask.distributed import as_completed
-            done = as_completed([submit() for _ in range(min(chunks.in_flight(), len(unique)))])
-            for f in done:
-                items = running.pop(f)
-                try:
-                    results = f.result()
-                except Exception as e:       # the worker died (not an error of a case)
-                    if data.status != "finished":        # the bench's copies died with the workers
-                        data = _scatter(client, info, again=True)
-                    # a task of several: which case killed it? each again alone. A case alone:
-                    # again up to 3 times after its worker died (it may have waited on a worker
-                    # another case killed), up to 10 after its bench copy was lost with one
-                    killed = type(e).__name__ == "KilledWorker"
-                    if len(items) > 1 or (tries[items[0]] < 3 if killed else lost[items[0]] < 10):
-                        for i in items:
-                            tries[i] += 1
-                            lost[i] += not killed
-                        chunks.alone.extend(items)
-                        items, results = [], []
-                    else:
-                        results = [(_case_row(keys[i], i, all_cases[i],
-                                              {"status": STATUS_FAILED, "error": f"worker: {type(e).__name__}: {e}",
-                                               "wall_s": math.nan}), None, None, math.nan) for i in items]
-                for *_, cpu in results:
-                    chunks.took(cpu)
-                while chunks.left() and len(running) < chunks.in_flight():
-                    done.add(submit())       # the next task before this one's files: no worker waits
-                for i, (row, case_file, series_file, _) in zip(items, results):
-                    bad = row["status"] == STATUS_FAILED     # (a terminated case ran: not counted)
-                    failed += bad
-                    if series_file is not None:
-                        _write_bytes(series_file, os.path.join(series_dir, f"{keys[i]}.parquet"))
-                    _write_bytes(case_file if case_file is not None else _parquet_bytes(_table([row])),
-                                 os.path.join(cases_dir, f"{keys[i]}.parquet"))
-                    rows[keys[i]] = row
-                    if bar:
-                        bar.update(bad)
-        finally:
+        todo = [i for i, k in enumerate(keys) if not finished(k)]
+        seen, unique = set(), []
+        for i in todo:                                    # the same values twice: run once
+            if keys[i] not in seen:
+                seen.add(keys[i])
+                unique.append(i)
+        manifest = {"bench": info.name, "run": str(bench), "method": d.method, "seed": d.seed, "stop_time": stop_time, "step": step,
+                    "fixed": fixed,
+                    "axes": [[n, [str(v) for v in vs]] for n, vs in d.axes] if d.method == "grid" else [],
+                    "parameters": sorted({k for c in all_cases for k in c}), "keys": keys,
+                    "argv": argv}
+        _write_text(out / MANIFEST, json.dumps(manifest, indent=1, default=str))
+        skipped = len(keys) - len(unique)
+        t0 = time.perf_counter()
+        failed = 0
+        rows = {}                                         # key -> its row, of the cases run now
+        if unique:
+            cluster = None
+            own = client is None
             if own:
-                try:
-                    client.run(release)          # the workers' instances and .ssp copies
-                except Exception:
-                    pass
-                client.close()
-                if cluster is not None:
-                    cluster.close()
-    wall = time.perf_counter() - t0
-    table = assemble(out, keys, rows)
-    res = SweepResult(table, out, len(unique), skipped, failed, wall)
-    if plot:
-        study(out, kpi=kpi, log=(lambda line: print(f"sweep: {line}", file=progress)) if progress else None)
-    return res
+                client, cluster = _client(scheduler, workers)
+            try:
+                data = _scatter(client, info)
+                cases_dir, series_dir = os.fspath(out / CASES_DIR), os.fspath(out / SERIES_DIR)
+                bar = _Progress(len(unique), skipped, progress) if progress else None
+                chunks = _Chunks(unique, client)
+                running = {}
+                tries = collections.Counter()             # a case's tasks lost with a dead worker
+                lost = collections.Counter()              # of them, cancelled: the bench's copy lost
+
+                def submit():
+                    items = chunks.next()
+                    f = client.submit(run_cases, info.name, info.ssp_hash, str(info.ssp), data,
+                                      [(keys[i], i, all_cases[i]) for i in items], fixed, stop_time, step, keep_series,
+                                      key=f"artibus-cases-{keys[items[0]]}-{len(items)}-{tries[items[0]]}", pure=False, retries=0)
+                    running[f] = items
+                    return f
+
+                from dask.distributed import as_completed
+                done = as_completed([submit() for _ in range(min(chunks.in_flight(), len(unique)))])
+                for f in done:
+                    items = running.pop(f)
+                    try:
+                        results = f.result()
+                    except Exception as e:       # the worker died (not an error of a case)
+                        if data.status != "finished":        # the bench's copies died with the workers
+                            data = _scatter(client, info, again=True)
+                        # a task of several: which case killed it? each again alone. A case alone:
+                        # again up to 3 times after its worker died (it may have waited on a worker
+                        # another case killed), up to 10 after its bench copy was lost with one
+                        killed = type(e).__name__ == "KilledWorker"
+                        if len(items) > 1 or (tries[items[0]] < 3 if killed else lost[items[0]] < 10):
+                            for i in items:
+                                tries[i] += 1
+                                lost[i] += not killed
+                            chunks.alone.extend(items)
+                            items, results = [], []
+                        else:
+                            results = [(_case_row(keys[i], i, all_cases[i],
+                                                  {"status": STATUS_FAILED, "error": f"worker: {type(e).__name__}: {e}",
+                                                   "wall_s": math.nan}), None, None, math.nan) for i in items]
+                    for *_, cpu in results:
+                        chunks.took(cpu)
+                    while chunks.left() and len(running) < chunks.in_flight():
+                        done.add(submit())       # the next task before this one's files: no worker waits
+                    for i, (row, case_file, series_file, _) in zip(items, results):
+                        bad = row["status"] == STATUS_FAILED     # (a terminated case ran: not counted)
+                        failed += bad
+                        if series_file is not None:
+                            _write_bytes(series_file, os.path.join(series_dir, f"{keys[i]}.parquet"))
+                        _write_bytes(case_file if case_file is not None else _parquet_bytes(_table([row])),
+                                     os.path.join(cases_dir, f"{keys[i]}.parquet"))
+                        rows[keys[i]] = row
+                        if bar:
+                            bar.update(bad)
+            finally:
+                if own:
+                    try:
+                        client.run(release)          # the workers' instances and .ssp copies
+                    except Exception:
+                        pass
+                    client.close()
+                    if cluster is not None:
+                        cluster.close()
+        wall = time.perf_counter() - t0
+        table = assemble(out, keys, rows)
+        res = SweepResult(table, out, len(unique), skipped, failed, wall)
+        if plot:
+            study(out, kpi=kpi, log=(lambda line: print(f"sweep: {line}", file=progress)) if progress else None)
+        return res
