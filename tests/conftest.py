@@ -57,6 +57,21 @@ def fmu_file(name):
     return path
 
 
+def packer_inputs(fmu, tmp_path):
+    """A built FMU as src/fmi/package_fmu.py's inputs for packing it again: the FMU
+    unpacked as its tree (tmp_path/tree) and its generated variable table (tmp_path/gen,
+    the model_vars.c/.h it ships in sources/). Returns (tree, gen)."""
+    import shutil
+    import zipfile
+    tree, gen = tmp_path / "tree", tmp_path / "gen"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(tree)
+    gen.mkdir()
+    for f in ("model_vars.c", "model_vars.h"):
+        shutil.copy(tree / "sources" / f, gen / f)
+    return tree, gen
+
+
 @pytest.fixture
 def open_fmu():
     """open_fmu(name) -> artibus.simulation.Fmu, freed after the test."""

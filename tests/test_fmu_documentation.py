@@ -16,7 +16,6 @@ reads for someone who has the FMU and not the repository:
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 import time
@@ -26,6 +25,7 @@ from pathlib import Path
 import pytest
 
 from artibus import fmu_dir
+from conftest import packer_inputs
 
 ROOT = Path(__file__).resolve().parents[1]
 NAMES = re.findall(r"^add_fmu\((\w+)", (ROOT / "CMakeLists.txt").read_text(), re.M)
@@ -119,13 +119,7 @@ def test_stale_win64_dll_is_not_packed(tmp_path):
     """A DLL older than a source of its model is left out with a warning naming both;
     touched newer, the same DLL is packed."""
     name = "TrainGuidance"
-    tree = tmp_path / "tree"
-    with zipfile.ZipFile(fmu(name)) as z:
-        z.extractall(tree)
-    gen = tmp_path / "gen"
-    gen.mkdir()
-    for f in ("model_vars.c", "model_vars.h"):
-        shutil.copy(tree / "sources" / f, gen / f)
+    tree, gen = packer_inputs(fmu(name), tmp_path)
     win = tmp_path / "win64"
     win.mkdir()
     dll = win / f"{name}.dll"

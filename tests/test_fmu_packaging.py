@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from conftest import FMU_NAMES, ROOT, fmu_file
+from conftest import FMU_NAMES, ROOT, fmu_file, packer_inputs
 
 VERSION = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
 
@@ -462,13 +462,7 @@ def test_packer_win64_hook_and_reproducible(tmp_path):
     without it none; the same inputs give the same bytes; SOURCE_DATE_EPOCH gives the
     generation time"""
     name = "TrainGuidance"
-    tree = tmp_path / "tree"
-    with zipfile.ZipFile(fmu_file(name)) as z:
-        z.extractall(tree)
-    gen = tmp_path / "gen"
-    gen.mkdir()
-    for f in ("model_vars.c", "model_vars.h"):
-        shutil.copy(tree / "sources" / f, gen / f)
+    tree, gen = packer_inputs(fmu_file(name), tmp_path)
     win = tmp_path / "win64"
     win.mkdir()
     dll = b"MZ not really a DLL, just what the mingw build would leave here"
@@ -505,13 +499,7 @@ def test_packer_platform_dirs(tmp_path):
     missing one leaves the folder out (an old one removed); an unknown tuple is refused with
     a message naming it, no traceback"""
     name = "TrainGuidance"
-    tree = tmp_path / "tree"
-    with zipfile.ZipFile(fmu_file(name)) as z:
-        z.extractall(tree)
-    gen = tmp_path / "gen"
-    gen.mkdir()
-    for f in ("model_vars.c", "model_vars.h"):
-        shutil.copy(tree / "sources" / f, gen / f)
+    tree, gen = packer_inputs(fmu_file(name), tmp_path)
     arm, win = tmp_path / "arm", tmp_path / "win"
     arm.mkdir()
     win.mkdir()
