@@ -37,24 +37,9 @@ if [ -n "$missing" ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends $missing >/dev/null
 fi
 
-# 1. SUNDIALS, static, for aarch64 (scripts/build_sundials.sh: Debian's source
-# package, the version of the installed libsundials-dev, as the linux build's);
-# without fused multiply-add, as the FMUs (cmake/aarch64-linux.cmake)
-inst="$B/sundials-install"
-ARTIBUS_SUNDIALS_JOBS="$JOBS" CACHE_CC=aarch64-linux-gnu-gcc bash scripts/build_sundials.sh "$B" \
-  -DCMAKE_TOOLCHAIN_FILE="$ROOT/cmake/aarch64-linux.cmake"
-
-# 2. every FMU's shared object and its importer, from the same CMakeLists.txt
-if [ ! -f "$B/CMakeCache.txt" ]; then
-  quiet cmake -S . -B "$B" -DCMAKE_TOOLCHAIN_FILE="$ROOT/cmake/aarch64-linux.cmake" \
-    -DCMAKE_BUILD_TYPE=Release -DCMAKE_FIND_ROOT_PATH="$inst" \
-    -DSUNDIALS_DIR="$inst/lib/cmake/sundials" \
-    -DEIGEN3_INCLUDE_DIR=/usr/include/eigen3   # Debian's libeigen3-dev (header-only)
-fi
-# only the FMUs and their importers (each fmu_check_<Name> needs its <Name>)
-targets="$(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p' CMakeLists.txt)"
-if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$B/CMakeCache.txt"; then   # and the FMI 3.0 builds: aarch64-linux/fmi3/
-  targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
-fi
-quiet cmake --build "$B" -j"$JOBS" --target $targets
+# 1.-2. SUNDIALS, static, for aarch64 (scripts/build_sundials.sh: Debian's source
+# package, the linux build's version), without fused multiply-add as the FMUs
+# (cmake/aarch64-linux.cmake), then every FMU's shared object and its importer
+# (build_common.sh's cross_build)
+cross_build "$B" aarch64-linux.cmake aarch64-linux-gnu-gcc "$JOBS"
 echo "aarch64: $(ls "$B"/aarch64-linux/*.so | wc -l) shared objects in $B/aarch64-linux"

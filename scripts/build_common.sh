@@ -16,7 +16,12 @@
 #   cache_key ARGS  12 hex digits naming a cache entry: a hash of ARGS, of every
 #                   file an argument names (a toolchain file) and of the version
 #                   of the compiler $CACHE_CC (default cc), so a change of any
-#                   makes a new entry.
+#                   makes a new entry;
+#   cross_build DIR TOOLCHAIN CC JOBS  a cross build into DIR with cmake/TOOLCHAIN:
+#                   SUNDIALS for it (scripts/build_sundials.sh, cached; CC names its
+#                   compiler for the cache key), then every FMU's binary and its importer
+#                   fmu_check_<Name> (and the FMI 3.0 binaries unless ARTIBUS_FMI3=OFF),
+#                   from the same CMakeLists.txt (scripts/build_win64.sh, build_aarch64.sh).
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT="$PWD"
 CACHE="${ARTIBUS_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/artibus}"
@@ -65,4 +70,23 @@ apt_install() {
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "$@" >/dev/null
   }
   step "installing the Debian packages$missing (apt; a minute or two on a fresh machine)" _apt $missing
+}
+
+cross_build() {
+  local dir="$1" toolchain="$ROOT/cmake/$2" cc="$3" jobs="$4"
+  local inst="$1/sundials-install" targets
+  ARTIBUS_SUNDIALS_JOBS="$jobs" CACHE_CC="$cc" bash scripts/build_sundials.sh "$dir" \
+    -DCMAKE_TOOLCHAIN_FILE="$toolchain"
+  if [ ! -f "$dir/CMakeCache.txt" ]; then
+    quiet cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
+      -DCMAKE_BUILD_TYPE=Release -DCMAKE_FIND_ROOT_PATH="$inst" \
+      -DSUNDIALS_DIR="$inst/lib/cmake/sundials" \
+      -DEIGEN3_INCLUDE_DIR=/usr/include/eigen3   # Debian's libeigen3-dev (header-only)
+  fi
+  # only the FMUs and their importers (each fmu_check_<Name> needs its <Name>)
+  targets="$(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p' CMakeLists.txt)"
+  if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$dir/CMakeCache.txt"; then   # and the FMI 3.0 builds: <platform>/fmi3/
+    targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
+  fi
+  quiet cmake --build "$dir" -j"$jobs" --target $targets
 }

@@ -22,25 +22,10 @@ B="$(work_dir "${1:-build-win64}")"
 JOBS="${ARTIBUS_WIN64_JOBS:-2}"
 QUIET_LOG="$B/last-step.log" QUIET_TAG=win64
 
-# 1. SUNDIALS, static, for win64 (scripts/build_sundials.sh: Debian's source
-# package, the version of the installed libsundials-dev, as the linux build's)
-inst="$B/sundials-install"
-ARTIBUS_SUNDIALS_JOBS="$JOBS" CACHE_CC=x86_64-w64-mingw32-gcc bash scripts/build_sundials.sh "$B" \
-  -DCMAKE_TOOLCHAIN_FILE="$ROOT/cmake/mingw-w64.cmake"
-
-# 2. every FMU's DLL and its importer, from the same CMakeLists.txt
-if [ ! -f "$B/CMakeCache.txt" ]; then
-  quiet cmake -S . -B "$B" -DCMAKE_TOOLCHAIN_FILE="$ROOT/cmake/mingw-w64.cmake" \
-    -DCMAKE_BUILD_TYPE=Release -DCMAKE_FIND_ROOT_PATH="$inst" \
-    -DSUNDIALS_DIR="$inst/lib/cmake/sundials" \
-    -DEIGEN3_INCLUDE_DIR=/usr/include/eigen3   # Debian's libeigen3-dev (header-only)
-fi
-# only the FMUs and their importers (each fmu_check_<Name> needs its <Name>)
-targets="$(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p' CMakeLists.txt)"
-if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$B/CMakeCache.txt"; then
-  targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
-fi
-quiet cmake --build "$B" -j"$JOBS" --target $targets
+# 1.-2. SUNDIALS, static, for win64 (scripts/build_sundials.sh: Debian's source
+# package, the linux build's version), then every FMU's DLL and its importer
+# (build_common.sh's cross_build)
+cross_build "$B" mingw-w64.cmake x86_64-w64-mingw32-gcc "$JOBS"
 echo "win64: $(ls "$B"/win64/*.dll | wc -l) DLLs in $B/win64"
 
 # 3. a Wine prefix for tests/test_win64.py (Debian's wine64 package), made once
