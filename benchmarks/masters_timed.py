@@ -145,7 +145,7 @@ def _libcosim(spec, recorder):
             if not ex.step(n):
                 raise RuntimeError(f"libcosim: {get_last_error_message()}")
             k = np.arange(1, n + 1)           # the rows: after each base step (as its last-value observer)
-            cols = [k * step]
+            cols = [k * ns * 1e-9]            # (its time in ns, as execution.status().current_time)
             for s, r, t in reads:
                 steps, values = samples(obs, s, r, t, n + 1)
                 # a component at a multiple of the base step has a sample at its own steps

@@ -42,6 +42,15 @@
    (wall clock, depends on the load) and as 2 idle cores give it (from the CPU
    times).
 
+5. Against ecos and libcosim (issue 30; benchmarks/masters.py, whose docstring
+   says exactly what is timed): on the portable packs of Urbino18_Circle,
+   Bus36m_Circle, Scania18m_Damping and MultiAxle_StepSteer, each master in a
+   process of its own, in-process set-up + run (loading, instantiating,
+   initialisation, stepping, every recorded output of every step read back), best
+   of MASTERS_REPEAT, ours stepped as each master steps, the KPIs compared; then
+   as commands: `artibus --version`, `artibus run` against ecos's own program and
+   Python processes driving ecospy and libcosimpy.
+
 usage: .venv/bin/python benchmarks/suite.py [--quick]
   --quick: one run per bench, short FMU blocks, the comparison on the
   two-BusKinematics bench only, the short sweep cases only and no external scheduler.
@@ -75,12 +84,14 @@ def _load(name):
 
 bench_runner = _load("runner")     # _timed_initialization, the two-BusKinematics bench
 bench_sweep = _load("sweep")       # run, report (the sweep throughput)
+bench_masters = _load("masters")   # figures, table, commands (against ecos and libcosim)
 
 QUICK = "--quick" in sys.argv[1:]
 REPEAT = 1 if QUICK else 7
 FMU_STEPS = 300 if QUICK else 2000
 SWEEP_LENGTHS = ("short",) if QUICK else ("long", "short")
 SWEEP_REPEAT = 1 if QUICK else 3
+MASTERS_REPEAT = 3 if QUICK else 5
 LONG = 10.0                        # s: a bench's runs stop repeating after this much
 TEST_FMUS = {"TypesTest"}          # the runner's test FMU (every FMI type), no model
 TARGETS = []                       # (what, met)
@@ -236,6 +247,27 @@ def sweep_rates(tmp):
     return bench_sweep.run(tmp, SWEEP_LENGTHS, SWEEP_REPEAT, configs)
 
 
+def masters_section():
+    load = os.getloadavg()[0]
+    line(f"\n5. Against ecos and libcosim on the portable packs (benchmarks/masters.py; load average {load:.1f}): "
+         f"in-process set-up + run in ms, best of {MASTERS_REPEAT}, each master in a process of its own, ours "
+         "stepped as each master steps; KPIs: our KPI code on their results, the largest difference from ours")
+    rows = bench_masters.figures(repeat=MASTERS_REPEAT, log=lambda text: None)
+    for text in bench_masters.table(rows):
+        line(f"   {text}")
+    ok = [r for r in rows if r["ok"]]
+    least = min(ok, key=lambda r: r["ratio"]) if ok else None
+    TARGETS.append((f"in-process set-up + run >= {bench_masters.TARGET} x faster than ecos and libcosim "
+                    + (f"(least: {least['bench']} {least['master']}, {least['ratio']:.2f} x)" if least
+                       else "(none ran)"),
+                    bool(ok) and len(ok) == len(rows) and least["ratio"] >= bench_masters.TARGET))
+    line(f"\n   As commands: a new process each, wall time best and median of {MASTERS_REPEAT}")
+    for r in bench_masters.commands(repeat=MASTERS_REPEAT, log=lambda text: line(f" {text}")):
+        if r["target"]:
+            TARGETS.append((f"{r['command']} <= {r['target']:.2f} s wall, best of {MASTERS_REPEAT} "
+                            f"({r['best']:.3f} s)", r["ok"] and r["best"] <= r["target"]))
+
+
 def main():
     t_start = time.time()
     load0 = os.getloadavg()
@@ -330,8 +362,10 @@ def main():
             TARGETS.append((f"sweep ({length} cases): 2 workers >= 1.8 x 1 worker ({wall:.2f} measured, "
                             f"{cpu:.2f} from the CPU times)", wall >= 1.8))
 
+    masters_section()
+
     load1 = os.getloadavg()
-    line(f"\nTargets (issue 13), load average {load1[0]:.1f} (1 min) at the end, {time.time() - t_start:.0f} s in all:")
+    line(f"\nTargets (issues 13 and 30), load average {load1[0]:.1f} (1 min) at the end, {time.time() - t_start:.0f} s in all:")
     for what, met in TARGETS:
         line(f"   [{'met' if met else 'MISSED'}] {what}")
 
