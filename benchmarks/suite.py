@@ -365,7 +365,8 @@ def main():
     masters_section()
 
     load1 = os.getloadavg()
-    line(f"\nTargets (issues 13 and 30), load average {load1[0]:.1f} (1 min) at the end, {time.time() - t_start:.0f} s in all:")
+    line(f"\nTargets (issues 13 and 30), load average {load1[0]:.1f} (1 min) at the end, "
+         f"{time.time() - t_start:.0f} s in all:")
     for what, met in TARGETS:
         line(f"   [{'met' if met else 'MISSED'}] {what}")
 
