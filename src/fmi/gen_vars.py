@@ -12,6 +12,10 @@ turns it into
                       causality, variability, range), the list REAL_OUTPUTS[],
                       per-type look-up arrays and vars_set_start_values().
 
+An Enumeration variable (declaredType= a <SimpleType><Enumeration>) is an int field, its
+range (the layer's range check) the smallest to the largest of its items, which must be
+consecutive; its start value must be one of them.
+
 A model description with <ModelExchange> (a plant) also gets MODEL_NX (its
 continuous states, in the order of <ModelStructure><Derivatives>), MODEL_NZ
 (event indicators), X_NAME[] and X_NOMINAL[]; a derivative named der(x) or
@@ -75,6 +79,7 @@ def read(xml_path):
     model = {"identifier": cs.get("modelIdentifier"), "guid": root.get("guid"),
              "vars": []}
     seen = {}
+    items = enumeration_items(root, xml_path)
     for sv in root.find("ModelVariables").findall("ScalarVariable"):
         name = sv.get("name")
         m = NAME_RE.match(name) or DER_RE.match(name)
@@ -92,6 +97,17 @@ def read(xml_path):
         causality = sv.get("causality", "local")
         variability = sv.get("variability", "continuous")
         start = typ_el.get("start")
+        lo, hi = typ_el.get("min"), typ_el.get("max")
+        if typ == "Enumeration":
+            values = items.get(typ_el.get("declaredType"))
+            if values is None:
+                raise ModelDescriptionError(f"{xml_path}: Enumeration '{name}': declaredType "
+                                            f"'{typ_el.get('declaredType')}' is no <SimpleType><Enumeration>")
+            # its range is its items' (the variable needs no min/max of its own)
+            lo, hi = lo or str(min(values)), hi or str(max(values))
+            if start is not None and int(start) not in values:
+                raise ModelDescriptionError(f"{xml_path}: Enumeration '{name}': start {start} is no item "
+                                            f"of {typ_el.get('declaredType')}")
         if start is None and causality in ("parameter", "input"):
             raise ModelDescriptionError(f"{xml_path}: {causality} '{name}' has no start value")
         model["vars"].append({
@@ -99,12 +115,32 @@ def read(xml_path):
             "base": ("der_" if name.startswith("der(") else "") + c_ident(m.group(1)),
             "index": int(m.group(2)) if m.group(2) is not None else None,
             "type": typ, "vr": vr, "causality": causality, "variability": variability,
-            "start": start, "min": typ_el.get("min"), "max": typ_el.get("max"),
+            "start": start, "min": lo, "max": hi,
             "description": sv.get("description", ""),
             "derivative": typ_el.get("derivative"), "nominal": typ_el.get("nominal"),
         })
     read_model_exchange(root, model, cs, xml_path)
     return model
+
+
+def enumeration_items(root, xml_path):
+    """{type name: [item values]} of the <TypeDefinitions><SimpleType><Enumeration>s. The
+    items of one type must be consecutive integers (the layer's range check, min..max, is
+    then exactly "one of the items"), each value and name once."""
+    out = {}
+    for st in root.iterfind("TypeDefinitions/SimpleType"):
+        en = st.find("Enumeration")
+        if en is None:
+            continue
+        vals = [int(i.get("value")) for i in en.findall("Item")]
+        names = [i.get("name") for i in en.findall("Item")]
+        if not vals or sorted(vals) != list(range(min(vals), min(vals) + len(vals))) \
+                or len(set(names)) != len(names):
+            raise ModelDescriptionError(
+                f"{xml_path}: Enumeration type '{st.get('name')}': items {list(zip(names, vals))} are not "
+                "unique names with consecutive values")
+        out[st.get("name")] = vals
+    return out
 
 
 def read_model_exchange(root, model, cs, xml_path):
