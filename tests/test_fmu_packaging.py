@@ -315,12 +315,25 @@ def test_documentation_lists_every_variable(name):
     parser.feed(page)
     rows = {r[0]: r for r in parser.rows if len(r) == 9}
     header = next(r for r in parser.rows if len(r) == 9 and r[0] == "name")
+    # every enumeration of the model description, with each item's value, name and description
+    items = {st.get("name"): {i.get("value"): i.get("name") for i in st.iter("Item")}
+             for st in _repo_md(name).iter("SimpleType") if st.find("Enumeration") is not None}
+    for tname, by_value in items.items():
+        assert f'<h3 id="type-{tname}">{tname}</h3>' in page, tname
+        table = page.split(f'<h3 id="type-{tname}">', 1)[1].split("</table>", 1)[0]
+        for value, item in by_value.items():
+            assert f'<td class="num">{value}</td><td class="name">{item}</td>' in table, (tname, item)
     assert header[:5] == ["name", "type", "unit", "display unit", "start"]
     for sv in _repo_md(name).iter("ScalarVariable"):
         t = next(c for c in sv if isinstance(c.tag, str))
         row = rows.get(sv.get("name"))
         assert row is not None, f"{sv.get('name')} not in index.html"
-        assert row[1] == t.tag
+        if t.tag == "Enumeration":      # the type, and the start value's item name after it
+            assert row[1] == f"Enumeration {t.get('declaredType')}"
+            if t.get("start") is not None:
+                assert row[4] == f"{t.get('start')} ({items[t.get('declaredType')][t.get('start')]})", row
+        else:
+            assert row[1] == t.tag
         assert row[2] == t.get("unit", "")
         # the value as written, then its display-unit value in brackets where it has one
         for col, attr in ((4, "start"), (5, "min"), (6, "max")):

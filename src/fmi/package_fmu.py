@@ -428,6 +428,19 @@ def fmt_display(value, unit, md_units):
     return f' <span class="du">({y:.6g} {html.escape(dname)})</span>'
 
 
+def enumerations(md):
+    """{type name: (description, [(item name, value, description)])} of the model
+    description's <TypeDefinitions><SimpleType><Enumeration>s, in their order."""
+    out = {}
+    for st in md.iterfind("TypeDefinitions/SimpleType"):
+        en = st.find("Enumeration")
+        if en is not None:
+            out[st.get("name")] = (st.get("description", ""),
+                                   [(i.get("name"), i.get("value"), i.get("description", ""))
+                                    for i in en.findall("Item")])
+    return out
+
+
 def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=(),
                   fmi_version=None, papers=None):
     """documentation/index.html: the metadata, the model's text (src/models/<Name>/README.md),
@@ -485,6 +498,7 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
         lic_items.append(f'<li><a href="licenses/{fname}">{fname}</a>: {e(what)}</li>')
 
     sections = []
+    enums = enumerations(md)
     for causality, title in CAUSALITY_TITLES:
         svs = [sv for sv in md.iter("ScalarVariable") if sv.get("causality", "local") == causality]
         if not svs:
@@ -497,12 +511,17 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
             du = units.get((unit, disp))
             dmap = {unit: du} if du else {}
             start = t.get("start", "")
+            items = enums.get(t.get("declaredType"), (None, []))[1] if t.tag == "Enumeration" else []
+            names = {v: n for n, v, _ in items}
+            item = f" ({e(names[start])})" if start in names else ""
             cells = [
                 f'<td class="name">{e(sv.get("name"))}</td>',
-                f"<td>{e(t.tag)}</td>",
+                f"<td>{e(t.tag)}"
+                + (f' <a href="#type-{e(t.get("declaredType"))}">{e(t.get("declaredType"))}</a>' if items else "")
+                + "</td>",
                 f"<td>{e(unit)}</td>",
                 f"<td>{e(disp)}</td>",
-                f'<td class="num">{e(start)}{fmt_display(start, unit, dmap)}</td>',
+                f'<td class="num">{e(start)}{item}{fmt_display(start, unit, dmap)}</td>',
                 f'<td class="num">{e(t.get("min", ""))}{fmt_display(t.get("min"), unit, dmap)}</td>',
                 f'<td class="num">{e(t.get("max", ""))}{fmt_display(t.get("max"), unit, dmap)}</td>',
                 f"<td>{e(sv.get('variability', 'continuous'))}</td>",
@@ -514,6 +533,22 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
             "<tr><th>name</th><th>type</th><th>unit</th><th>display unit</th><th>start</th>"
             "<th>min</th><th>max</th><th>variability</th><th>description</th></tr>\n"
             + "\n".join(body) + "</table>")
+
+    if enums:
+        # the items of each choice (FMI 2.0, 2.2.3 <SimpleType><Enumeration>; FMI 3.0
+        # <EnumerationType>): a tool shows the names, the FMU reads and writes the values
+        # (FMI 2.0: fmi2GetInteger/fmi2SetInteger; FMI 3.0: fmi3GetInt64/fmi3SetInt64)
+        body = []
+        for tname, (tdesc, items) in enums.items():
+            rows_ = "".join(f'<tr><td class="num">{e(v)}</td><td class="name">{e(n)}</td>'
+                            f"<td>{e(outside(d))}</td></tr>" for n, v, d in items)
+            body.append(f'<h3 id="type-{e(tname)}">{e(tname)}</h3>\n<p>{e(outside(tdesc))}</p>\n'
+                        f"<table><tr><th>value</th><th>item</th><th>description</th></tr>{rows_}</table>")
+        sections.append(f'<h2 id="enumerations">Enumerations ({len(enums)})</h2>\n'
+                        "<p>The choices among the parameters: a variable of one of these types takes the "
+                        "value of an item; set it by the value (FMI 2.0: <code>fmi2SetInteger</code>, "
+                        "FMI 3.0: <code>fmi3SetInt64</code>) or, in a tool that reads the type, by the "
+                        "item's name.</p>\n" + "\n".join(body))
 
     return f"""<!DOCTYPE html>
 <html lang="en">
