@@ -25,8 +25,8 @@ for --platform x86_64-linux and FMI 2.0). This adds
 
 With --fmi 3 the tree is the FMI 3.0 build's (<build>/fmu3/<Name>/, binaries/x86_64-linux and
 x86_64-windows): its modelDescription.xml is written by fmi3_description.py from the same
-completed FMI 2.0 description, and sources/ is not shipped (an FMI 3.0 source FMU needs
-sources/buildDescription.xml).
+completed FMI 2.0 description, and its sources/ (the same models as FMI 2.0's, with
+fmi3Functions.c and the FMI 3.0 table) are described by sources/buildDescription.xml.
 
 then writes the archive (entries in a fixed order with a fixed time stamp, so the same
 inputs give the same bytes) through a temporary file, so a reader never sees half an FMU.
@@ -476,7 +476,8 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
     ]
     if de is not None:
         rows.append(("default experiment", ", ".join(f"{k} = {v}" for k, v in de.attrib.items())))
-    rows.append(("sources", f"sources/ ({len(source_files)} C files listed in &lt;SourceFiles&gt;, "
+    listed = "sources/buildDescription.xml" if fmi_version == "3.0" else "&lt;SourceFiles&gt;"
+    rows.append(("sources", f"sources/ ({len(source_files)} C files listed in {listed}, "
                  "one flat folder: compile them with sources/ and your importer's FMI headers as the "
                  "include path, or <code>fmpy compile</code> the FMU)" if source_files else
                  f"not shipped: {e(why_not or '')}"))
@@ -697,7 +698,9 @@ def ship_sources(root, gen, tree, files, fmi_version="2"):
 def build_description(name, c_files):
     """sources/buildDescription.xml (FMI 3.0, 2.5.1.2 "Build Configurations", the schema
     fmi3BuildDescription.xsd): one build configuration for the model identifier, one C99
-    source file set, sources/ (".") its only include directory. Returns the document's text.
+    source file set (FMPy's `fmpy compile` compiles the first set only), FMI_VERSION=3
+    defined, sources/ (".") its only include directory (FMPy passes sources/ and its own FMI
+    headers, whatever the set names). Returns the document's text.
     (FMI 2.0.4, 2.3 lets an FMI 2.0 FMU carry it too; FMPy reads it for FMI 3.0 only, so an
     FMI 2.0 FMU says the same with <SourceFiles>.)"""
     root = ET.Element("fmiBuildDescription", {"fmiVersion": "3.0"})
@@ -705,6 +708,10 @@ def build_description(name, c_files):
     fset = ET.SubElement(conf, "SourceFileSet", {"language": "C99"})
     for f in c_files:
         ET.SubElement(fset, "SourceFile", {"name": f})
+    # the sources define it themselves too (model_vars.h's MODEL_FMI_VERSION, which fmu.h
+    # takes where no FMI_VERSION is defined): an importer that passes no definition builds
+    # FMI 3.0 as well; the exports are the unprefixed fmi3* names (no FMI3_FUNCTION_PREFIX)
+    ET.SubElement(fset, "PreprocessorDefinition", {"name": "FMI_VERSION", "value": "3"})
     ET.SubElement(fset, "IncludeDirectory", {"name": "."})
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
@@ -827,10 +834,6 @@ def main(argv=None):
     if "win64" in platforms:
         libraries.append("mingw-w64")
     why_not = needs_beyond_libc(files, system)
-    if a.fmi_version == "3":
-        why_not = ("the FMI 3.0 build ships binaries only for now: its sources/buildDescription.xml "
-                   "(build_description()) is written and schema-checked, but no importer's compile of it "
-                   "is tested yet; the FMI 2.0 FMU of the same model carries the same sources")
 
     tree_md = parse(a.xml)
     md = tree_md.getroot()
