@@ -179,6 +179,26 @@ def test_enumeration_items_are_the_codes_constants(name, tname):
 
 
 @pytest.mark.parametrize("name", FMU_NAMES)
+def test_no_jacobian_stated_and_documented(name):
+    """no model exports a Jacobian: every interface of the FMI 3.0 description states
+    providesDirectionalDerivatives and providesAdjointDerivatives false (FMI 3.0, 2.4.1: the
+    calls are then not to be made; ours answer fmi3Error), and the FMU's documentation says
+    why, and why its vectors are scalars"""
+    import xml.etree.ElementTree as ET
+    with zipfile.ZipFile(fmu3_file(name)) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        page = z.read("documentation/index.html").decode()
+    interfaces = [e for e in root if e.tag in ("CoSimulation", "ModelExchange")]
+    assert interfaces
+    for e in interfaces:
+        assert e.get("providesDirectionalDerivatives") == "false", e.tag
+        assert e.get("providesAdjointDerivatives") == "false", e.tag
+    assert not list(root.iter("Dimension"))          # the flat names: no FMI 3.0 array
+    assert "<th>derivatives</th><td>providesDirectionalDerivatives and providesAdjointDerivatives are false" in page
+    assert "no analytic Jacobian" in page and "<th>arrays</th>" in page
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
 def test_fmpy_validate(name):
     assert validate_fmu(str(fmu3_file(name))) == []
 
