@@ -95,6 +95,17 @@ def test_both_model_descriptions_describe_the_same_variables(name):
             assert b.start == a.start, where
         if a.derivative is not None:
             assert b.derivative is not None and b.derivative.name == a.derivative.name, where
+    # the enumerations: the same types, items (name, value, description) and type descriptions
+    # (FMPy does not read an FMI 2.0 SimpleType's description: compared in the XML)
+    def enums(m):
+        return {t.name: [(i.name, int(i.value), i.description) for i in t.items]
+                for t in m.typeDefinitions if t.type == "Enumeration"}
+    assert enums(m3) == enums(m2), name
+    assert all(enums(m2).values())
+    assert _type_descriptions(fmu_file(name), "SimpleType") == _type_descriptions(fmu3_file(name), "EnumerationType")
+    for n, a in v2.items():
+        if a.type == "Enumeration":     # a start value is one of its type's items
+            assert a.start is None or int(a.start) in [v for _, v, _ in enums(m2)[a.declaredType.name]], n
     # units, display units, the default experiment, the log categories
     def units(m):
         base = ("kg", "m", "s", "A", "K", "mol", "cd", "rad", "factor", "offset")
@@ -126,6 +137,67 @@ def test_both_model_descriptions_describe_the_same_variables(name):
             assert not it.providesDirectionalDerivative
 
 
+def _type_descriptions(fmu, tag):
+    import xml.etree.ElementTree as ET
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    return {t.get("name"): t.get("description") for t in root.iter(tag)
+            if tag == "EnumerationType" or t.find("Enumeration") is not None}
+
+
+#: the C constants each choice's code compares with (the models' own headers), by enumeration
+#: type: the items' values must be these, or the FMU would show one name and do another
+C_CHOICES = {
+    ("BusDynamics", "TyreModel"): ("src/models/BusDynamics/dynamics.h",
+                                   ["TYRE_LINEAR", "TYRE_LINEAR_FRICTION", "TYRE_FIALA", "TYRE_LINEAR_SCALED"]),
+    ("ForceMinimization", "SteeringLaw"): ("src/models/ForceMinimization/config.h",
+                                           ["LAW_STRAIGHT", "LAW_FORCE_MINIMIZATION", "LAW_LIKE_GUIDED"]),
+    ("RoadFollowDriver", "Road"): ("src/models/RoadFollowDriver/roads.h",
+                                   ["ROAD_CSV", "ROAD_LANE_CHANGE", "ROAD_CIRCLE", "ROAD_ISO3888"]),
+}
+
+
+def _c_enum(path, names):
+    """the values of C enum constants (an enum { A = 0, B, ... } list: implicit ones count on)"""
+    text = (ROOT / path).read_text()
+    body = next(m.group(1) for m in re.finditer(r"enum\s*\w*\s*\{([^}]*)\}", text) if names[0] in m.group(1))
+    body = re.sub(r"/\*.*?\*/", "", body, flags=re.S)
+    values, k = {}, -1
+    for part in body.split(","):
+        m = re.match(r"\s*(\w+)\s*(?:=\s*(\d+))?\s*$", part)
+        if m:
+            k = int(m.group(2)) if m.group(2) else k + 1
+            values[m.group(1)] = k
+    return [values[n] for n in names]
+
+
+@pytest.mark.parametrize("name,tname", sorted(C_CHOICES))
+def test_enumeration_items_are_the_codes_constants(name, tname):
+    path, names = C_CHOICES[(name, tname)]
+    (t,) = [t for t in md(name, 2).typeDefinitions if t.name == tname]
+    assert [int(i.value) for i in t.items] == _c_enum(path, names)
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_no_jacobian_stated_and_documented(name):
+    """no model exports a Jacobian: every interface of the FMI 3.0 description states
+    providesDirectionalDerivatives and providesAdjointDerivatives false (FMI 3.0, 2.4.1: the
+    calls are then not to be made; ours answer fmi3Error), and the FMU's documentation says
+    why, and why its vectors are scalars"""
+    import xml.etree.ElementTree as ET
+    with zipfile.ZipFile(fmu3_file(name)) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        page = z.read("documentation/index.html").decode()
+    interfaces = [e for e in root if e.tag in ("CoSimulation", "ModelExchange")]
+    assert interfaces
+    for e in interfaces:
+        assert e.get("providesDirectionalDerivatives") == "false", e.tag
+        assert e.get("providesAdjointDerivatives") == "false", e.tag
+    assert not list(root.iter("Dimension"))          # the flat names: no FMI 3.0 array
+    assert "<th>derivatives</th><td>providesDirectionalDerivatives and providesAdjointDerivatives are false" in page
+    assert "no analytic Jacobian" in page and "<th>arrays</th>" in page
+
+
 @pytest.mark.parametrize("name", FMU_NAMES)
 def test_fmpy_validate(name):
     assert validate_fmu(str(fmu3_file(name))) == []
@@ -144,7 +216,11 @@ def test_fmi3_binaries_only_fmi_symbols_exported(name, tmp_path):
         names = z.namelist()
         z.extractall(tmp_path)
     assert f"binaries/x86_64-linux/{name}.so" in names
-    assert not any(n.startswith(("binaries/linux64", "binaries/win64", "sources/")) for n in names)
+    assert not any(n.startswith(("binaries/linux64", "binaries/win64")) for n in names)
+    # sources/ (with sources/buildDescription.xml) exactly where the FMI 2.0 FMU ships its sources
+    with zipfile.ZipFile(fmu_file(name)) as z2:
+        fmi2_sources = any(n.startswith("sources/") for n in z2.namelist())
+    assert ("sources/buildDescription.xml" in names) == fmi2_sources
     nm = subprocess.run(["nm", "-D", "--defined-only", str(tmp_path / f"binaries/x86_64-linux/{name}.so")],
                         capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in nm.splitlines() if line.split()[1:2] == ["T"]}

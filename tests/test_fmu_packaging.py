@@ -57,13 +57,22 @@ def _uses_eigen(name):
                for p in _model_files(name))
 
 
-def _names(name):
-    with zipfile.ZipFile(fmu_file(name)) as z:
+def _fmu(name, fmi=2):
+    """the FMI 2.0 FMU, or the FMI 3.0 one (fmus/fmi3/)"""
+    if fmi == 2:
+        return fmu_file(name)
+    path = fmu_file(name).parent / "fmi3" / f"{name}.fmu"
+    assert path.is_file(), f"{path} not built"
+    return path
+
+
+def _names(name, fmi=2):
+    with zipfile.ZipFile(_fmu(name, fmi)) as z:
         return set(z.namelist())
 
 
-def _read(name, member):
-    with zipfile.ZipFile(fmu_file(name)) as z:
+def _read(name, member, fmi=2):
+    with zipfile.ZipFile(_fmu(name, fmi)) as z:
         return z.read(member)
 
 
@@ -315,12 +324,25 @@ def test_documentation_lists_every_variable(name):
     parser.feed(page)
     rows = {r[0]: r for r in parser.rows if len(r) == 9}
     header = next(r for r in parser.rows if len(r) == 9 and r[0] == "name")
+    # every enumeration of the model description, with each item's value, name and description
+    items = {st.get("name"): {i.get("value"): i.get("name") for i in st.iter("Item")}
+             for st in _repo_md(name).iter("SimpleType") if st.find("Enumeration") is not None}
+    for tname, by_value in items.items():
+        assert f'<h3 id="type-{tname}">{tname}</h3>' in page, tname
+        table = page.split(f'<h3 id="type-{tname}">', 1)[1].split("</table>", 1)[0]
+        for value, item in by_value.items():
+            assert f'<td class="num">{value}</td><td class="name">{item}</td>' in table, (tname, item)
     assert header[:5] == ["name", "type", "unit", "display unit", "start"]
     for sv in _repo_md(name).iter("ScalarVariable"):
         t = next(c for c in sv if isinstance(c.tag, str))
         row = rows.get(sv.get("name"))
         assert row is not None, f"{sv.get('name')} not in index.html"
-        assert row[1] == t.tag
+        if t.tag == "Enumeration":      # the type, and the start value's item name after it
+            assert row[1] == f"Enumeration {t.get('declaredType')}"
+            if t.get("start") is not None:
+                assert row[4] == f"{t.get('start')} ({items[t.get('declaredType')][t.get('start')]})", row
+        else:
+            assert row[1] == t.tag
         assert row[2] == t.get("unit", "")
         # the value as written, then its display-unit value in brackets where it has one
         for col, attr in ((4, "start"), (5, "min"), (6, "max")):
@@ -341,19 +363,30 @@ def _ships_sources(name):
     return not _uses_sundials(name) and not any(p.suffix == ".cpp" for p in _model_files(name))
 
 
-def test_the_controllers_ship_sources():
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_the_controllers_ship_sources(fmi):
+    """the models that need only the C library ship sources/ in both FMI versions; the plants
+    (SUNDIALS, Eigen) do not, and their documentation says why"""
     assert MUST_SHIP_SOURCES <= set(FMU_NAMES)
     for name in FMU_NAMES:
-        has = any(n.startswith("sources/") for n in _names(name))
+        has = any(n.startswith("sources/") for n in _names(name, fmi))
         assert has == _ships_sources(name), name
         assert (name in MUST_SHIP_SOURCES) <= has
+        page = _read(name, "documentation/index.html", fmi).decode()
+        if not has:
+            why = re.search(r"<th>sources</th><td>not shipped: ([^<]*)</td>", page)
+            assert why, name
+            if _uses_sundials(name):
+                assert "SUNDIALS" in why.group(1), name
+            if _uses_eigen(name):
+                assert "Eigen" in why.group(1), name
 
 
 def _stimulus(md, t):
     """every Real input moved within its range: a sine around its start value"""
     cols = []
     for k, v in enumerate(md.modelVariables):
-        if v.causality != "input" or v.type != "Real":
+        if v.causality != "input" or v.type not in ("Real", "Float64"):
             continue
         start = float(v.start or 0.0)
         lo = float(v.min) if v.min is not None else -math.inf
@@ -363,38 +396,53 @@ def _stimulus(md, t):
     return cols
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("name", [n for n in FMU_NAMES if _ships_sources(n)])
-def test_sources_are_one_flat_set(name):
-    """sources/ is one folder, the only include path: every file of <SourceFiles> is in it,
-    every local #include of every file there names a file there, and the FMI headers are not
-    shipped (FMI 2.0.4, 2.3: the importer's own are used)"""
-    names = _names(name)
+def test_sources_are_one_flat_set(name, fmi):
+    """sources/ is one folder, the only include path: every file of <SourceFiles> (FMI 2.0) or
+    of sources/buildDescription.xml's one source file set (FMI 3.0, 2.5.1.2, valid against
+    fmi3BuildDescription.xsd) is in it, every local #include of every file there names a file
+    there, and the FMI headers are not shipped (FMI 2.0.4, 2.3; FMI 3.0, 2.5.1: the importer's
+    own are used)"""
+    names = _names(name, fmi)
     shipped = {n[len("sources/"):] for n in names if n.startswith("sources/") and n != "sources/"}
     assert shipped and all("/" not in f for f in shipped), sorted(shipped)
-    assert not shipped & {"fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"}
-    md = read_model_description(str(fmu_file(name)))
+    assert not shipped & {f"fmi{fmi}Functions.h", f"fmi{fmi}FunctionTypes.h",
+                          "fmi2TypesPlatform.h", "fmi3PlatformTypes.h"}
+    md = read_model_description(str(_fmu(name, fmi)), validate=True)
     assert len(md.buildConfigurations) == 1 and len(md.buildConfigurations[0].sourceFileSets) == 1
-    files = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
-    assert files[0] == "fmi2Functions.c" and "model_vars.c" in files
+    fset = md.buildConfigurations[0].sourceFileSets[0]
+    files = fset.sourceFiles
+    assert files[0] == f"fmi{fmi}Functions.c" and "model_vars.c" in files
     assert set(files) <= shipped
     assert {f for f in shipped if f.endswith(".c")} == set(files)   # nothing left uncompiled
+    if fmi == 3:
+        assert "buildDescription.xml" in shipped
+        assert md.buildConfigurations[0].modelIdentifier == name and fset.language == "C99"
+        assert [(d.name, d.value) for d in fset.preprocessorDefinitions] == [("FMI_VERSION", "3")]
+        assert fset.includeDirectories == ["."]
+    # the table says the FMI version itself (model_vars.h), for an importer that passes no -D
+    assert f"#define MODEL_FMI_VERSION {fmi}\n" in _read(name, "sources/model_vars.h", fmi).decode()
     for f in shipped:
-        for inc in re.findall(r'^\s*#\s*include\s*"([^"]+)"', _read(name, f"sources/{f}").decode(), re.M):
+        for inc in re.findall(r'^\s*#\s*include\s*"([^"]+)"', _read(name, f"sources/{f}", fmi).decode(), re.M):
             # the FMI headers are the importer's: fmu.h includes FMI 2.0's or 3.0's by FMI_VERSION
             assert inc in shipped or inc.startswith(("fmi2", "fmi3")), (f, inc)
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("name", [n for n in FMU_NAMES if _ships_sources(n)])
-def test_fmpy_compile_gives_the_shipped_results(name, tmp_path):
+def test_fmpy_compile_gives_the_shipped_results(name, fmi, tmp_path):
     """A copy of the FMU with its binaries removed, compiled by `fmpy compile` (FMPy's CMake
-    project: the first source file set, sources/ and FMPy's FMI headers as the include path,
-    warnings as errors), gets a linux64 binary that needs only libc/libm, and gives the shipped
-    binary's results bit for bit on a co-simulation of (at most 3 s of) its default experiment
-    with every input moving"""
+    project: the first source file set, its preprocessor definitions, sources/ and FMPy's FMI
+    headers as the include path, warnings as errors), gets a linux64 (FMI 3.0: x86_64-linux)
+    binary that needs only libc/libm and exports the unprefixed fmiN* functions only, and
+    gives the shipped binary's results bit for bit on a co-simulation of (at most 3 s of) its
+    default experiment with every input moving"""
     if not shutil.which("cmake"):
         pytest.skip("cmake is not installed (fmpy compile runs it; scripts/setup.sh installs it)")
+    shipped_fmu = _fmu(name, fmi)
     copy = tmp_path / f"{name}.fmu"
-    with zipfile.ZipFile(fmu_file(name)) as zin, zipfile.ZipFile(copy, "w", zipfile.ZIP_DEFLATED) as zout:
+    with zipfile.ZipFile(shipped_fmu) as zin, zipfile.ZipFile(copy, "w", zipfile.ZIP_DEFLATED) as zout:
         for item in zin.infolist():
             if not item.filename.startswith("binaries/"):
                 zout.writestr(item, zin.read(item))
@@ -403,15 +451,26 @@ def test_fmpy_compile_gives_the_shipped_results(name, tmp_path):
     out = subprocess.run([sys.executable, "-m", "fmpy.cli", "compile", "--warning-as-error", str(copy)],
                          capture_output=True, text=True, env=env, cwd=tmp_path)
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+    folder = "linux64" if fmi == 2 else "x86_64-linux"
     with zipfile.ZipFile(copy) as z:
-        assert f"binaries/linux64/{name}.so" in z.namelist()
+        assert f"binaries/{folder}/{name}.so" in z.namelist()
         so = tmp_path / f"{name}.so"
-        so.write_bytes(z.read(f"binaries/linux64/{name}.so"))
+        so.write_bytes(z.read(f"binaries/{folder}/{name}.so"))
     ldd = subprocess.run(["ldd", str(so)], capture_output=True, text=True, check=True, env=env).stdout
     libs = {line.split()[0].rsplit("/", 1)[-1] for line in ldd.splitlines() if line.strip()}
     assert libs <= SYSTEM_LIBS, libs
+    if shutil.which("nm"):
+        # every function of the standard's header, by its own name (no FMIn_FUNCTION_PREFIX:
+        # FMI 2.0.4, 2.1.1; FMI 3.0, 2.2.1), and no prefixed one
+        nm = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True,
+                            check=True, env=env).stdout
+        exported = {line.split()[-1] for line in nm.splitlines() if line.split()[1:2] == ["T"]}
+        header = (ROOT / f"include/fmi{fmi}/fmi{fmi}Functions.h").read_text()
+        api = set(re.findall(rf"FMI{fmi}_Export\s+\w+TYPE\s+(fmi{fmi}\w+);", header))
+        assert len(api) > 20 and api <= exported, sorted(api - exported)
+        assert not [f for f in exported if re.search(rf"\w+_fmi{fmi}[A-Z]", f)]
 
-    md = read_model_description(str(fmu_file(name)))
+    md = read_model_description(str(shipped_fmu))
     stop = min(float(md.defaultExperiment.stopTime), 3.0)
     step = float(md.defaultExperiment.stepSize or 0.01)
     t = np.arange(0.0, stop + step, step)
@@ -422,7 +481,7 @@ def test_fmpy_compile_gives_the_shipped_results(name, tmp_path):
                           dtype=[("time", np.float64)] + [(c[0], np.float64) for c in cols])
     outputs = [v.name for v in md.modelVariables if v.causality == "output" and v.type != "String"]
     kw = dict(stop_time=stop, output_interval=step, input=inputs, output=outputs, fmi_type="CoSimulation")
-    shipped = simulate_fmu(str(fmu_file(name)), **kw)
+    shipped = simulate_fmu(str(shipped_fmu), **kw)
     ours = simulate_fmu(str(copy), **kw)
     assert len(shipped) == len(t) or len(shipped) > 10
     moved = False

@@ -83,3 +83,41 @@ def test_cli_pack_portable_and_its_errors(tmp_path, capsys):
     assert "--portable" in capsys.readouterr().err
     with pytest.raises(ArtibusError, match="CAN"):
         pack_portable("Bus36m_Circle_CAN", out=tmp_path / "c.ssp")
+
+
+def test_enumerations_are_integers_in_the_pack(tmp_path):
+    """The choices (Enumeration variables) reach the other masters as Integers: in the pack's
+    FMUs each is an Integer with the same value reference, min/max its items' smallest and
+    largest value and the items in its description; the bench's item (Driver.road =
+    fullCircle in Bus36m_Circle) is the ssv:Integer of that item's value; every other entry
+    of the FMU is byte for byte the built FMU's (the binary is the same)."""
+    from fmpy import read_model_description
+    from artibus import fmu_path
+    pack = pack_portable("Bus36m_Circle", [], out=tmp_path / "p.ssp")
+    root, sets = _sets(pack)
+    road = [p for p in root.iter(f"{{{NS['ssv']}}}Parameter") if p.get("name") == "road"]
+    (value,) = [c for r in road for c in r]
+    assert etree.QName(value).localname == "Integer" and value.get("value") == "2"   # fullCircle
+    assert not list(root.iter(f"{{{NS['ssv']}}}Enumeration"))
+    with zipfile.ZipFile(pack) as z:
+        (entry,) = [n for n in z.namelist() if n.endswith("RoadFollowDriver.fmu")]
+        (tmp_path / "d.fmu").write_bytes(z.read(entry))
+    built = read_model_description(str(fmu_path("RoadFollowDriver")))
+    packed = read_model_description(str(tmp_path / "d.fmu"))
+    b = {v.name: v for v in built.modelVariables}
+    enums = [v for v in built.modelVariables if v.type == "Enumeration"]
+    assert {v.name for v in enums} == {"road", "method"}
+    for v in packed.modelVariables:
+        if v.name in ("road", "method"):
+            items = [int(i.value) for i in b[v.name].declaredType.items]
+            assert v.type == "Integer" and v.valueReference == b[v.name].valueReference
+            assert (int(v.min), int(v.max)) == (min(items), max(items))
+            assert all(i.name in v.description for i in b[v.name].declaredType.items)
+        else:
+            assert (v.type, v.valueReference, v.description) == \
+                (b[v.name].type, b[v.name].valueReference, b[v.name].description)
+    with zipfile.ZipFile(fmu_path("RoadFollowDriver")) as a, zipfile.ZipFile(tmp_path / "d.fmu") as c:
+        assert a.namelist() == c.namelist()
+        for n in a.namelist():
+            if n != "modelDescription.xml":
+                assert a.read(n) == c.read(n), n

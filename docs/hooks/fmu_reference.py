@@ -90,6 +90,13 @@ def variable_tables(md):
                 number(t.get("start", ""), du), number(attr("min"), du), number(attr("max"), du),
                 cell(sv.get("variability", "continuous")), cell(sv.get("description", ""))]) + " |")
         out.append("")
+    enums = package_fmu().enumerations(md)
+    if enums:
+        out += [f"## Enumerations ({len(enums)}) {{#enumerations}}", ""]
+        for tname, (tdesc, items) in enums.items():
+            out += [f"### {tname}", "", cell(tdesc), "", "| value | item | description |", "| --- | --- | --- |"]
+            out += [f"| {cell(v)} | {code(n)} | {cell(d)} |" for n, v, d in items]
+            out.append("")
     return out
 
 

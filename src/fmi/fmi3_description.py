@@ -8,7 +8,8 @@ What changes from FMI 2.0 to FMI 3.0 (FMI 3.0, 2.4):
 - ``guid`` becomes ``instantiationToken``; ``numberOfEventIndicators`` goes (the event
   indicators are variables, listed in <ModelStructure><EventIndicator>);
 - <ModelExchange>/<CoSimulation>: ``canGetAndSetFMUState``, ``canSerializeFMUState``,
-  ``providesDirectionalDerivatives="false"`` (no Jacobian is provided),
+  ``providesDirectionalDerivatives="false"`` and ``providesAdjointDerivatives="false"``
+  (stated, though false is the default: no model exports an analytic Jacobian),
   ``needsCompletedIntegratorStep="false"``; Co-Simulation ``hasEventMode="true"`` (the FMU
   has nothing to do in Event Mode, it handles its events inside the step, so an importer
   may use either), ``canHandleVariableCommunicationStepSize`` as in FMI 2.0; no
@@ -58,13 +59,15 @@ def _interfaces(md2, md3):
                      "false" if me.get("completedIntegratorStepNotNeeded") == "true" else "true",
                  "canGetAndSetFMUState": me.get("canGetAndSetFMUstate", "false"),
                  "canSerializeFMUState": me.get("canSerializeFMUstate", "false"),
-                 "providesDirectionalDerivatives": "false"}
+                 "providesDirectionalDerivatives": "false",
+                 "providesAdjointDerivatives": "false"}
         md3.append(_element("ModelExchange", attrs, "\n  "))
     cs = md2.find("CoSimulation")
     attrs = {"modelIdentifier": cs.get("modelIdentifier"),
              "canGetAndSetFMUState": cs.get("canGetAndSetFMUstate", "false"),
              "canSerializeFMUState": cs.get("canSerializeFMUstate", "false"),
              "providesDirectionalDerivatives": "false",
+             "providesAdjointDerivatives": "false",
              "canHandleVariableCommunicationStepSize": cs.get("canHandleVariableCommunicationStepSize",
                                                                "false"),
              "hasEventMode": "true"}

@@ -18,8 +18,12 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include "model_vars.h"   /* MODEL_FMI_VERSION: the version the variable table is for */
 #ifndef FMI_VERSION
-#define FMI_VERSION 2
+#define FMI_VERSION MODEL_FMI_VERSION
+#endif
+#if FMI_VERSION != MODEL_FMI_VERSION
+#error "FMI_VERSION differs from MODEL_FMI_VERSION: model_vars.h was generated for the other FMI version"
 #endif
 #if FMI_VERSION == 3
 #include "fmi3Functions.h"

@@ -25,8 +25,8 @@ for --platform x86_64-linux and FMI 2.0). This adds
 
 With --fmi 3 the tree is the FMI 3.0 build's (<build>/fmu3/<Name>/, binaries/x86_64-linux and
 x86_64-windows): its modelDescription.xml is written by fmi3_description.py from the same
-completed FMI 2.0 description, and sources/ is not shipped (an FMI 3.0 source FMU needs
-sources/buildDescription.xml).
+completed FMI 2.0 description, and its sources/ (the same models as FMI 2.0's, with
+fmi3Functions.c and the FMI 3.0 table) are described by sources/buildDescription.xml.
 
 then writes the archive (entries in a fixed order with a fixed time stamp, so the same
 inputs give the same bytes) through a temporary file, so a reader never sees half an FMU.
@@ -428,6 +428,19 @@ def fmt_display(value, unit, md_units):
     return f' <span class="du">({y:.6g} {html.escape(dname)})</span>'
 
 
+def enumerations(md):
+    """{type name: (description, [(item name, value, description)])} of the model
+    description's <TypeDefinitions><SimpleType><Enumeration>s, in their order."""
+    out = {}
+    for st in md.iterfind("TypeDefinitions/SimpleType"):
+        en = st.find("Enumeration")
+        if en is not None:
+            out[st.get("name")] = (st.get("description", ""),
+                                   [(i.get("name"), i.get("value"), i.get("description", ""))
+                                    for i in en.findall("Item")])
+    return out
+
+
 def documentation(md, name, readme, libraries, platforms, source_files, version, why_not, with_sundials=(),
                   fmi_version=None, papers=None):
     """documentation/index.html: the metadata, the model's text (src/models/<Name>/README.md),
@@ -463,10 +476,20 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
     ]
     if de is not None:
         rows.append(("default experiment", ", ".join(f"{k} = {v}" for k, v in de.attrib.items())))
-    rows.append(("sources", f"sources/ ({len(source_files)} C files listed in &lt;SourceFiles&gt;, "
+    listed = "sources/buildDescription.xml" if fmi_version == "3.0" else "&lt;SourceFiles&gt;"
+    rows.append(("sources", f"sources/ ({len(source_files)} C files listed in {listed}, "
                  "one flat folder: compile them with sources/ and your importer's FMI headers as the "
                  "include path, or <code>fmpy compile</code> the FMU)" if source_files else
                  f"not shipped: {e(why_not or '')}"))
+    if fmi_version == "3.0":
+        rows.append(("derivatives", "providesDirectionalDerivatives and providesAdjointDerivatives are false: "
+                     "the model exports no analytic Jacobian (its equations are integrated inside the FMU, "
+                     "and no model derives its partial derivatives), so fmi3GetDirectionalDerivative and "
+                     "fmi3GetAdjointDerivative answer fmi3Error; an importer that needs a Jacobian takes "
+                     "finite differences of the outputs"))
+        rows.append(("arrays", "none: every vector (axle angles, forces, positions) is a set of scalar "
+                     "variables named x[1], x[2], ... as in FMI 2.0, so the same connections and parameter "
+                     "files serve both versions and every importer that reads scalars"))
     meta = "".join(f"<tr><th>{e(k)}</th><td>{v if k == 'sources' else e(v or '')}</td></tr>" for k, v in rows)
 
     lic_items = []
@@ -485,6 +508,7 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
         lic_items.append(f'<li><a href="licenses/{fname}">{fname}</a>: {e(what)}</li>')
 
     sections = []
+    enums = enumerations(md)
     for causality, title in CAUSALITY_TITLES:
         svs = [sv for sv in md.iter("ScalarVariable") if sv.get("causality", "local") == causality]
         if not svs:
@@ -497,12 +521,17 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
             du = units.get((unit, disp))
             dmap = {unit: du} if du else {}
             start = t.get("start", "")
+            items = enums.get(t.get("declaredType"), (None, []))[1] if t.tag == "Enumeration" else []
+            names = {v: n for n, v, _ in items}
+            item = f" ({e(names[start])})" if start in names else ""
             cells = [
                 f'<td class="name">{e(sv.get("name"))}</td>',
-                f"<td>{e(t.tag)}</td>",
+                f"<td>{e(t.tag)}"
+                + (f' <a href="#type-{e(t.get("declaredType"))}">{e(t.get("declaredType"))}</a>' if items else "")
+                + "</td>",
                 f"<td>{e(unit)}</td>",
                 f"<td>{e(disp)}</td>",
-                f'<td class="num">{e(start)}{fmt_display(start, unit, dmap)}</td>',
+                f'<td class="num">{e(start)}{item}{fmt_display(start, unit, dmap)}</td>',
                 f'<td class="num">{e(t.get("min", ""))}{fmt_display(t.get("min"), unit, dmap)}</td>',
                 f'<td class="num">{e(t.get("max", ""))}{fmt_display(t.get("max"), unit, dmap)}</td>',
                 f"<td>{e(sv.get('variability', 'continuous'))}</td>",
@@ -514,6 +543,22 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
             "<tr><th>name</th><th>type</th><th>unit</th><th>display unit</th><th>start</th>"
             "<th>min</th><th>max</th><th>variability</th><th>description</th></tr>\n"
             + "\n".join(body) + "</table>")
+
+    if enums:
+        # the items of each choice (FMI 2.0, 2.2.3 <SimpleType><Enumeration>; FMI 3.0
+        # <EnumerationType>): a tool shows the names, the FMU reads and writes the values
+        # (FMI 2.0: fmi2GetInteger/fmi2SetInteger; FMI 3.0: fmi3GetInt64/fmi3SetInt64)
+        body = []
+        for tname, (tdesc, items) in enums.items():
+            rows_ = "".join(f'<tr><td class="num">{e(v)}</td><td class="name">{e(n)}</td>'
+                            f"<td>{e(outside(d))}</td></tr>" for n, v, d in items)
+            body.append(f'<h3 id="type-{e(tname)}">{e(tname)}</h3>\n<p>{e(outside(tdesc))}</p>\n'
+                        f"<table><tr><th>value</th><th>item</th><th>description</th></tr>{rows_}</table>")
+        sections.append(f'<h2 id="enumerations">Enumerations ({len(enums)})</h2>\n'
+                        "<p>The choices among the parameters: a variable of one of these types takes the "
+                        "value of an item; set it by the value (FMI 2.0: <code>fmi2SetInteger</code>, "
+                        "FMI 3.0: <code>fmi3SetInt64</code>) or, in a tool that reads the type, by the "
+                        "item's name.</p>\n" + "\n".join(body))
 
     return f"""<!DOCTYPE html>
 <html lang="en">
@@ -662,7 +707,9 @@ def ship_sources(root, gen, tree, files, fmi_version="2"):
 def build_description(name, c_files):
     """sources/buildDescription.xml (FMI 3.0, 2.5.1.2 "Build Configurations", the schema
     fmi3BuildDescription.xsd): one build configuration for the model identifier, one C99
-    source file set, sources/ (".") its only include directory. Returns the document's text.
+    source file set (FMPy's `fmpy compile` compiles the first set only), FMI_VERSION=3
+    defined, sources/ (".") its only include directory (FMPy passes sources/ and its own FMI
+    headers, whatever the set names). Returns the document's text.
     (FMI 2.0.4, 2.3 lets an FMI 2.0 FMU carry it too; FMPy reads it for FMI 3.0 only, so an
     FMI 2.0 FMU says the same with <SourceFiles>.)"""
     root = ET.Element("fmiBuildDescription", {"fmiVersion": "3.0"})
@@ -670,6 +717,10 @@ def build_description(name, c_files):
     fset = ET.SubElement(conf, "SourceFileSet", {"language": "C99"})
     for f in c_files:
         ET.SubElement(fset, "SourceFile", {"name": f})
+    # the sources define it themselves too (model_vars.h's MODEL_FMI_VERSION, which fmu.h
+    # takes where no FMI_VERSION is defined): an importer that passes no definition builds
+    # FMI 3.0 as well; the exports are the unprefixed fmi3* names (no FMI3_FUNCTION_PREFIX)
+    ET.SubElement(fset, "PreprocessorDefinition", {"name": "FMI_VERSION", "value": "3"})
     ET.SubElement(fset, "IncludeDirectory", {"name": "."})
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
@@ -792,10 +843,6 @@ def main(argv=None):
     if "win64" in platforms:
         libraries.append("mingw-w64")
     why_not = needs_beyond_libc(files, system)
-    if a.fmi_version == "3":
-        why_not = ("the FMI 3.0 build ships binaries only for now: its sources/buildDescription.xml "
-                   "(build_description()) is written and schema-checked, but no importer's compile of it "
-                   "is tested yet; the FMI 2.0 FMU of the same model carries the same sources")
 
     tree_md = parse(a.xml)
     md = tree_md.getroot()

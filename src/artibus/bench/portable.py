@@ -57,10 +57,55 @@ def _text(value, v):
     if t == "Boolean":
         b = value if isinstance(value, bool) else str(value).strip() in ("true", "1")
         return "Boolean", "true" if b else "false"
-    if t == "Enumeration":                       # SSP 1.0: the item's name
-        items = {str(int(i.value)): i.name for i in v.declaredType.items} if v.declaredType else {}
-        return "Enumeration", items.get(str(value), str(value))
+    if t == "Enumeration":                       # the item's value: see integer_view
+        byname = {i.name: int(i.value) for i in v.declaredType.items} if v.declaredType else {}
+        return "Integer", str(byname.get(str(value), value))
     return "String", str(value)
+
+
+def integer_view(fmu):
+    """The FMI 2.0 FMU ``fmu`` (bytes) with each Enumeration variable declared as an Integer
+    (bytes; the FMU itself where it has none): the same value reference, min and max its
+    items' smallest and largest value, its description followed by the items. Only
+    modelDescription.xml changes. The binary cannot tell: FMI 2.0 reads and writes an
+    Enumeration with fmi2GetInteger/fmi2SetInteger, in the Integer value references (FMI
+    2.0.4, 2.1.7 and 2.2.7), so every master sets the choice by its value. Why: neither
+    libcosim (its FMU loader ignores FMI 2.0 Enumeration variables, with a warning) nor ecos
+    (it sets no Integer parameter on an Enumeration) applies a parameter to an Enumeration,
+    and none of the three other masters reads SSP 1.0's ssv:Enumeration (the item's name:
+    ecos "Unknown XML node in ssv:Parameter", libcosim an internal error, FMPy's
+    simulate_ssp converts the value with int())."""
+    import io
+    with zipfile.ZipFile(io.BytesIO(fmu)) as z:
+        md = etree.fromstring(z.read("modelDescription.xml"))
+        types = {st.get("name"): [(i.get("name"), int(i.get("value"))) for i in st.iter("Item")]
+                 for st in md.iterfind("TypeDefinitions/SimpleType") if st.find("Enumeration") is not None}
+        changed = False
+        for sv in md.iterfind("ModelVariables/ScalarVariable"):
+            en = sv.find("Enumeration")
+            if en is None or en.get("declaredType") not in types:
+                continue
+            items = types[en.get("declaredType")]
+            attrs = {"min": en.get("min", str(min(v for _, v in items))),
+                     "max": en.get("max", str(max(v for _, v in items)))}
+            if en.get("start") is not None:
+                attrs["start"] = en.get("start")
+            integer = etree.Element("Integer", attrs)
+            integer.tail = en.tail
+            sv.replace(en, integer)
+            sv.set("description", f"{sv.get('description', '')}; an Integer here, the items of "
+                   f"{en.get('declaredType')}: " + ", ".join(f"{v} = {n}" for n, v in items))
+            changed = True
+        if not changed:
+            return fmu
+        out = io.BytesIO()
+        with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as o:
+            for info in z.infolist():
+                data = z.read(info)
+                if info.filename == "modelDescription.xml":
+                    data = etree.tostring(md, xml_declaration=True, encoding="UTF-8")
+                o.writestr(info, data)
+    return out.getvalue()
 
 
 def _steps(bench, z):
@@ -96,6 +141,7 @@ def pack_portable(bench, variants=None, out=None):
         files = {n: z.read(n) for n in names
                  if n != "SystemStructure.ssd" and not n.endswith((".ssv", ".ssm"))
                  and not n.startswith(f"{ssp_mod.VARIANT_DIR}/")}
+    files = {n: integer_view(data) if n.endswith(".fmu") else data for n, data in files.items()}
     where = f"{src}/SystemStructure.ssd"
     values = {p: dict(c.parameters) for p, c in b.components.items()}
     overrides = ssp_mod.variant_overrides(src, variants)
