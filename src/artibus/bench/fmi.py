@@ -93,3 +93,33 @@ def pack_file(bench, fmi, refs):
     if fmi == "2" and any(r.startswith("resources/fmi3/") and r.endswith(".fmu") for r in refs):
         return fmu_dir() / "fmi2" / f"{bench}.ssp"
     return fmu_dir() / f"{bench}.ssp"
+
+
+def add_fmi_option(parser, verb):
+    """The command line's --fmi of ``verb`` (run, sweep, pack: a bench's FMUs; simulate: one FMU)."""
+    if verb == "simulate":
+        parser.add_argument("--fmi", choices=FMI_VERSIONS, default="2",
+                            help="run the FMI 3.0 build of a built FMU (fmus/fmi3/<Name>.fmu; default 2)")
+        return
+    parser.add_argument("--fmi", choices=FMI_VERSIONS, default=None,
+                        help="every FMU of the bench in its FMI 2.0 (fmus/<Name>.fmu) or FMI 3.0 build "
+                             "(fmus/fmi3/<Name>.fmu), packed as fmus/fmi3/<BENCH>.ssp (default: the builds "
+                             "the bench's .ssd names, resources/<Name>.fmu or resources/fmi3/<Name>.fmu)")
+
+
+def simulated_fmu(fmu, arg, fmi):
+    """The file `artibus simulate ARG --fmi FMI` runs: ``fmu`` (ARG's FMI 2.0
+    file) with "2", its FMI 3.0 build fmus/fmi3/<Name>.fmu with "3" (a name
+    of a built FMU only: an .fmu's path runs as it is, without --fmi)."""
+    from pathlib import Path
+
+    from artibus.base import fmu_dir
+    if fmi != "3":
+        return fmu
+    if Path(arg).suffix == ".fmu":       # the parameters are checked against its FMI 2.0 declarations
+        raise ArtibusError(f"--fmi 3 takes the name of a built FMU, not a path ({arg}): "
+                           "give an FMI 3.0 .fmu's path without --fmi")
+    run = fmu_dir() / "fmi3" / f"{arg}.fmu"
+    if not run.is_file():
+        raise ArtibusError(f"{run}: no FMI 3.0 build of {arg} (built with -DARTIBUS_FMI3=ON)")
+    return run
