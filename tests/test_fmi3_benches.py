@@ -187,3 +187,32 @@ def test_pack_fmi3_holds_the_fmi3_builds_under_the_same_names(tmp_path, monkeypa
         for n in fmus:
             assert z.read(n) == (d / "fmi3" / Path(n).name).read_bytes()
     assert os.path.isfile(out)
+
+
+@pytest.mark.slow
+def test_sweep_fmi3_gives_the_fmi2_kpis_as_other_cases(tmp_path):
+    """`artibus sweep --fmi 3`: the pack with the FMI 3.0 builds runs on the workers; its
+    cases are keyed apart from the FMI 2.0 ones (the FMUs differ) and give their KPIs."""
+    import logging
+
+    import artibus
+    from dask.distributed import Client, LocalCluster
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.CRITICAL)
+    client = Client(cluster)
+    try:
+        kw = dict(grid={"Driver.vSet": "3,5"}, fixed={"Driver.roadBefore": 2.0}, stop_time=3.0,
+                  client=client, progress=None, plot=False)
+        a = artibus.sweep("Bus36m_Circle", out=tmp_path / "s", fmi="2", **kw)
+        b = artibus.sweep("Bus36m_Circle", out=tmp_path / "s", fmi="3", **kw)   # the same folder
+    finally:
+        client.close()
+        cluster.close()
+    assert a.ran == 2 and b.ran == 2 and a.failed == b.failed == 0     # not taken for the FMI 2.0 cases
+    ta, tb = a.table.to_pylist(), b.table.to_pylist()
+    kpis = [c for c in a.table.column_names if c.endswith("]") and not c.startswith("Driver.")]
+    assert kpis
+    for ra, rb in zip(ta, tb):
+        assert ra["key"] != rb["key"]
+        for c in kpis:
+            assert close(ra[c], rb[c]), (c, ra[c], rb[c])
