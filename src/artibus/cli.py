@@ -156,8 +156,10 @@ def cmd_pack(args):
         if args.variant or args.output:
             raise ArtibusError("--variant and -o are for a portable pack (--portable)")
         for name in args.bench or ssp.bench_names():
-            print(ssp.pack(name))
+            print(ssp.pack(name, fmi=args.fmi))
         return 0
+    if args.fmi:
+        raise ArtibusError("--fmi: a portable pack has the builds the bench's .ssd names")
     from artibus.bench.portable import pack_portable
     benches = args.bench or [b for b in ssp.bench_names() if ssp.read(ssp.ssp_path(b)).can is None]
     if args.output and len(benches) != 1:
@@ -189,7 +191,7 @@ def cmd_run(args):
                 user=user, stop_time=args.stop_time, step=args.step, record=args.record,
                 algorithm=args.algorithm, can=args.can, can_log=args.can_log, can_faults=args.can_fault,
                 report=args.report, output=args.output, progress=sys.stderr.isatty(), single_rate=args.single_rate,
-                checked=lambda out: setattr(args, "_out", out))
+                checked=lambda out: setattr(args, "_out", out), fmi=args.fmi)
     return 0
 
 
@@ -314,15 +316,9 @@ def cmd_simulate(args):
     from artibus.bench.parameters import check_against, parse_set, read_parameters
     from artibus.fmu import simulate
     from artibus.runner import save_partial
+    from artibus.bench.fmi import simulated_fmu
     fmu = _fmu_arg(args.fmu)
-    run = fmu
-    if args.fmi == "3":      # the FMI 3.0 build of a built FMU; the parameters checked against
-        if Path(args.fmu).suffix == ".fmu":       # its FMI 2.0 declarations (the same ones)
-            raise ArtibusError(f"--fmi 3 takes the name of a built FMU, not a path ({args.fmu}): "
-                               "give an FMI 3.0 .fmu's path without --fmi")
-        run = fmu_dir() / "fmi3" / f"{args.fmu}.fmu"
-        if not run.is_file():
-            raise ArtibusError(f"{run}: no FMI 3.0 build of {args.fmu} (built with -DARTIBUS_FMI3=ON)")
+    run = simulated_fmu(fmu, args.fmu, args.fmi)     # --fmi 3: its FMI 3.0 build, checked as FMI 2.0's
     out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"))
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
     extra = parse_set(args.set)
@@ -385,8 +381,7 @@ def cmd_sweep(args):
                 design=args.design, out=out, stop_time=args.stop_time, step=args.step,
                 fixed=parse_set(args.set),
                 keep_series=args.keep_series, scheduler=args.scheduler, workers=args.workers, kpi=args.kpi,
-                retry_failed=args.retry_failed,
-                argv=sys.argv)
+                retry_failed=args.retry_failed, argv=sys.argv, fmi=args.fmi)
     n = res.table.num_rows
     print(f"sweep {Path(args.bench).stem}: {n} cases, {res.ran} run now ({res.failed} failed), "
           f"{res.skipped} done before" + (f"; {res.rate:.1f} cases/min" if res.ran else ""))
@@ -397,6 +392,7 @@ def cmd_sweep(args):
 
 
 def build_parser():
+    from artibus.bench.fmi import add_fmi_option
     p = argparse.ArgumentParser(prog="artibus", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"artibus {__version__}")
@@ -429,6 +425,7 @@ def build_parser():
                         "latency:MSG|NODE:DELAY_S[:jitter=S][:seed=N], corrupt:MSG|NODE:crc|repeat|skip[:rate=R], "
                         "silent:NODE, busoff:NODE[:recover[=DELAY_S]]; each may end in @T0 or @T0-T1 (s). "
                         "With --report, the fault-free run's KPIs are printed and written beside the faulty ones")
+    add_fmi_option(s, "run")
     s.set_defaults(func=cmd_run)
     s = sub.add_parser("plot", help="a PNG of signals of a results CSV, a panel per unit")
     s.add_argument("results", metavar="RESULTS.csv", help="a results file of artibus run or simulate")
@@ -505,6 +502,7 @@ def build_parser():
     s.add_argument("--all-platforms", action="store_true",
                    help="first build every platform's binaries (win64 with mingw-w64) into the FMUs "
                         "(scripts/setup.sh --all-platforms, a few minutes the first time)")
+    add_fmi_option(s, "pack")
     s.set_defaults(func=cmd_pack)
     s = sub.add_parser("info", help="show an FMU's variables or a bench's structure")
     s.add_argument("fmu", metavar="BENCH|FMU", help="a bench name, the name of a built FMU, or the path of an .ssp or .fmu")
@@ -516,8 +514,7 @@ def build_parser():
     s.add_argument("--stop-time", type=arg_seconds)
     s.add_argument("--step", type=arg_seconds)
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: <FMU>.csv)")
-    s.add_argument("--fmi", choices=["2", "3"], default="2",
-                   help="run the FMI 3.0 build of a built FMU (fmus/fmi3/<Name>.fmu; default 2)")
+    add_fmi_option(s, "simulate")
     s.set_defaults(func=cmd_simulate)
     s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia), "
                                      "or what of a bench other SSP masters run differently")
@@ -546,6 +543,7 @@ def build_parser():
     s.add_argument("--workers", type=arg_integer, help="local worker processes (default: one per core)")
     s.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
     s.add_argument("--kpi", help="the KPI of the study plot and the worst cases (default: the bench's first)")
+    add_fmi_option(s, "sweep")
     s.set_defaults(func=cmd_sweep)
     return p
 

@@ -73,6 +73,37 @@ static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the F
     return 0;
 }
 
+/* the unit's calls, FMI 2.0 or 3.0 (core.h) */
+static fmi2Status set_inputs(ac_unit *u) {
+    if (u->fmi == 3)
+        return (fmi2Status)u->setFloat64(u->component, (const fmi3ValueReference *)u->in_vrs, u->n_in,
+                                         u->in, u->n_in);
+    return u->setReal(u->component, u->in_vrs, u->n_in, u->in);
+}
+
+static fmi2Status get_outputs(ac_unit *u) {
+    if (u->fmi == 3)
+        return (fmi2Status)u->getFloat64(u->component, (const fmi3ValueReference *)u->out_vrs, u->n_out,
+                                         u->out, u->n_out);
+    return u->getReal(u->component, u->out_vrs, u->n_out, u->out);
+}
+
+/* one step; 1 in *end when the FMU ends the simulation: FMI 3.0's terminateSimulation
+ * (FMI 2.0's fmi2Discard with fmi2Terminated is Python's to ask, after AC_DO_STEP) */
+static fmi2Status do_step(ac_unit *u, double t, int *end) {
+    *end = 0;
+    if (u->fmi == 3) {
+        fmi3Boolean event = fmi3False, terminate = fmi3False, early = fmi3False;
+        fmi3Float64 last = t;
+        const fmi3Status st = u->doStep3(u->component, t, u->step, fmi3True, &event, &terminate, &early, &last);
+        u->terminate = terminate ? 1 : 0;
+        u->last_successful_time = last;
+        *end = u->terminate;
+        return (fmi2Status)st;
+    }
+    return u->doStep(u->component, t, u->step, fmi2True);
+}
+
 /* _RawCalls.write (write: its inputs changed), then Simulation._step(u, t)
  * (step: the plan steps it right after, as Gauss-Seidel's propagate, write,
  * step of one unit does): the FMU's calls within one pair of stamps, its
@@ -80,7 +111,7 @@ static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the F
 static int call_unit(ac_unit *u, int write, int step, double t, fmi2Status *st) {
     const unsigned long long w = stamp();
     if (write) {
-        *st = u->setReal(u->component, u->in_vrs, u->n_in, u->in);
+        *st = set_inputs(u);
         if (*st > fmi2Warning) {
             u->ticks += stamp() - w;
             return AC_SET_REAL;
@@ -88,11 +119,12 @@ static int call_unit(ac_unit *u, int write, int step, double t, fmi2Status *st) 
     }
     int failed = AC_OK;
     if (step) {
-        *st = u->doStep(u->component, t, u->step, fmi2True);
-        if (*st > fmi2Warning)
+        int end;
+        *st = do_step(u, t, &end);
+        if (*st > fmi2Warning || end)
             failed = AC_DO_STEP;
         else if (u->n_out) {
-            *st = u->getReal(u->component, u->out_vrs, u->n_out, u->out);
+            *st = get_outputs(u);
             if (*st > fmi2Warning)
                 failed = AC_GET_REAL;
         }
@@ -495,7 +527,7 @@ static int read_unit(ac_unit *u, fmi2Status *st) {
     if (!u->n_out)
         return AC_OK;
     const unsigned long long w = stamp();
-    *st = u->getReal(u->component, u->out_vrs, u->n_out, u->out);
+    *st = get_outputs(u);
     u->ticks += stamp() - w;
     return *st > fmi2Warning ? AC_GET_REAL : AC_OK;
 }
@@ -560,14 +592,14 @@ static int settle_rounds(ac_sim *sim, ac_settle *z) {
     return AC_UNSETTLED;
 }
 
-/* Simulation._initialize's end: each unit fmi2ExitInitializationMode, then read */
+/* Simulation._initialize's end: each unit fmi2/fmi3ExitInitializationMode, then read */
 static int exit_initialization(ac_sim *sim, ac_settle *z) {
     fmi2Status st = fmi2OK;
     int failed;
     for (int j = 0; j < sim->n_units; j++) {
         ac_unit *u = &sim->units[j];
         const unsigned long long w = stamp();
-        st = z->exit_init[j](u->component);
+        st = u->fmi == 3 ? (fmi2Status)z->exit_init[j].fmi3(u->component) : z->exit_init[j].fmi2(u->component);
         u->ticks += stamp() - w;
         if (st > fmi2Warning)
             return fail(sim, j, AC_EXIT_INIT, st, -1);

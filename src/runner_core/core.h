@@ -8,6 +8,14 @@
  * operations in the same order, so the results are bit for bit those of the
  * Python loop. Plain C11, no Python headers, no heap use: every array is
  * Python's (see src/artibus/runner/core.py, _CoreStepper).
+ *
+ * A unit is an FMI 2.0 or an FMI 3.0 instance (ac_unit.fmi): FMI 3.0's
+ * fmi3SetFloat64/fmi3DoStep/fmi3GetFloat64 take the same values in the same
+ * order (nValues = nValueReferences: every variable the core reads or sets is
+ * a scalar Float64, FMI 3.0 2.2.6.2), and fmi3DoStep says through its
+ * out-arguments what FMI 2.0 says through fmi2Discard and fmi2GetBooleanStatus:
+ * terminateSimulation ends the run (FMI 3.0 4.2.1). fmi3Status has fmi2Status's
+ * values for OK .. Fatal (FMI 3.0 2.2.3), so one status type serves both.
  */
 #ifndef ARTIBUS_RUNNER_CORE_H
 #define ARTIBUS_RUNNER_CORE_H
@@ -15,8 +23,9 @@
 #include <stddef.h>
 
 #include "fmi2FunctionTypes.h"
+#include "fmi3FunctionTypes.h"
 
-#define ARTIBUS_CORE_ABI 10         /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 11         /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -26,10 +35,14 @@ typedef struct {
 } ac_source;
 
 typedef struct {
-    fmi2Component component;
+    void *component;                /* fmi2Component or fmi3Instance */
+    int fmi;                        /* 2: the fmi2 functions below are called, 3: the fmi3 ones */
     fmi2DoStepTYPE *doStep;
     fmi2GetRealTYPE *getReal;
     fmi2SetRealTYPE *setReal;
+    fmi3DoStepTYPE *doStep3;
+    fmi3GetFloat64TYPE *getFloat64;
+    fmi3SetFloat64TYPE *setFloat64;
     double step;                    /* its communication step (s) */
     size_t n_out, n_in;
     const fmi2ValueReference *out_vrs;
@@ -42,6 +55,8 @@ typedef struct {
     const ac_source *sources;
     double wall;                    /* seconds inside fmi2DoStep, fmi2GetReal, fmi2SetReal, accumulated */
     unsigned long long ticks;       /* the same in the processor's time-stamp counter, within one call */
+    int terminate;                  /* FMI 3.0: its last fmi3DoStep's terminateSimulation */
+    double last_successful_time;    /* FMI 3.0: its last fmi3DoStep's lastSuccessfulTime */
 } ac_unit;
 
 /* what the plan does with a unit */
@@ -50,6 +65,8 @@ enum { AC_PROPAGATE = 0, AC_WRITE = 1, AC_STEP = 2 };
 /* which functions failed (ac_sim.fail_function); AC_CAN: a frame could not be
  * encoded (a value outside its signal's range or its raw bits): fail_unit is
  * then the message's index, Python's encoder says why (artibus.can) */
+/* AC_DO_STEP: fmi2DoStep/fmi3DoStep returned fmi2Discard or worse, or fmi3DoStep
+ * asked to terminate the simulation (ac_unit.terminate) */
 enum { AC_OK = 0, AC_DO_STEP = 1, AC_GET_REAL = 2, AC_SET_REAL = 3, AC_CAN = 4 };
 
 /* --- the CAN network's tick (artibus.can.Network.tick without faults, log,
@@ -176,6 +193,11 @@ int artibus_core_can_settle(ac_can *c);
  * done when each input is within 1e-12 + 1e-12 |x| of its value before the
  * round (_settled). Then, if exit_init is given, each unit in turn
  * (units[0..n_units-1]) fmi2ExitInitializationMode and read. */
+typedef union {                     /* a unit's exit, as its fmi */
+    fmi2ExitInitializationModeTYPE *fmi2;
+    fmi3ExitInitializationModeTYPE *fmi3;
+} ac_exit_init;
+
 typedef struct {
     const int *order;               /* n_order unit indices: Simulation.order */
     int n_order;
@@ -183,7 +205,7 @@ typedef struct {
     int max_iter;                   /* MAX_INIT_ITERATIONS */
     ac_can *can;                    /* NULL: no network */
     double *before;                 /* scratch: the units' n_in summed */
-    fmi2ExitInitializationModeTYPE *const *exit_init;   /* n_units, or NULL: Python exits */
+    const ac_exit_init *exit_init;  /* n_units, or NULL: Python exits */
     /* results */
     double fmu_wall;                /* seconds inside fmi2GetReal/fmi2SetReal (time-stamp counter), added */
     int rounds;                     /* rounds begun */

@@ -35,6 +35,7 @@ from pathlib import Path
 from lxml import etree
 
 from artibus.base import ROOT, ArtibusError, fmu_dir, parse_real
+from artibus.bench.fmi import build_of, fmi_choice, pack_file
 from artibus.bench.ssd import (MAPPINGS, NS, _component_sources, _compose, _depth,  # noqa: F401
                                _number, _sources_inside_components, map_transformation,
                                model_description)
@@ -57,20 +58,25 @@ def bench_names():
     return sorted(p.parent.name for p in BENCH_DIR.glob("*/SystemStructure.ssd"))
 
 
-def ssp_path(bench):
+def ssp_path(bench, fmi=None):
     """A bench by name (``Urbino18_Circle``) or the path of an .ssp file. A
-    bench of ssp/benches/ by name is ``<fmu_dir>/<bench>.ssp``, packed again
-    first when it is missing or older than any file it packs (its .ssd, the
-    FMUs, parameter sets, roads), as make would: a rebuilt FMU or an edited
-    parameter set is what runs, never a stale copy."""
-    p = Path(bench)
+    bench of ssp/benches/ by name is ``<fmu_dir>/<bench>.ssp`` (with ``fmi``
+    "3" every FMU's FMI 3.0 build: fmus/fmi3/<bench>.ssp, artibus.bench.fmi),
+    packed again first when it is missing or older than any file it packs
+    (its .ssd, the FMUs, parameter sets, roads), as make would: a rebuilt FMU
+    or an edited parameter set is what runs, never a stale copy."""
+    p, fmi = Path(bench), fmi_choice(fmi)
     if p.suffix == ".ssp":
         if not p.is_file():
             raise ArtibusError(f"{p}: no such file")
+        if fmi is not None:
+            raise ArtibusError(f"--fmi {fmi}: {p} is a pack, run with the FMUs inside it (--fmi picks the "
+                               f"build of a bench of ssp/benches by name)")
         return p
     q = fmu_dir() / f"{bench}.ssp"
     if bench in bench_names():
-        ssd_file, files = _sources(bench)
+        ssd_file, files = _sources(bench, fmi)
+        q = pack_file(bench, fmi, files)
         packed = q.stat().st_mtime_ns if q.is_file() else None
         if packed is None or any(f.stat().st_mtime_ns > packed for f in (ssd_file, *files.values())):
             _write_pack(q, ssd_file, files)
@@ -90,9 +96,10 @@ def ssp_path(bench):
     raise ArtibusError(f"{bench}: no such bench{hint}{stale} (known: {', '.join(bench_names()) or 'none'})")
 
 
-def _sources(bench):
+def _sources(bench, fmi=None):
     """The bench's SystemStructure.ssd and {name inside the .ssp: file} for
-    every file it references: components' FMUs, parameter sets, and files
+    every file it references: components' FMUs (with ``fmi`` their build of
+    that FMI version, artibus.bench.fmi.build_of), parameter sets, and files
     named by String parameters whose value starts with "resources/" (found in
     the bench folder, fmus/, ssp/parameters/ or ssp/roads/)."""
     src = BENCH_DIR / bench
@@ -106,6 +113,9 @@ def _sources(bench):
         if ref is None or not ref.startswith("resources/"):
             continue
         name = ref[len("resources/"):]
+        if fmi is not None and name.endswith(".fmu"):
+            files[ref] = build_of(ref, fmi, f"{ssd_file}:{el.sourceline}: <{etree.QName(el).localname}>")
+            continue
         candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name,
                       ROOT / "ssp" / "roads" / name, ROOT / "ssp" / "can" / name]
         found = next((c for c in candidates if c.is_file()), None)
@@ -214,10 +224,11 @@ def variant_overrides(ssp, names):
     return values
 
 
-def pack(bench, out_dir=None):
-    """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every file it
-    references inside (see _sources)."""
-    return _write_pack(Path(out_dir or fmu_dir()) / f"{bench}.ssp", *_sources(bench))
+def pack(bench, out_dir=None, fmi=None):
+    """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every file it references (_sources; fmi: see ssp_path)."""
+    ssd_file, files = _sources(bench, fmi_choice(fmi))
+    return _write_pack(Path(out_dir) / f"{bench}.ssp" if out_dir else pack_file(bench, fmi_choice(fmi), files),
+                       ssd_file, files)
 
 
 def _write_pack(out, ssd_file, files):

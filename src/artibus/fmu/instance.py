@@ -1,7 +1,6 @@
 """An FMU instance with its variables addressed by name (``Fmu``): FMPy's
 FMU2Slave (or FMU3Slave, an FMI 3.0 FMU) with a log of its own, the process's
 memory callbacks (artibus.fmu.memory) and model descriptions read once per content."""
-import copy
 import shutil
 
 from fmpy import read_model_description
@@ -9,6 +8,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from artibus import cache
 from artibus.base import ArtibusError
+from artibus.bench.fmi import FMI2_TYPE, fmi2_view  # noqa: F401
 
 
 def _callbacks(log):
@@ -80,10 +80,6 @@ def claim_logger_proxy():
     _proxy().addLoggerProxy(byref(cb))
 
 
-#: an FMI 3.0 variable's type as FMI 2.0 names it (the types artibus's FMUs use; the
-#: checks of artibus.bench.parameters speak FMI 2.0)
-FMI2_TYPE = {"Float64": "Real", "Int32": "Integer", "Enumeration": "Enumeration",
-             "Boolean": "Boolean", "String": "String"}
 #: the FMI 3.0 accessor of each (FMU3Slave.get<T>/set<T>); an Enumeration is an Int64
 FMI3_ACCESSOR = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Int64",
                  "Boolean": "Boolean", "String": "String"}
@@ -158,20 +154,12 @@ class Fmu:
             raise ArtibusError(f"{self.path}: {self.md.modelName} is not an FMI 2.0 or 3.0 "
                                "co-simulation FMU")
         self.fmi = int(self.md.fmiVersion[0])
-        if self.fmi == 3:
-            # as FMI 2.0 names the types (the same variables: tests/test_fmi3.py)
-            self.vars = {}
-            for v in self.md.modelVariables:
-                if v.causality == "independent":
-                    continue
-                if v.type not in FMI2_TYPE:
-                    raise ArtibusError(f"{self.path}: {v.name} is an FMI 3.0 {v.type}, which artibus "
-                                       "does not read")
-                v = copy.copy(v)
-                v.type = FMI2_TYPE[v.type]
-                self.vars[v.name] = v
-        else:
-            self.vars = {v.name: v for v in self.md.modelVariables}
+        if self.fmi == 3:    # as FMI 2.0 names the types (the same variables: tests/test_fmi3.py)
+            try:
+                self.md = fmi2_view(self.md)
+            except ArtibusError as e:
+                raise ArtibusError(f"{self.path}: {e}") from None
+        self.vars = {v.name: v for v in self.md.modelVariables if v.causality != "independent"}
         self.log = []
         self.instance_name = instance_name
         self._dir, self._own_dir = None, False

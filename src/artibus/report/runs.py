@@ -13,7 +13,7 @@ from artibus.files import check_output, make_dir, write_text
 
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
                 algorithm="gauss-seidel", can=None, can_log=None, can_faults=None, report=None, output=None,
-                progress=False, checked=None, log=print, single_rate=False):
+                progress=False, checked=None, log=print, single_rate=False, fmi=None):
     """Run each bench (names or .ssp paths) with its variants (``variants``: names, as
     ``--variant``), then the user's values (``user``: {"comp.var": value}, from
     --ssv and --set); ``every``: the benches are all of ssp/benches/ (``--all``:
@@ -24,7 +24,9 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     (runner.save_partial). ``log``: print, for what the command line prints (an
     FMU's warnings go to sys.stderr). ``single_rate``: every component at one
     step (--single-rate). With ``report`` each multi-rate bench is run once
-    more single-rate for its page (artibus.report.single_rate). Returns
+    more single-rate for its page (artibus.report.single_rate). ``fmi``: the
+    build of the benches' FMUs, None (as each bench's .ssd names them), "2" or
+    "3" (--fmi; artibus.bench.fmi); the extra runs use the same. Returns
     [(bench, report directory, KPIs)] of the benches with a report. The drawing
     (artibus.report.pages, comparison: matplotlib) is imported only with ``report``."""
     if report:
@@ -38,7 +40,8 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, variants), **(user or {})}
         with runner.Simulation(bench, step=step, overrides=overrides, record=record, algorithm=algorithm,
-                               can=can, can_log=can_log, can_faults=can_faults, single_rate=single_rate) as sim:
+                               can=can, can_log=can_log, can_faults=can_faults, single_rate=single_rate,
+                               fmi=fmi) as sim:
             name = sim.bench.name
             # where the results go, checked before the run (not found unwritable after it)
             if report:
@@ -71,11 +74,12 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
                 raise
             span = result.time[-1] - result.time[0]
             log(f"{name}: {out}: {len(result.rows)} rows, {len(result.names) - 1} signals; "
-                f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})")
+                f"{span:g} s simulated in {sim.wall:.2f} s (real-time factor {span / sim.wall:.0f})"
+                + (f"; the FMUs' FMI {fmi}.0 builds" if fmi else ""))
             if out_dir is not None:
                 # the page says how far a master without multi-rate steps is: one more run, single-rate
                 sr = single_rate_report.measure(sim, result, lambda: single_rate_report.run_single_rate(
-                    bench, overrides, stop_time, step=step, record=record, algorithm=algorithm, can=can))
+                    bench, overrides, stop_time, step=step, record=record, algorithm=algorithm, can=can, fmi=fmi))
                 if sr.multi_rate:
                     log(f"{name}: single-rate at {sr.step:g} s: KPIs within {sr.deviation:.3g} % "
                         f"({sr.worst}); the extra run took {sr.wall:.2f} s")
@@ -94,7 +98,7 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
                     kept[name] = result
                 if can_faults:
                     fault_free_kpis(bench, overrides, out_dir, kpis, can_faults, step=step, record=record,
-                                    algorithm=algorithm, can=can, stop_time=stop_time, log=log)
+                                    algorithm=algorithm, can=can, stop_time=stop_time, log=log, fmi=fmi)
     if every and report:
         page = comparison.write(Path(report) / "comparison", kept)
         pages = [("comparison/index.html", comparison.TITLE, "unsteered, guided, guided + force minimisation "
@@ -125,12 +129,12 @@ def print_warnings(logs):
 
 
 def fault_free_kpis(bench, overrides, out_dir, kpis, can_faults, step=None, record=None, algorithm="gauss-seidel",
-                    can=None, stop_time=None, log=print):
+                    can=None, stop_time=None, log=print, fmi=None):
     """The same bench without the faults: its KPIs next to the faulty run's,
     printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free)."""
     from artibus.report.pages import write_report
     with runner.Simulation(bench, step=step, overrides=overrides, record=record,
-                           algorithm=algorithm, can=can) as sim:
+                           algorithm=algorithm, can=can, fmi=fmi) as sim:
         result = sim.run(stop_time=stop_time)
         free = write_report(sim.bench.name, result, out_dir / "fault-free", sim.wall)
     faults = "; ".join(can_faults)

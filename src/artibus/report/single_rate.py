@@ -98,8 +98,9 @@ def measure(sim, result, run_again):
     return SingleRate(steps, h, worst[4], worst[0], rows, wall)
 
 
-def run_single_rate(bench, overrides, stop_time, step=None, record=None, algorithm="gauss-seidel", can=None):
-    """The bench run with every component at one step (a Result)."""
+def run_single_rate(bench, overrides, stop_time, step=None, record=None, algorithm="gauss-seidel", can=None,
+                    fmi=None):
+    """The bench run with every component at one step (a Result; fmi: its FMUs' build, as Simulation's)."""
     with runner.Simulation(bench, step=step, overrides=overrides, record=record, algorithm=algorithm,
-                           can=can, single_rate=True) as sim:
+                           can=can, single_rate=True, fmi=fmi) as sim:
         return sim.run(stop_time=stop_time)

@@ -2,7 +2,8 @@
 
 Simulation.run's loop over the base steps (propagate, set, step, get, record)
 done by <build>/lib/libartibus_core.so (src/runner_core/core.c) through the
-FMUs' own fmi2SetReal/fmi2DoStep/fmi2GetReal, on the same value buffers
+FMUs' own fmi2SetReal/fmi2DoStep/fmi2GetReal (an FMI 3.0 FMU's
+fmi3SetFloat64/fmi3DoStep/fmi3GetFloat64), on the same value buffers
 (_RawCalls'), in the same order, with the same floating-point operations:
 the results are the Python loop's, bit for bit (tests/test_runner_core.py).
 Python keeps the set-up, the checks and the errors; of the initialisation the
@@ -33,7 +34,7 @@ from artibus.runner import tables
 from artibus.runner.can_core import _CanCore
 from artibus.runner.unit import _last_message
 
-CORE_ABI = 10                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 11                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_DO_STEP = 1                    # core.h: fmi2DoStep failed (or returned fmi2Discard)
@@ -46,11 +47,13 @@ class _AcSource(Structure):
 
 
 class _AcUnit(Structure):
-    _fields_ = [("component", c_void_p), ("doStep", c_void_p), ("getReal", c_void_p),
-                ("setReal", c_void_p), ("step", c_double), ("n_out", c_size_t), ("n_in", c_size_t),
+    _fields_ = [("component", c_void_p), ("fmi", c_int), ("doStep", c_void_p), ("getReal", c_void_p),
+                ("setReal", c_void_p), ("doStep3", c_void_p), ("getFloat64", c_void_p), ("setFloat64", c_void_p),
+                ("step", c_double), ("n_out", c_size_t), ("n_in", c_size_t),
                 ("out_vrs", c_void_p), ("out", c_void_p), ("in_vrs", c_void_p), ("inp", c_void_p),
                 ("written", c_void_p), ("has_written", c_int), ("n_sources", c_int),
-                ("sources", c_void_p), ("wall", c_double), ("ticks", c_ulonglong)]
+                ("sources", c_void_p), ("wall", c_double), ("ticks", c_ulonglong),
+                ("terminate", c_int), ("last_successful_time", c_double)]
 
 
 class _AcSim(Structure):
@@ -168,8 +171,12 @@ class _CoreStepper:
             written = (c_double * max(1, raw.n_in))()
             self._keep += [sources, written]
             self.written.append(written)
-            s.component = raw.comp.value
-            s.doStep, s.getReal, s.setReal = (cast(f, c_void_p).value for f in (raw._do, raw._get, raw._set))
+            s.component, s.fmi = raw.comp.value, raw.fmi
+            calls = [cast(f, c_void_p).value for f in (raw._do, raw._get, raw._set)]
+            if raw.fmi == 3:
+                s.doStep3, s.getFloat64, s.setFloat64 = calls
+            else:
+                s.doStep, s.getReal, s.setReal = calls
             s.step, s.n_out, s.n_in = u.step, raw.n_out, raw.n_in
             s.out_vrs, s.out = addressof(raw.out_vrs), addressof(raw.out)
             s.in_vrs, s.inp = addressof(raw.in_vrs), addressof(raw.inp)
@@ -204,13 +211,14 @@ class _CoreStepper:
         self._each = [(a, u, u.raw, written) for a, u, written in zip(self.units, units, self.written)]
         # core.h's ac_settle of the initialisation (settle): the order, the algorithm,
         # the network, a scratch for the inputs before each round, and the FMUs'
-        # fmi2ExitInitializationMode (FMPy's call, without its call logger when none is set)
+        # fmi2/fmi3ExitInitializationMode (FMPy's call, without its call logger when none is set)
         order = (c_int * max(1, len(sim.order)))(*(index[id(u)] for u in sim.order))
         before = (c_double * max(1, sum(u.raw.n_in for u in units)))()
         exits = None
         if all(u.fmu.slave.fmiCallLogger is None for u in units):
             exits = (c_void_p * len(units))(
-                *(cast(u.fmu.slave.dll.fmi2ExitInitializationMode, c_void_p).value for u in units))
+                *(cast(getattr(u.fmu.slave.dll, f"fmi{u.fmu.fmi}ExitInitializationMode"), c_void_p).value
+                  for u in units))
         self._keep += [order, before, exits]
         self.settling = _AcSettle(order=addressof(order), n_order=len(sim.order),
                                   gauss_seidel=sim.algorithm == "gauss-seidel", before=addressof(before),
@@ -249,10 +257,10 @@ class _CoreStepper:
             raise ArtibusError(f"{sim.bench.file}: initialisation did not settle in "
                                f"{max_iter} iterations of the connected inputs")
         if failed:
-            sim._busy = sim.units[s.fail_unit]
-            raise FMICallException(function={_AC_GET_REAL: "fmi2GetReal", _AC_SET_REAL: "fmi2SetReal",
-                                             _AC_EXIT_INIT: "fmi2ExitInitializationMode"}[failed],
-                                   status=s.fail_status)
+            sim._busy = u = sim.units[s.fail_unit]
+            function = {_AC_GET_REAL: "GetReal", _AC_SET_REAL: "SetReal", _AC_EXIT_INIT: "ExitInitializationMode"}
+            name = function[failed].replace("Real", "Float64") if u.fmu.fmi == 3 else function[failed]
+            raise FMICallException(function=f"fmi{u.fmu.fmi}{name}", status=s.fail_status)
         return z.exit_init is not None
 
     def _ops(self, steps, period):
@@ -356,6 +364,8 @@ class _CoreStepper:
             self.can.refused(s.fail_unit, start + s.fail_k * h)
         if failed == _AC_DO_STEP:      # fmi2Discard with fmi2Terminated: the FMU's own end, as the Python loop
             k = s.fail_k
+            a, raw = self.units[s.fail_unit], sim.units[s.fail_unit].raw    # (FMI 3.0: terminateSimulation)
+            raw.terminate, raw.last_successful_time = bool(a.terminate), a.last_successful_time
             end = sim._end_of(sim.units[s.fail_unit], s.fail_status, self.plan, k, start + k * h, h)
             if end is not None:
                 row = table[k + 1]

@@ -1,4 +1,6 @@
-"""The co-simulation master: runs an SSP bench of FMI 2.0 co-simulation FMUs.
+"""The co-simulation master: runs an SSP bench of FMI 2.0 or 3.0 co-simulation
+FMUs (``fmi``: the bench's choice, or every FMU's FMI 2.0 or 3.0 build,
+artibus.bench.fmi).
 
 - parameters from the bench's bindings (.ssv inside the .ssp), then from
   ``--ssv`` files and ``--set comp.var=value`` given by the user;
@@ -20,7 +22,7 @@
 - on a failure midway, the results so far are kept with the failing time and
   the FMU's log;
 - an FMU that ends the simulation itself (fmi2DoStep's fmi2Discard with
-  fmi2Terminated) ends the run as a normal end: the base step it ended in is
+  fmi2Terminated, fmi3DoStep's terminateSimulation) ends the run as a normal end: the base step it ended in is
   finished by the others, recorded, and the run returns its Result with
   ``terminated`` (artibus.fmu.Termination: which component, when).
 """
@@ -36,7 +38,7 @@ from fmpy.fmi1 import FMICallException
 from artibus import cache
 from artibus.base import ArtibusError
 from artibus.bench import ssp as ssp_mod
-from artibus.fmu import Result, SimulationError, Termination, terminated
+from artibus.fmu import Result, SimulationError, Termination
 from artibus.runner.core import _core_stepper
 from artibus.runner.plan import _Plan
 from artibus.runner.results import check_room
@@ -44,6 +46,7 @@ from artibus.runner.setup import _Setup
 from artibus.runner.unit import _last_message
 
 MAX_INIT_ITERATIONS = 50
+_DO_STEP = ("fmi2DoStep", "fmi3DoStep")     # a failure that may be the FMU's own end (_end_of)
 
 
 def _settled(before, now, tol=1e-12):
@@ -86,7 +89,7 @@ class Simulation(_Setup):
     """A bench, set up and ready to run (the set-up: artibus.runner.setup)."""
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
-                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False):
+                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False, fmi=None):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
         the start of each of the component's steps. cut: inputs ("comp.input")
@@ -103,13 +106,15 @@ class Simulation(_Setup):
         row. single_rate: every component at the one step (--step, else the
         shortest of the bench's), as a master without multi-rate steps runs
         the bench. What the bench holds that the runner does not apply is
-        printed as warnings, once (artibus.bench.portability)."""
+        printed as warnings, once (artibus.bench.portability). fmi: None (the
+        builds the bench's .ssd names), "2" or "3" (every FMU's build of that
+        FMI version: a bench of ssp/benches by name, artibus.bench.ssp.ssp_path)."""
         self.can = None
         self.single_rate = single_rate
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
         self.algorithm = algorithm
-        self.ssp = ssp_mod.ssp_path(ssp)
+        self.ssp = ssp_mod.ssp_path(ssp, fmi)
         self.bench = _read_bench(self.ssp)
         from artibus.bench.portability import warn
         warn(self.ssp)                   # what the runner does not apply: once a process, not cached
@@ -166,9 +171,7 @@ class Simulation(_Setup):
     def _initialize(self, start):
         for u in self.units:
             self._busy = u            # the unit being called: a failure names it
-            s = u.fmu.slave
-            s.setupExperiment(startTime=start)
-            s.enterInitializationMode()
+            u.fmu.enter_initialization_mode(start)
             u.fmu.set_values(self.parameters[u.path])
             u.raw.written = None      # every connected input is set at least once
         settle, self._settle_core = getattr(self, "_settle_core", None), None   # (no cycle: it refers to self)
@@ -336,7 +339,7 @@ class Simulation(_Setup):
         except FMICallException as e:
             current = current or getattr(self, "_busy", None)    # (in the initialisation)
             end = None
-            if stepping is not None and current is not None and e.function == "fmi2DoStep":
+            if stepping is not None and current is not None and e.function in _DO_STEP:
                 end = self._end_of(current, e.status, plan, stepping, t, h)
             if end is not None:          # the FMU ended the run: a normal end at the end of this step
                 if progress:
@@ -360,10 +363,10 @@ class Simulation(_Setup):
         return rec.result()
 
     def _end_of(self, u, status, plan, k, t, h):
-        """After unit u's fmi2DoStep returned ``status`` in base step k (from t,
-        step h): a Termination if it ended the simulation (artibus.fmu.terminated),
+        """After unit u's fmi2DoStep/fmi3DoStep returned ``status`` in base step k
+        (from t, step h): a Termination if it ended the simulation (_RawCalls.ended),
         with the base step finished (_finish_step), else None (a failure)."""
-        t_end = terminated(u.fmu.slave, status)
+        t_end = u.raw.ended(status)
         if t_end is None:
             return None
         self._finish_step(u, plan, k, t, h)
@@ -394,7 +397,7 @@ class Simulation(_Setup):
                     try:
                         self._step(u, t + h - u.step)
                     except FMICallException as e:
-                        if e.function != "fmi2DoStep" or terminated(u.fmu.slave, e.status) is None:
+                        if e.function not in _DO_STEP or u.raw.ended(e.status) is None:
                             raise
                     u.raw.read()
             except FMICallException:
@@ -439,8 +442,8 @@ class Simulation(_Setup):
 
 
 def run(ssp, stop_time=None, step=None, overrides=None, record=None,
-        algorithm="gauss-seidel", progress=False, stimuli=None):
+        algorithm="gauss-seidel", progress=False, stimuli=None, fmi=None):
     """Run a bench (name or .ssp path); returns the Result."""
     with Simulation(ssp, step=step, overrides=overrides, record=record, algorithm=algorithm,
-                    stimuli=stimuli) as sim:
+                    stimuli=stimuli, fmi=fmi) as sim:
         return sim.run(stop_time=stop_time, progress=progress)

@@ -1,15 +1,16 @@
 """A component while it runs (``Unit``), the connections into it (``Link``),
-and its calls into the FMU: fmi2GetReal/SetReal/DoStep through ctypes on
-buffers allocated once (``_RawCalls``), Integer, Boolean, String and
-Enumeration variables through FMPy's calls (``_TypedCalls``, the conversion of
-such a connection: ``_typed_convert``)."""
-from ctypes import CDLL, c_double, c_int, c_size_t, c_uint, c_void_p
+and its calls into the FMU: fmi2GetReal/SetReal/DoStep (an FMI 3.0 FMU:
+fmi3GetFloat64/SetFloat64/DoStep) through ctypes on buffers allocated once
+(``_RawCalls``), Integer, Boolean, String and Enumeration variables through
+FMPy's calls (``_TypedCalls``, the conversion of such a connection:
+``_typed_convert``)."""
+from ctypes import CDLL, byref, c_bool, c_double, c_int, c_size_t, c_uint, c_void_p
 from dataclasses import dataclass, field
 
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
-from artibus.fmu import Fmu
+from artibus.fmu import Fmu, terminated
 
 
 @dataclass
@@ -63,16 +64,32 @@ class _RawCalls:
     step, without FMPy's per-call wrapper (it logs and converts lists). The
     functions come from a handle of our own on the FMU's library (FMPy's are
     left as they are) and get ctypes objects made once, not Python values to
-    convert at every call."""
+    convert at every call.
+
+    An FMI 3.0 FMU (``fmi`` 3) is called through fmi3GetFloat64/SetFloat64,
+    whose nValues is nValueReferences (scalar Float64 variables, FMI 3.0
+    2.2.6.2), and fmi3DoStep, whose terminateSimulation (FMI 3.0 4.2.1) says
+    what FMI 2.0's fmi2Discard with fmi2Terminated says: the FMU ended the run
+    (``ended``)."""
 
     def __init__(self, unit):
-        dll = CDLL(unit.fmu.slave.dll._name)      # the library FMPy loaded: the same instance
-        self._get, self._set, self._do = dll.fmi2GetReal, dll.fmi2SetReal, dll.fmi2DoStep
+        slave = unit.fmu.slave
+        dll = CDLL(slave.dll._name)      # the library FMPy loaded: the same instance
+        self.fmi, self.slave = unit.fmu.fmi, slave
+        v = "fmi3" if self.fmi == 3 else "fmi2"
+        self._get, self._set, self._do = (getattr(dll, f"{v}{f}") for f in
+                                          (("GetFloat64", "SetFloat64", "DoStep") if self.fmi == 3
+                                           else ("GetReal", "SetReal", "DoStep")))
         for f in (self._get, self._set, self._do):
             f.restype = c_int
-        self.comp = c_void_p(unit.fmu.slave.component)
+        self.comp = c_void_p(slave.component)
         self.n_out, self.n_in = len(unit.out_vrs), len(unit.in_vrs)
         self._n_out, self._n_in = c_size_t(self.n_out), c_size_t(self.n_in)
+        # FMI 3.0: nValues after the values; fmi3DoStep's out-arguments
+        self._nv_out, self._nv_in = ((self._n_out,), (self._n_in,)) if self.fmi == 3 else ((), ())
+        self._event, self._terminate, self._early, self._last = c_bool(), c_bool(), c_bool(), c_double()
+        self._outs = tuple(byref(x) for x in (self._event, self._terminate, self._early, self._last))
+        self.terminate, self.last_successful_time = False, None
         self.out_vrs = (c_uint * self.n_out)(*unit.out_vrs)
         self.out = (c_double * self.n_out)()
         self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
@@ -82,24 +99,42 @@ class _RawCalls:
 
     def read(self):
         if self.n_out:
-            status = self._get(self.comp, self.out_vrs, self._n_out, self.out)
+            status = self._get(self.comp, self.out_vrs, self._n_out, self.out, *self._nv_out)
             if status > 1:  # fmi2Discard or worse
-                raise FMICallException(function="fmi2GetReal", status=status)
+                raise FMICallException(function="fmi3GetFloat64" if self.fmi == 3 else "fmi2GetReal",
+                                       status=status)
 
     def write(self):
         if self.n_in:
             values = bytes(self.inp)
-            if values == self.written:    # the FMU holds them already (FMI 2.0: inputs keep their values)
+            if values == self.written:    # the FMU holds them already (FMI 2.0, 3.0: inputs keep their values)
                 return
-            status = self._set(self.comp, self.in_vrs, self._n_in, self.inp)
+            status = self._set(self.comp, self.in_vrs, self._n_in, self.inp, *self._nv_in)
             if status > 1:
-                raise FMICallException(function="fmi2SetReal", status=status)
+                raise FMICallException(function="fmi3SetFloat64" if self.fmi == 3 else "fmi2SetReal",
+                                       status=status)
             self.written = values
 
     def step(self, t, h):
+        if self.fmi == 3:
+            status = self._do(self.comp, c_double(t), c_double(h), self._true, *self._outs)
+            self.terminate, self.last_successful_time = self._terminate.value, self._last.value
+            if status > 1 or self.terminate:  # fmi3Discard or worse, or the FMU ends the run
+                raise FMICallException(function="fmi3DoStep", status=status)
+            return
         status = self._do(self.comp, c_double(t), c_double(h), self._true)
         if status > 1:  # fmi2Discard or worse
             raise FMICallException(function="fmi2DoStep", status=status)
+
+    def ended(self, status):
+        """After its DoStep raised with ``status``: the time at which the FMU
+        ended the simulation (FMI 2.0: fmi2Discard with fmi2Terminated, its
+        fmi2LastSuccessfulTime, artibus.fmu.terminated; FMI 3.0: its
+        terminateSimulation and lastSuccessfulTime), NaN where it gives no
+        time, else None (a failure)."""
+        if self.fmi == 3:
+            return float(self.last_successful_time) if self.terminate else None
+        return terminated(self.slave, status)
 
 
 class _TypedCalls(_RawCalls):
@@ -115,7 +150,6 @@ class _TypedCalls(_RawCalls):
 
     def __init__(self, unit):
         super().__init__(unit)
-        self.slave = unit.fmu.slave
         n_real = self.n_out
         self.n_real, self.n_out = n_real, n_real + len(unit.tout)
         self.out = (c_double * self.n_out)()
@@ -123,30 +157,34 @@ class _TypedCalls(_RawCalls):
         self.tin_values = [None] * len(unit.tin)
         self.tin_written = None
         self.texts = {}
-        self._get_groups = self._groups(unit.tout)
-        self._set_groups = self._groups(unit.tin)
+        self._get_groups = self._groups(unit.tout, self.fmi)
+        self._set_groups = self._groups(unit.tin, self.fmi)
         self._string_out = [i for i, (_, t, _) in enumerate(unit.tout) if t == "String"]
 
     @staticmethod
-    def _groups(variables):
-        """[(FMI type of the call, [indices], [value references])] per type."""
+    def _groups(variables, fmi=2):
+        """[(FMI type of the call, [indices], [value references])] per type (FMI 3.0's
+        names: artibus.fmu.instance.FMI3_ACCESSOR)."""
+        from artibus.fmu.instance import FMI3_ACCESSOR
         groups = {}
         for i, (_, t, vr) in enumerate(variables):
-            g = groups.setdefault("Integer" if t == "Enumeration" else t, ([], []))
+            g = groups.setdefault(FMI3_ACCESSOR[t] if fmi == 3 else "Integer" if t == "Enumeration" else t,
+                                  ([], []))
             g[0].append(i)
             g[1].append(vr)
         return [(t, idx, vrs) for t, (idx, vrs) in groups.items()]
 
     def read(self):
         if self.n_real:
-            status = self._get(self.comp, self.out_vrs, self._n_out, self.out)
+            status = self._get(self.comp, self.out_vrs, self._n_out, self.out, *self._nv_out)
             if status > 1:  # fmi2Discard or worse
-                raise FMICallException(function="fmi2GetReal", status=status)
+                raise FMICallException(function="fmi3GetFloat64" if self.fmi == 3 else "fmi2GetReal",
+                                       status=status)
         for t, idx, vrs in self._get_groups:
             values = getattr(self.slave, f"get{t}")(vrs)
             for i, x in zip(idx, values):
-                if t == "String":
-                    x = x.decode("utf-8", errors="replace") if x is not None else ""
+                if t == "String":       # (FMI 3.0: FMPy's str already)
+                    x = x.decode("utf-8", errors="replace") if isinstance(x, bytes) else x or ""
                     self.out[self.n_real + i] = self.texts.setdefault(x, len(self.texts))
                 else:
                     x = bool(x) if t == "Boolean" else int(x)

@@ -34,7 +34,7 @@ class SweepResult:
 
 def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep", stop_time=None, step=None,
           fixed=None, keep_series=False, scheduler=None, workers=None, client=None, kpi=None, plot=True,
-          progress=sys.stderr, argv=None, retry_failed=False):
+          progress=sys.stderr, argv=None, retry_failed=False, fmi=None):
     """Run the cases of a bench as Dask tasks; returns a SweepResult (its table
     a pyarrow.Table). grid: {name: [values] or "start:stop:step"}; variants:
     [[names]] (each list an axis) or [names] (one axis); design: a design file;
@@ -42,8 +42,10 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
     case (after its variants, before its own values); retry_failed: run the
     cases recorded as failed again (else a rerun skips them too). scheduler: an existing
     scheduler's address; client: a dask.distributed Client to use (else a
-    local cluster of `workers` processes, default one per core). See the
-    module's docstring."""
+    local cluster of `workers` processes, default one per core). fmi: "2"
+    or "3", every FMU's build of that FMI version (the bench's pack with them,
+    artibus.bench.ssp.ssp_path: its cases are other cases, their keys hash the
+    FMUs), None as the bench's .ssd names them. See the module's docstring."""
     axes = []
     for name, values in (grid or {}).items():
         if isinstance(values, str):
@@ -69,6 +71,9 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
         raise ArtibusError(f"--step {step}: must be > 0")
     if stop_time is not None and not stop_time > 0:
         raise ArtibusError(f"--stop-time {stop_time}: must be > 0")
+    if fmi is not None:
+        from artibus.bench import ssp as ssp_mod
+        bench = ssp_mod.ssp_path(bench, fmi)
     info = bench_info(bench)
     all_cases = build_cases(info, d, where)
     fixed = {k: typed_value(info, k, v, "--set") for k, v in (fixed or {}).items()}

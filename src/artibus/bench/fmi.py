@@ -1,0 +1,125 @@
+"""FMI 3.0 in the bench's words: an FMI 3.0 model description seen with FMI
+2.0's type names (``fmi2_view``), so that the reader of a bench, the
+parameter checks and the runner's set-up (written in FMI 2.0's words) take
+an FMI 3.0 FMU as they take its FMI 2.0 build; and which build of its FMUs a
+bench runs with (``FMI_VERSIONS``, ``fmi_choice``)."""
+import copy
+
+from artibus.base import ArtibusError
+
+#: an FMI 3.0 variable's type as FMI 2.0 names it (the types artibus's FMUs use; the
+#: checks of artibus.bench.parameters speak FMI 2.0)
+FMI2_TYPE = {"Float64": "Real", "Int32": "Integer", "Enumeration": "Enumeration",
+             "Boolean": "Boolean", "String": "String"}
+#: the builds of a bench's FMUs artibus runs: "2" (fmus/<Name>.fmu), "3" (fmus/fmi3/<Name>.fmu)
+FMI_VERSIONS = ("2", "3")
+_VIEWS = {}                            # id(description) -> (it, its view)
+_VIEWS_KEPT = 256
+
+
+def fmi2_view(md):
+    """An FMI 3.0 model description as FMI 2.0 names its types (``FMI2_TYPE``:
+    Float64 -> Real, Int32 -> Integer, ...), the rest as FMPy read it: the
+    same variables, value references, units, starts and model structure
+    (tests/test_fmi3.py checks the two builds' descriptions agree), so that
+    the bench's reader and the runner's checks (artibus.bench, written in FMI
+    2.0's words) take an FMI 3.0 FMU as they take its FMI 2.0 build. A shallow
+    copy, made once per description; an FMI 2.0 one is returned as it is. A
+    type artibus does not read (Binary, Clock, the other widths) is an error
+    naming the variable."""
+    if md.fmiVersion != "3.0":
+        return md
+    kept = _VIEWS.get(id(md))
+    if kept is not None and kept[0] is md:
+        return kept[1]
+    view = copy.copy(md)
+    copies = {}
+    for v in md.modelVariables:
+        if v.type not in FMI2_TYPE:
+            raise ArtibusError(f"{md.modelName}: {v.name} is an FMI 3.0 {v.type}, which artibus does not read")
+        w = copies[id(v)] = copy.copy(v)
+        w.type = FMI2_TYPE[v.type]
+    view.modelVariables = [copies[id(v)] for v in md.modelVariables]
+    view.outputs = []
+    for o in md.outputs:                  # ModelStructure's Outputs on the copies (direct feedthrough)
+        u = copy.copy(o)
+        u.variable = copies.get(id(o.variable), o.variable)
+        if o.dependencies is not None:
+            u.dependencies = [copies.get(id(d), d) for d in o.dependencies]
+        view.outputs.append(u)
+    if len(_VIEWS) >= _VIEWS_KEPT:
+        _VIEWS.pop(next(iter(_VIEWS)))
+    _VIEWS[id(md)] = (md, view)        # (FMPy's descriptions have __slots__: no attribute on them)
+    return view
+
+
+def fmi_choice(fmi):
+    """``--fmi``'s value: None (the bench's choice: the builds its .ssd names,
+    resources/<Name>.fmu FMI 2.0, resources/fmi3/<Name>.fmu FMI 3.0), "2" or
+    "3" (every FMU of the bench in that build); ArtibusError otherwise."""
+    if fmi is None:
+        return None
+    if str(fmi) not in FMI_VERSIONS:
+        raise ArtibusError(f"--fmi {fmi}: expected {' or '.join(FMI_VERSIONS)}")
+    return str(fmi)
+
+
+def build_of(ref, fmi, where):
+    """The file of the FMU a bench names ``ref`` (resources/<Name>.fmu or
+    resources/fmi3/<Name>.fmu) in the build ``fmi``: fmus/<Name>.fmu (FMI
+    2.0) or fmus/fmi3/<Name>.fmu (FMI 3.0, CMake's ARTIBUS_FMI3); an error
+    naming the component's line (``where``) and the missing build."""
+    from pathlib import PurePosixPath
+
+    from artibus.base import fmu_dir
+    name = PurePosixPath(ref).name
+    f = (fmu_dir() if fmi == "2" else fmu_dir() / "fmi3") / name
+    if not f.is_file():
+        how = "the set-up command of the README" if fmi == "2" else "CMake with -DARTIBUS_FMI3=ON"
+        raise ArtibusError(f"{where}: source=\"{ref}\": {PurePosixPath(name).stem} has no FMI {fmi}.0 build "
+                           f"({f} is not built; {how} builds it)")
+    return f
+
+
+def pack_file(bench, fmi, refs):
+    """Where the bench's pack with the build ``fmi`` of its FMUs goes (refs: the
+    files it packs): fmus/<Bench>.ssp as its .ssd says (fmi None, or "2" when it
+    names no FMI 3.0 FMU), fmus/fmi3/<Bench>.ssp with every FMU's FMI 3.0 build,
+    fmus/fmi2/<Bench>.ssp with every FMU's FMI 2.0 build of a bench that names
+    FMI 3.0 ones."""
+    from artibus.base import fmu_dir
+    if fmi == "3":
+        return fmu_dir() / "fmi3" / f"{bench}.ssp"
+    if fmi == "2" and any(r.startswith("resources/fmi3/") and r.endswith(".fmu") for r in refs):
+        return fmu_dir() / "fmi2" / f"{bench}.ssp"
+    return fmu_dir() / f"{bench}.ssp"
+
+
+def add_fmi_option(parser, verb):
+    """The command line's --fmi of ``verb`` (run, sweep, pack: a bench's FMUs; simulate: one FMU)."""
+    if verb == "simulate":
+        parser.add_argument("--fmi", choices=FMI_VERSIONS, default="2",
+                            help="run the FMI 3.0 build of a built FMU (fmus/fmi3/<Name>.fmu; default 2)")
+        return
+    parser.add_argument("--fmi", choices=FMI_VERSIONS, default=None,
+                        help="every FMU of the bench in its FMI 2.0 (fmus/<Name>.fmu) or FMI 3.0 build "
+                             "(fmus/fmi3/<Name>.fmu), packed as fmus/fmi3/<BENCH>.ssp (default: the builds "
+                             "the bench's .ssd names, resources/<Name>.fmu or resources/fmi3/<Name>.fmu)")
+
+
+def simulated_fmu(fmu, arg, fmi):
+    """The file `artibus simulate ARG --fmi FMI` runs: ``fmu`` (ARG's FMI 2.0
+    file) with "2", its FMI 3.0 build fmus/fmi3/<Name>.fmu with "3" (a name
+    of a built FMU only: an .fmu's path runs as it is, without --fmi)."""
+    from pathlib import Path
+
+    from artibus.base import fmu_dir
+    if fmi != "3":
+        return fmu
+    if Path(arg).suffix == ".fmu":       # the parameters are checked against its FMI 2.0 declarations
+        raise ArtibusError(f"--fmi 3 takes the name of a built FMU, not a path ({arg}): "
+                           "give an FMI 3.0 .fmu's path without --fmi")
+    run = fmu_dir() / "fmi3" / f"{arg}.fmu"
+    if not run.is_file():
+        raise ArtibusError(f"{run}: no FMI 3.0 build of {arg} (built with -DARTIBUS_FMI3=ON)")
+    return run
