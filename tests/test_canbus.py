@@ -334,6 +334,25 @@ def test_standard_identifier_beats_extended_with_the_same_base(bus):
     assert b.ops(3, "Transmit")[0][0] == pytest.approx(wire_time(base, b"\x00"), abs=1e-12)
 
 
+def test_error_active_nodes_are_preferred_to_error_passive_ones(bus):
+    b = bus()
+    # node 1 reports ERROR_PASSIVE (Status 0x41, 0x02): its lower identifier waits
+    # (4_4_1_can.adoc, Arbitration: the Suspend Transmission Time)
+    b.send({1: status(0x02) + transmit(0x100, b"\x01"), 2: transmit(0x200, b"\x02")})
+    b.run(0.01)
+    assert [op[1][0] for _, op in b.ops(3, "Transmit")] == [0x200, 0x100]
+
+
+def test_a_nodes_own_frames_go_in_the_order_it_sent_them(bus):
+    b = bus()
+    b.send({1: transmit(0x300, b"\x01") + transmit(0x100, b"\x02")})
+    b.run(0.01)
+    got = b.ops(2, "Transmit")
+    assert [op[1][0] for _, op in got] == [0x300, 0x100]
+    assert got[1][0] == pytest.approx(wire_time(0x300, b"\x01") + wire_time(0x100, b"\x02"), abs=1e-12)
+    assert [op[1] for _, op in b.ops(1, "Confirm")] == [0x300, 0x100]
+
+
 # ---- the wire time -----------------------------------------------------------------------
 
 @pytest.mark.parametrize("can_id,data", [(0x110, bytes([2] * 8)), (0x000, bytes(8)), (0x7FF, bytes([0xFF] * 8)),
@@ -478,6 +497,27 @@ def test_every_cut_of_a_buffer_is_safe(bus):
         partial = cut not in (0, 24, len(whole))
         assert len(b.ops(2, "Transmit")) == n_whole
         assert len(b.ops(1, "FormatError")) == int(partial)
+
+
+def test_random_bytes_never_crash_the_bus(bus):
+    """Random buffers and mutated operations (also under ASan/UBSan): every answer is a
+    well-formed buffer of the standard's operations."""
+    import random
+    rng = random.Random(24)
+    b = bus(wireTime=False, nNodes=2)
+    good = [transmit(0x100, b"\x01\x02"), configuration(0x01, 500_000), status(0x01),
+            struct.pack("<II", 0x42, 8), struct.pack("<III", 0x20, 12, 5)]
+    for i in range(300):
+        if i % 2:
+            buf = bytes(rng.randrange(256) for _ in range(rng.randrange(0, 64)))
+        else:
+            buf = bytearray(b"".join(rng.choice(good) for _ in range(rng.randrange(1, 4))))
+            for _ in range(rng.randrange(1, 4)):
+                buf[rng.randrange(len(buf))] = rng.randrange(256)
+            buf = bytes(buf[:rng.randrange(len(buf) + 1)])
+        b.send({1: buf})
+    assert b.rx                                  # it answered, every buffer parsed by parse()
+    assert not [m for st, m in b.log if st >= 3]
 
 
 def _raises(b, call, *words):
