@@ -5,8 +5,9 @@
   (``VR_<name>`` for the bus's own variables, ``VR_NODE_*`` offsets of node k's
   members at ``VR_NODE_STRIDE * k``), after checking that every node's five
   members follow that pattern and that each Tx/Rx Binary is clocked by its clock;
-- ``pack --xml XML --so SO --readme MD --out FMU``: the FMU archive: the model
-  description, binaries/x86_64-linux/CanBus.so, terminalsAndIcons/terminalsAndIcons.xml
+- ``pack --xml XML --binary PLATFORM=FILE ... --readme MD --out FMU``: the FMU archive:
+  the model description, binaries/<platform>/CanBus.so|.dll (x86_64-linux, and the cross
+  builds' x86_64-windows, aarch64-linux where built), terminalsAndIcons/terminalsAndIcons.xml
   (one Bus Terminal per node, written from the variables' names), the LS-BUS
   manifest extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml and documentation/.
 
@@ -126,12 +127,20 @@ def terminals(xml):
     return "\n".join(out)
 
 
-def pack(xml, so, readme, out):
+PLATFORMS = ("x86_64-linux", "x86_64-windows", "aarch64-linux")   # FMI 3.0, 2.5.1.1: platform tuples
+
+
+def pack(xml, binaries, readme, out):
+    """binaries: [(platform tuple, file)]."""
     read(xml)
+    for platform, f in binaries:
+        if platform not in PLATFORMS:
+            raise DeclarationError(f"--binary {platform}={f}: platform {platform!r} is none of {PLATFORMS}")
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
         z.write(xml, "modelDescription.xml")
-        z.write(so, "binaries/x86_64-linux/CanBus.so")
+        for platform, f in binaries:
+            z.write(f, f"binaries/{platform}/CanBus{Path(f).suffix}")
         z.writestr("terminalsAndIcons/terminalsAndIcons.xml", terminals(xml))
         z.writestr("extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml", MANIFEST)
         if readme and Path(readme).is_file():
@@ -143,8 +152,17 @@ def main(argv):
         if argv[:1] == ["header"] and len(argv) == 3:
             header(argv[1], argv[2])
         elif argv[:1] == ["pack"]:
-            a = dict(zip(argv[1::2], argv[2::2]))
-            pack(a["--xml"], a["--so"], a.get("--readme"), a["--out"])
+            import argparse
+            ap = argparse.ArgumentParser(prog="gen_canbus.py pack")
+            ap.add_argument("--xml", required=True)
+            ap.add_argument("--binary", action="append", default=[], metavar="PLATFORM=FILE")
+            ap.add_argument("--readme")
+            ap.add_argument("--out", required=True)
+            a = ap.parse_args(argv[1:])
+            binaries = [tuple(b.split("=", 1)) for b in a.binary]
+            if any(len(b) != 2 for b in binaries):
+                raise DeclarationError(f"--binary {a.binary}: expected PLATFORM=FILE")
+            pack(a.xml, binaries, a.readme, a.out)
         else:
             print(__doc__, file=sys.stderr)
             return 2
