@@ -25,7 +25,7 @@ import struct
 import zipfile
 
 import pytest
-from fmpy import extract, read_model_description
+from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
@@ -550,13 +550,33 @@ def test_parameters_out_of_range_are_refused(unzipped, name, value):
         Importer(unzipped, **{name: value})
 
 
-def test_event_mode_is_required(unzipped):
+def test_without_event_mode_the_bus_runs_idle(unzipped):
+    """eventModeUsed = false: no clock can tick (FMI 3.0.2, 4.2.1), so no frame can be sent; the bus
+    still instantiates (a plain importer such as `fmpy simulate` steps it), says why once, carries
+    nothing (busLoad 0, no frame) and refuses fmi3EnterEventMode."""
     path, md, d = unzipped
     log = []
     f = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="CanBus", instanceName="bus")
+    f.instantiate(eventModeUsed=False, logMessage=lambda env, st, cat, msg: log.append(msg.decode()))
+    assert sum("eventModeUsed" in m for m in log) == 1
+    f.enterInitializationMode(startTime=0.0)
+    f.exitInitializationMode()
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    t = 0.0
+    for _ in range(100):
+        f.doStep(t, 0.01)
+        t += 0.01
+    assert f.getFloat64([vr["busLoad"]]) == [0.0]
     with pytest.raises(Exception):
-        f.instantiate(eventModeUsed=False, logMessage=lambda env, st, cat, msg: log.append(msg.decode()))
-    assert any("eventModeUsed" in m for m in log)
+        f.enterEventMode()
+    f.freeInstance()
+
+
+def test_fmpy_simulate_runs_the_default_experiment(unzipped):
+    """`fmpy simulate fmus/fmi3/CanBus.fmu` as a user types it: the default experiment without
+    event mode ends without an error, the bus idle."""
+    r = simulate_fmu(str(unzipped[0]))
+    assert r["time"][-1] > 0 and max(abs(r["busLoad"])) == 0.0
 
 
 # ---- the FMU's description ---------------------------------------------------------------------------

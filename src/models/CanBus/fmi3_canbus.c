@@ -140,9 +140,6 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     const char *why = NULL;
     if (!instantiationToken || strcmp(instantiationToken, TOKEN) != 0)
         why = "fmi3InstantiateCoSimulation: instantiationToken is not this FMU's " TOKEN;
-    else if (!eventModeUsed)
-        why = "fmi3InstantiateCoSimulation: eventModeUsed = false: CanBus exchanges its frames through "
-              "clocks, which need Event Mode (fmi-ls-bus 2____common_concepts.adoc: hasEventMode)";
     else if (nRequiredIntermediateVariables > 0)
         why = "fmi3InstantiateCoSimulation: CanBus provides no intermediate update";
     if (why) {
@@ -155,6 +152,14 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     c->env = env;
     c->logMessage = logMessage;
     c->logEvents = loggingOn;
+    c->eventModeUsed = eventModeUsed;
+    /* without Event Mode no clock can tick (FMI 3.0.2, 4.2.1): the bus carries no frame. It still
+       runs, idle (busLoad 0), so that a plain importer (fmpy simulate) steps it; said once */
+    if (!eventModeUsed && logMessage)
+        logMessage(env, fmi3Warning, "logStatusWarning",
+                   "fmi3InstantiateCoSimulation: eventModeUsed = false: CanBus exchanges its frames through "
+                   "clocks, which need Event Mode (fmi-ls-bus 2____common_concepts.adoc: hasEventMode); "
+                   "without it the bus stays idle and carries no frame");
     start_values(c);
     for (int k = 0; k < CANBUS_NODES; k++) c->announced[k] = INFINITY;
     return c;
@@ -181,13 +186,15 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     ENTER("fmi3ExitInitializationMode", S(INIT_MODE));
     canbus_init(&c->bus, &c->p, c->time, bus_log, c);
-    c->state = EVENT_MODE;                 /* eventModeUsed (FMI 3.0.2, 4.2.1) */
+    c->state = c->eventModeUsed ? EVENT_MODE : STEP_MODE;   /* FMI 3.0.2, 4.2.1 */
     c->updated = c->needUpdate = false;
     return fmi3OK;
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     ENTER("fmi3EnterEventMode", S(STEP_MODE));
+    if (!c->eventModeUsed)
+        return FAIL("fmi3EnterEventMode: instantiated with eventModeUsed = false (FMI 3.0.2, 4.2.1)");
     c->state = EVENT_MODE;
     c->updated = c->needUpdate = false;
     canbus_advance(&c->bus, c->time);
@@ -261,7 +268,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     bool due = false;
     for (int k = 0; k < CANBUS_NODES; k++)
         if (canbus_due(&c->bus, k, c->time, c->txRead[k]) <= c->time + CANBUS_TIME_EPS) due = true;
-    if (eventHandlingNeeded) *eventHandlingNeeded = due;
+    if (eventHandlingNeeded) *eventHandlingNeeded = due && c->eventModeUsed;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (earlyReturn) *earlyReturn = fmi3False;
     if (lastSuccessfulTime) *lastSuccessfulTime = c->time;

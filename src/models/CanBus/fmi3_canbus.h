@@ -35,6 +35,7 @@ typedef struct {
     double announced[CANBUS_NODES];            /* the tick of NodeK.Tx_Clock announced, or INFINITY */
     bool changed[CANBUS_NODES];                /* announced but not yet reported */
     bool updated, needUpdate;                  /* fmi3UpdateDiscreteStates in this Event Mode */
+    bool eventModeUsed;                        /* false: an idle bus (no clock can tick) */
 } Instance;
 
 void canbus_logf(Instance *c, fmi3Status s, const char *cat, const char *fmt, ...)
