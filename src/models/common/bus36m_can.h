@@ -10,6 +10,7 @@
 /* the messages, in order of identifier (the arbitration order) */
 #define BUS36M_NMSG 8
 #define BUS36M_MAX_SIGNALS 2   /* data signals of a message (CRC and AliveCounter not counted) */
+#define BUS36M_BAUDRATE 500000   /* bit/s, the DBC's Baudrate */
 enum {
     BUS36M_SENSORA1_ANGLE = 0,
     BUS36M_SENSORG1_ANGLE = 1,
