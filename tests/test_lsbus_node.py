@@ -301,3 +301,164 @@ def test_the_ecu_node_commands_what_the_fmi2_ecu_fed_the_signals_commands(tmp_pa
         node.close()
         ecu.terminate()
         ecu.freeInstance()
+
+
+def cmd_frame(db, k, a, b, counter=None):
+    return python_frame(db, "Module2ECU_Cmd", {"SteerCmdA3": RAD_DEG * a, "SteerCmdA4": RAD_DEG * b},
+                        k % 16 if counter is None else counter)
+
+
+def test_the_actuator_node_detects_a_silent_ecu_after_nstale_cycles(tmp_path, db):
+    """Module2ECU_Cmd every cycle for 20 cycles, then none: stale (and the hold) in the
+    nStale-th = 3rd cycle without a frame (can_fallback.h), the axles held at the last set-points"""
+    node = Node("SteeringActuator_LSBUS", tmp_path, module=2)
+    try:
+        for k in range(30):
+            rx = op_transmit(*cmd_frame(db, k, 0.1, -0.05)) if k < 20 else b""
+            node.event(rx=rx, tx=False)
+            node.step()
+            stale, fallback = node.get("stale", "fallback")
+            silent = k - 19                      # cycles without a new frame
+            assert stale == (1.0 if silent >= 3 else 0.0), k
+            assert fallback == (1.0 if 3 <= silent <= 3 + 19 else 0.0), k
+        assert node.get("delta[1]", "delta[2]") == [DEG_RAD * (573 * 0.01), DEG_RAD * (-286 * 0.01)]
+    finally:
+        node.close()
+
+
+def test_the_actuator_node_rejects_what_the_e2e_check_rejects(tmp_path, db):
+    node = Node("SteeringActuator_LSBUS", tmp_path, module=2)
+    try:
+        node.event(rx=op_transmit(*cmd_frame(db, 0, 0.1, 0.1)), tx=False)
+        node.step()
+        assert node.get("cmdRx[1]")[0] == DEG_RAD * (573 * 0.01)      # 0.1 rad = 5.73 deg
+        i, good = cmd_frame(db, 1, 0.2, 0.2)
+        bad_crc = bytes([good[0] ^ 0x01]) + good[1:]
+        for bad in (bad_crc, cmd_frame(db, 0, 0.3, 0.3)[1],        # a wrong CRC, the counter repeated
+                    cmd_frame(db, 9, 0.3, 0.3)[1]):                # 9 after 0, one cycle later: wrong sequence
+            node.event(rx=op_transmit(i, bad), tx=False)
+            node.step()
+            assert node.get("cmdRx[1]", "alive") == [DEG_RAD * (573 * 0.01), 0.0]
+        # a frame of another module, and one of another DLC, are not its command either
+        node.event(rx=op_transmit(*python_frame(db, "Module3ECU_Cmd", {"SteerCmdA5": 1.0, "SteerCmdA6": 1.0}, 10))
+                   + op_transmit(i, good[:4]), tx=False)
+        node.step()
+        assert node.get("cmdRx[1]", "alive") == [DEG_RAD * (573 * 0.01), 0.0]
+        node.event(rx=op_transmit(*cmd_frame(db, 10, 0.2, 0.2)), tx=False)    # 10 after 9's resync
+        node.step()
+        assert node.get("cmdRx[1]", "alive") == [DEG_RAD * (1146 * 0.01), 10.0]
+    finally:
+        node.close()
+
+
+def format_errors(tx):
+    """the Data of each Format Error (0x01: DL u16, Data; Length 10 + DL)"""
+    out = []
+    for code, args in read_ops(tx):
+        if code == 0x01:
+            (dl,) = struct.unpack_from("<H", args)
+            assert len(args) == 2 + dl
+            out.append(args[2:])
+    return out
+
+
+MALFORMED = {
+    "Transmit with a Length other than 16 + DL": struct.pack("<IIIBBH", 0x10, 20, 0x120, 0, 0, 6) + bytes(4),
+    "Transmit with Ide = 2": struct.pack("<IIIBBH", 0x10, 22, 0x120, 2, 0, 6) + bytes(6),
+    "Confirm with Length 13": struct.pack("<III", 0x20, 13, 0x120) + b"\x00",
+}
+
+
+@pytest.mark.parametrize("case", sorted(MALFORMED))
+def test_a_malformed_operation_is_answered_with_a_format_error(tmp_path, db, case):
+    """the bad operation comes back in a Format Error at the next Tx tick; the frame after it
+    is still received"""
+    node = Node("SteeringECU_LSBUS", tmp_path, module=2)
+    try:
+        node.event(tx=True)                                   # the Configuration out of the way
+        node.step()
+        bad = MALFORMED[case]
+        frame = python_frame(db, "SensorG1_Angle", {"ArtAngleG1": 12.3}, 1)
+        tx = node.event(rx=bad + op_transmit(*frame), tx=True)
+        assert format_errors(tx) == [bad]
+        assert node.get("dPsi[1]")[0] == DEG_RAD * (123 * 0.1)
+        node.step()
+    finally:
+        node.close()
+
+
+@pytest.mark.parametrize("cut", [1, 7, 8, 15, 19])   # of the 20 bytes of a 4-byte frame
+def test_a_truncated_binary_gives_a_format_error_of_its_rest(tmp_path, db, cut):
+    node = Node("SteeringECU_LSBUS", tmp_path, module=2)
+    try:
+        good = op_transmit(*python_frame(db, "SensorG1_Angle", {"ArtAngleG1": 1.0}, 0))
+        tx = node.event(rx=good + good[:cut], tx=True)
+        assert format_errors(tx) == [good[:cut]]
+        assert node.get("dPsi[1]")[0] == DEG_RAD * (10 * 0.1)       # the whole frame before it was taken
+    finally:
+        node.close()
+
+
+def test_unknown_operations_and_notifications_are_ignored(tmp_path, db):
+    node = Node("SteeringECU_LSBUS", tmp_path, module=2)
+    try:
+        ops = (struct.pack("<II", 0x7777, 12) + b"abcd"              # an OP Code the standard does not have
+               + struct.pack("<III", 0x20, 12, 0x120)                # Confirm of its own frame
+               + struct.pack("<III", 0x30, 12, 0x120)                # Arbitration Lost
+               + struct.pack("<IIIBBB", 0x31, 15, 0x120, 0x04, 0x01, 1)   # Bus Error (CRC, primary)
+               + op_transmit(*python_frame(db, "SensorG1_Angle", {"ArtAngleG1": 2.0}, 0)))
+        tx = node.event(rx=ops, tx=True)
+        assert format_errors(tx) == []
+        assert [c for c, _ in read_ops(tx)] == [0x40, 0x10]       # Configuration, its command frame
+        assert node.get("dPsi[1]")[0] == DEG_RAD * (20 * 0.1)
+    finally:
+        node.close()
+
+
+def test_call_order_errors_are_errors_not_crashes(tmp_path):
+    node = Node("SteeringECU_LSBUS", tmp_path, module=2)
+    f = node.fmu
+    try:
+        f.setClock([node.rxc], [True])
+        f.updateDiscreteStates()
+        with pytest.raises(FMICallException):                    # a clock after the discrete states
+            f.setClock([node.rxc], [True])
+    finally:
+        f.freeInstance()
+    node = Node("SteeringECU_LSBUS", tmp_path / "b", module=2)
+    try:
+        with pytest.raises(FMICallException):                    # Rx_Data while Rx_Clock is inactive
+            node.fmu.setBinary([node.rx], [b"\x10\x00\x00\x00"])
+    finally:
+        node.fmu.freeInstance()
+    node = Node("SteeringECU_LSBUS", tmp_path / "c", module=2)
+    try:
+        with pytest.raises(FMICallException):                    # more than maxSize
+            node.fmu.setClock([node.rxc], [True])
+            node.fmu.setBinary([node.rx], [bytes(1025)])
+    finally:
+        node.fmu.freeInstance()
+
+
+def test_random_bytes_never_crash_the_node(tmp_path, db):
+    """fuzz: random buffers, cut and spliced frames; every update returns, Tx_Data stays well formed"""
+    rng = random.Random(7)
+    node = Node("SteeringECU_LSBUS", tmp_path, module=3)
+    good = op_transmit(*python_frame(db, "SensorG1_Angle", {"ArtAngleG1": 1.0}, 0))
+    try:
+        for k in range(300):
+            kind = rng.random()
+            if kind < 0.3:
+                rx = bytes(rng.randrange(256) for _ in range(rng.randrange(1, 64)))
+            elif kind < 0.6:
+                b = bytearray(good * rng.randrange(1, 4))
+                for _ in range(rng.randrange(1, 4)):
+                    b[rng.randrange(len(b))] = rng.randrange(256)
+                rx = bytes(b)
+            else:
+                rx = good[:rng.randrange(1, len(good) + 1)]
+            tx = node.event(rx=rx, tx=True)
+            read_ops(tx)
+            node.step()
+    finally:
+        node.close()
