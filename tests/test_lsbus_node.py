@@ -462,3 +462,41 @@ def test_random_bytes_never_crash_the_node(tmp_path, db):
             node.step()
     finally:
         node.close()
+
+
+@pytest.mark.parametrize("name,base", [("SteeringECU_LSBUS", "SteeringECU"),
+                                       ("SteeringActuator_LSBUS", "SteeringActuator")])
+def test_the_node_has_its_base_models_variables(name, base):
+    """one declaration: every variable of modelDescription/<base>.xml in the node's FMI 3.0
+    description, with its value reference, type and unit; the received inputs as locals"""
+    import xml.etree.ElementTree as ET
+    import zipfile
+    spec = ET.parse(ROOT / "modelDescription" / "lsbus" / f"{name}.xml").getroot()
+    received = {r.get("name") for r in spec.findall("Received")}
+    base_md = ET.parse(ROOT / "modelDescription" / f"{base}.xml").getroot()
+    with zipfile.ZipFile(fmu3(name)) as z:
+        node = {v.get("name"): v for v in ET.fromstring(z.read("modelDescription.xml")).find("ModelVariables")}
+    fmi3 = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}
+    for sv in base_md.find("ModelVariables").findall("ScalarVariable"):
+        t = next(iter(sv))
+        v = node[sv.get("name")]
+        assert (v.tag, v.get("valueReference"), v.get("unit")) == (fmi3[t.tag], sv.get("valueReference"),
+                                                                   t.get("unit")), sv.get("name")
+        want = "local" if sv.get("name") in received else sv.get("causality")
+        assert v.get("causality") == want, sv.get("name")
+    assert received and received <= {sv.get("name") for sv in base_md.iter("ScalarVariable")
+                                     if sv.get("causality") == "input"}
+
+
+def test_a_node_file_naming_no_input_of_its_base_is_refused(tmp_path):
+    import subprocess
+    import sys
+    bad = tmp_path / "Bad.xml"
+    bad.write_text('<LsBusNode name="Bad" base="SteeringECU" guid="{x}" terminal="T" txInterval="0.01" '
+                   'description="d"><Received name="gammaFront"/></LsBusNode>')
+    r = subprocess.run([sys.executable, str(ROOT / "src" / "fmi" / "lsbus_node.py"), str(bad),
+                        str(ROOT / "modelDescription"), str(tmp_path / "o.xml"), str(tmp_path / "o.h")],
+                       capture_output=True, text=True)
+    assert r.returncode != 0
+    assert "Bad.xml" in r.stderr and '<Received name="gammaFront">' in r.stderr and "no input" in r.stderr
+    assert "Traceback" not in r.stderr
