@@ -87,6 +87,7 @@ cross_build() {
   targets="$(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p' CMakeLists.txt)"
   if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$dir/CMakeCache.txt"; then   # and the FMI 3.0 builds: <platform>/fmi3/
     targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
+    targets="$targets CanBus_fmi3"   # FMI 3.0 only, not an add_fmu (CMakeLists.txt, issue 24)
   fi
   quiet cmake --build "$dir" -j"$jobs" --target $targets
 }
