@@ -15,6 +15,12 @@
  * Execution, and the types it has no variables of (Float32, the 8-, 16- and
  * unsigned integers, Binary). An Enumeration is an Int64 here (FMI 3.0), an
  * Integer an Int32.
+ *
+ * An FMI-LS-BUS network node (MODEL_LSBUS, src/models/common/lsbus_node.h) also
+ * has the Binary and Clock variables of its bus terminal (Rx_Data, Tx_Data,
+ * Rx_Clock, Tx_Clock): fmi3Get/SetBinary, fmi3Get/SetClock, fmi3GetIntervalDecimal
+ * and fmi3UpdateDiscreteStates hand them to lsbus_node.c; no FMU state there
+ * (canGetAndSetFMUState = false).
  */
 #include <math.h>
 #include <stdint.h>
@@ -22,6 +28,9 @@
 #include <string.h>
 
 #include "fmu_core.h"
+#ifdef MODEL_LSBUS
+#include "lsbus_node.h"     /* an FMI-LS-BUS network node: its Binary and Clock variables */
+#endif
 
 /* ---- allowed states per function ------------------------------------------- */
 #define M_SetDebugLogging   ANY_BUT_FATAL
@@ -184,6 +193,9 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     const Status status = core_exit_init(comp, "fmi3ExitInitializationMode");
     if (status > Warning) return ST(status);
     comp->v.state = comp->type == IF_MODEL_EXCHANGE || comp->eventModeUsed ? S_EVENT_MODE : S_STEP_COMPLETE;
+#ifdef MODEL_LSBUS
+    lsnode_enter_event_mode(comp);  /* the first event: t = startTime */
+#endif
     return ST(status);
 }
 
@@ -196,6 +208,9 @@ fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
         return leave(comp, log_error(comp, "fmi3EnterEventMode: illegal call sequence: not allowed in "
                                            "state '%s'", state_name(comp->v.state)));
     comp->v.state = S_EVENT_MODE;
+#ifdef MODEL_LSBUS
+    lsnode_enter_event_mode(comp);
+#endif
     return fmi3OK;
 }
 
@@ -340,6 +355,54 @@ NO_TYPE(fmi3GetUInt16, fmi3SetUInt16, fmi3UInt16, "UInt16")
 NO_TYPE(fmi3GetUInt32, fmi3SetUInt32, fmi3UInt32, "UInt32")
 NO_TYPE(fmi3GetUInt64, fmi3SetUInt64, fmi3UInt64, "UInt64")
 
+#ifdef MODEL_LSBUS
+
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                         size_t nValueReferences, size_t valueSizes[], fmi3Binary values[], size_t nValues) {
+    ENTER("fmi3GetBinary", M_Get);
+    SIZES("fmi3GetBinary");
+    REQUIRE_ARRAY("fmi3GetBinary", valueSizes, nValues);
+    for (size_t i = 0; i < nValueReferences; i++)
+        if (lsnode_get_binary(comp, valueReferences[i], &valueSizes[i], &values[i])) return leave(comp, Error);
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                         size_t nValueReferences, const size_t valueSizes[], const fmi3Binary values[],
+                         size_t nValues) {
+    ENTER("fmi3SetBinary", M_Set);
+    SIZES("fmi3SetBinary");
+    REQUIRE_ARRAY("fmi3SetBinary", valueSizes, nValues);
+    for (size_t i = 0; i < nValueReferences; i++)
+        if (lsnode_set_binary(comp, valueReferences[i], valueSizes[i], values[i])) return leave(comp, Error);
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, fmi3Clock values[]) {
+    ENTER("fmi3GetClock", M_Get);
+    REQUIRE_ARRAY("fmi3GetClock", valueReferences, nValueReferences);
+    REQUIRE_ARRAY("fmi3GetClock", values, nValueReferences);
+    for (size_t i = 0; i < nValueReferences; i++) {
+        bool active = false;
+        if (lsnode_get_clock(comp, valueReferences[i], &active)) return leave(comp, Error);
+        values[i] = active;
+    }
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, const fmi3Clock values[]) {
+    ENTER("fmi3SetClock", S_EVENT_MODE);     /* FMI 3.0, 2.2.9: clocks are set in Event Mode only */
+    REQUIRE_ARRAY("fmi3SetClock", valueReferences, nValueReferences);
+    REQUIRE_ARRAY("fmi3SetClock", values, nValueReferences);
+    for (size_t i = 0; i < nValueReferences; i++)
+        if (lsnode_set_clock(comp, valueReferences[i], values[i] != fmi3ClockInactive)) return leave(comp, Error);
+    return fmi3OK;
+}
+
+#else
+
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                          size_t nValueReferences, size_t valueSizes[], fmi3Binary values[], size_t nValues) {
     (void)valueSizes; (void)values; (void)nValues;
@@ -364,6 +427,8 @@ fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueRef
     (void)values;
     return no_such_type(instance, "fmi3SetClock", "Clock", M_Set, valueReferences, nValueReferences);
 }
+
+#endif
 
 /* ---- what this FMU does not provide ------------------------------------------ */
 
@@ -422,8 +487,20 @@ fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                   size_t nValueReferences, fmi3Float64 intervals[],
                                   fmi3IntervalQualifier qualifiers[]) {
+#ifdef MODEL_LSBUS
+    ENTER("fmi3GetIntervalDecimal", M_Get);
+    REQUIRE_ARRAY("fmi3GetIntervalDecimal", valueReferences, nValueReferences);
+    REQUIRE_ARRAY("fmi3GetIntervalDecimal", intervals, nValueReferences);
+    REQUIRE_ARRAY("fmi3GetIntervalDecimal", qualifiers, nValueReferences);
+    for (size_t i = 0; i < nValueReferences; i++) {
+        if (lsnode_interval(comp, valueReferences[i], &intervals[i])) return leave(comp, Error);
+        qualifiers[i] = fmi3IntervalUnchanged;   /* a constant clock: its interval never changes */
+    }
+    return fmi3OK;
+#else
     (void)valueReferences; (void)nValueReferences; (void)intervals; (void)qualifiers;
     return NOT_PROVIDED("fmi3GetIntervalDecimal", NO_CLOCKS);
+#endif
 }
 
 fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
@@ -488,12 +565,24 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     ENTER("fmi3GetFMUState", M_FMUState);
+#ifdef MODEL_LSBUS
+    (void)FMUState;
+    return leave(comp, log_error(comp, "fmi3GetFMUState: not provided by this FMU (canGetAndSetFMUState = "
+                                       "false: a network node's bus state is not saved)"));
+#else
     return ST(core_get_state(comp, "fmi3GetFMUState", FMUState));
+#endif
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
     ENTER("fmi3SetFMUState", M_FMUState);
+#ifdef MODEL_LSBUS
+    (void)FMUState;
+    return leave(comp, log_error(comp, "fmi3SetFMUState: not provided by this FMU (canGetAndSetFMUState = "
+                                       "false: a network node's bus state is not saved)"));
+#else
     return ST(core_set_state(comp, "fmi3SetFMUState", FMUState));
+#endif
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
@@ -515,6 +604,11 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, f
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState *FMUState) {
     ENTER("fmi3DeserializeFMUState", M_FMUState);
+#ifdef MODEL_LSBUS
+    (void)serializedState; (void)size; (void)FMUState;
+    return leave(comp, log_error(comp, "fmi3DeserializeFMUState: not provided by this FMU "
+                                       "(canSerializeFMUState = false)"));
+#endif
     return ST(core_deserialize(comp, "fmi3DeserializeFMUState", serializedState, size, FMUState));
 }
 
@@ -539,6 +633,12 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
     bool terminate = false;
     double tNext = INFINITY;
     Status status = OK;
+#ifdef MODEL_LSBUS
+    /* a network node: the operations received (Rx_Clock) and those to send (Tx_Clock) */
+    if (core_refresh(comp) > Warning) return leave(comp, Error);
+    status = (Status)lsnode_update(comp);
+    if (status > Warning) return leave(comp, status);
+#endif
 #ifdef MODEL_NX
     /* Co-Simulation handles its events inside the step: nothing to update here */
     if (comp->type == IF_MODEL_EXCHANGE) {
@@ -563,6 +663,9 @@ fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
         return leave(comp, log_error(comp, "fmi3EnterStepMode: a Co-Simulation function, but the instance "
                                            "was instantiated for Model Exchange"));
     comp->v.state = S_STEP_COMPLETE;
+#ifdef MODEL_LSBUS
+    lsnode_leave_event_mode(comp);  /* the clocks of this event are over */
+#endif
     return fmi3OK;
 }
 
@@ -574,6 +677,9 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     ENTER("fmi3DoStep", M_DoStep);
     if (!eventHandlingNeeded || !terminateSimulation || !earlyReturn || !lastSuccessfulTime)
         return leave(comp, log_error(comp, "fmi3DoStep: NULL argument"));
+#ifdef MODEL_LSBUS
+    lsnode_step(comp);              /* the bus's operations of the last event are done */
+#endif
     const Status status = core_do_step(comp, "fmi3DoStep", currentCommunicationPoint, communicationStepSize);
     /* the FMU handles its events (a sample, an end stop) inside the step */
     *eventHandlingNeeded = fmi3False;

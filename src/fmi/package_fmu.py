@@ -52,6 +52,7 @@ import zipfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fmi3_description  # noqa: E402  (src/fmi/, beside this script)
+import lsbus_node  # noqa: E402
 
 AUTHOR = "the artibus authors"
 COPYRIGHT = "Copyright (c) 2026, the artibus authors"
@@ -805,6 +806,8 @@ def main(argv=None):
     ap.add_argument("--platform-dir", action="append", default=[], metavar="TUPLE=DIR",
                     help="a cross build's folder of <Name>.<ext> for platform TUPLE (DIR may be empty)")
     ap.add_argument("--win64-dir", default="", help="the same as --platform-dir x86_64-windows=DIR")
+    ap.add_argument("--lsbus", default="", help="FMI 3.0: an FMI-LS-BUS network node's file "
+                    "(modelDescription/lsbus/<Name>.xml): its bus terminal (src/fmi/lsbus_node.py)")
     a = ap.parse_args(argv)
     name, root, tree = a.name, os.path.abspath(a.root), os.path.abspath(a.tree)
     version = project_version(root)
@@ -855,7 +858,7 @@ def main(argv=None):
     indent_unit_children(md)
 
     # the plain parts of the tree, rebuilt each time
-    for sub in ("documentation", "resources", "sources"):
+    for sub in ("documentation", "resources", "sources", "terminalsAndIcons", "extra"):
         p = os.path.join(tree, sub)
         if os.path.isdir(p):
             shutil.rmtree(p)
@@ -873,6 +876,8 @@ def main(argv=None):
             f.write(build_description(name, c_files))
     if a.fmi_version == "3":
         md3 = fmi3_description.fmi3_model_description(md, a.xml)
+        if a.lsbus:
+            lsbus_node.extend_fmi3(md3, a.lsbus, a.xml, tree)
         order_elements(md3)
         write_xml(ET.ElementTree(md3), os.path.join(tree, "modelDescription.xml"))
     else:

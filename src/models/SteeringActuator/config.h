@@ -4,6 +4,9 @@
 #ifndef CONFIG_H
 #define CONFIG_H
 
+#ifdef MODEL_LSBUS
+#include "lsbus_node.h"
+#endif
 #include "actuator.h"
 
 /* plain data, saved as FMU state */
@@ -12,6 +15,9 @@ typedef struct {
     double t0;              /* start time: sample k is at t0 + k Ts */
     long long k;            /* index of the next sample */
     int mode;               /* fallback state of the last sample */
+#ifdef MODEL_LSBUS
+    LsNode bus;             /* the FMI-LS-BUS build (<Name>_LSBUS): its bus terminal's state */
+#endif
 } ModelState;
 
 #endif

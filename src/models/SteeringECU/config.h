@@ -4,6 +4,9 @@
 #ifndef CONFIG_H
 #define CONFIG_H
 
+#ifdef MODEL_LSBUS
+#include "lsbus_node.h"
+#endif
 #include "ecu.h"
 
 /* plain data, saved as FMU state */
@@ -15,6 +18,9 @@ typedef struct {
     unsigned stale;         /* stale mask of the last sample */
     int mode;               /* fallback state of the last sample */
     int direction;          /* driving direction of the last sample (an event when it changes) */
+#ifdef MODEL_LSBUS
+    LsNode bus;             /* the FMI-LS-BUS build (<Name>_LSBUS): its bus terminal's state */
+#endif
 } ModelState;
 
 #endif
