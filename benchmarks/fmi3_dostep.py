@@ -65,7 +65,9 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("names", nargs="*")
     a = ap.parse_args(argv)
-    names = a.names or sorted(p.stem for p in (fmu_dir() / "fmi3").glob("*.fmu"))
+    # the FMUs built in both versions (CanBus and the LS-BUS nodes are FMI 3.0 only: nothing to compare)
+    names = a.names or sorted(p.stem for p in (fmu_dir() / "fmi3").glob("*.fmu")
+                              if (fmu_dir() / p.name).exists())
     if not names:
         sys.exit(f"no FMI 3.0 FMUs in {fmu_dir() / 'fmi3'}: build them first")
     timer = _timer()
