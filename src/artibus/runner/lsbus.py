@@ -1,0 +1,455 @@
+"""A small FMI-LS-BUS 1.0 co-simulation master for FMI 3.0 Co-Simulation with Event Mode
+(issue 24): CAN network nodes, connected directly (two nodes) or through a bus simulation FMU
+such as CanBus, on FMPy's FMU3Slave. Python only: the C stepping core (runner/core.py) has no
+clocks yet.
+
+What it does, with the sections it follows:
+
+- the nodes' time-based Tx clocks (``intervalVariability`` constant or fixed, periodic with the
+  description's ``intervalDecimal`` and ``shiftDecimal``) are the master's clock sources: they
+  tick at t0 + shift + k * interval (FMI 3.0.2, 2.4.7.4 "Time-based Clocks"; fmi-ls-bus v1.0.0
+  docs/4____network_abstraction.adoc, "Time-based Tx Clocks");
+- the bus simulation FMU's countdown Tx clocks are read with fmi3GetIntervalDecimal after each
+  fmi3UpdateDiscreteStates (qualifier changed: a tick at t + interval), and an
+  eventHandlingNeeded of its fmi3DoStep brings it into Event Mode at the step's end;
+- the communication steps are cut at the next of these ticks (the next bus communication
+  point), so every tick is an event at its exact time;
+- in each Event Mode the calls go in the standard's order: the Float64 inputs, fmi3SetClock,
+  fmi3SetBinary, fmi3UpdateDiscreteStates, repeated while discreteStatesNeedUpdate; a clock
+  set after the discrete states that asked for no further iteration is refused here, before
+  the FMU sees it (FMI 3.0.2, 5.2.2);
+- the Rx clocks are triggered: a node's Rx_Clock ticks when Tx data arrive for it; a zero-size
+  Tx_Data activates nothing (4____network_abstraction.adoc, "Rx Clocks");
+- Tx_Data is copied (``bytes``) before the next FMU is called, and routed through the
+  terminals: node Tx_Data -> CanBus NodeK.Rx_Data, CanBus NodeK.Tx_Data -> node Rx_Data
+  (2____common_concepts.adoc, "Composition with dedicated Bus Simulation FMU"), or, without a
+  bus FMU, one node's Tx_Data -> the other's Rx_Data (the direct composition of two nodes).
+
+The order within an instant: first the bus's operations due now (frames that end now), then the
+nodes in the order given (sensors, the tractor ECU, the other ECUs, the actuators). Each node's
+Tx_Data goes to the bus at once, in an Event Mode of the bus's own at the same time, and what the
+bus answers in the same instant (wire time off) reaches the next nodes within their Event Mode
+of this instant. A node that receives data in the instant after its own Event Mode gets a further
+Event Mode at the same time with its Rx clock only.
+
+Known limit: CanBus arbitrates at each fmi3UpdateDiscreteStates among the frames it holds, so a
+frame of a node later in the order, sent in the same instant, waits for the frame already on the
+wire even if its identifier is lower (on a real bus they would arbitrate together). In the 36 m
+bus's network the order above sends the lower identifiers first, so it does not show there.
+"""
+import ctypes
+import math
+import shutil
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from collections import defaultdict
+from pathlib import Path
+
+from fmpy import extract, read_model_description
+from fmpy.fmi3 import FMU3Slave
+
+CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2, 2.2.9.1)
+EPS = 1e-9           # s: two times this close are one instant
+MAX_ITERATIONS = 100  # event iterations per Event Mode before giving up
+NETWORK_TERMINAL = "org.fmi-ls-bus.network-terminal"
+MEMBERS = ("Rx_Data", "Tx_Data", "Rx_Clock", "Tx_Clock")
+
+
+class LsBusError(Exception):
+    """A bad network, bad input or a refused call; the message names the FMU and the variable."""
+
+
+# ---- what the FMU declares -----------------------------------------------------------------
+
+class Terminal:
+    """One bus terminal of an FMU: the value references of its four members and, for a
+    time-based Tx clock, its period and shift."""
+
+    def __init__(self, fmu_name, name, members, variables, clocks):
+        self.name = name
+        missing = [m for m in MEMBERS if m not in members]
+        if missing:
+            raise LsBusError(f"{fmu_name}: terminal {name} has no member {', '.join(missing)}")
+        v = {m: variables[members[m]] for m in MEMBERS}
+        self.rx_data, self.tx_data = v["Rx_Data"].valueReference, v["Tx_Data"].valueReference
+        self.rx_clock, self.tx_clock = v["Rx_Clock"].valueReference, v["Tx_Clock"].valueReference
+        tx = v["Tx_Clock"]
+        self.tx_kind = tx.intervalVariability
+        self.period = self.shift = None
+        if self.tx_kind in ("constant", "fixed"):
+            interval, shift = clocks.get(tx.name, (None, None))
+            try:
+                self.period, self.shift = float(interval), float(shift or 0.0)
+            except (TypeError, ValueError):
+                self.period = None
+            if not self.period or self.period <= 0 or not math.isfinite(self.period):
+                raise LsBusError(f"{fmu_name}: {tx.name} is {self.tx_kind} but has intervalDecimal="
+                                 f"{interval!r}: no period to tick it with")
+        elif self.tx_kind not in ("countdown", "triggered"):
+            raise LsBusError(f"{fmu_name}: {tx.name} has intervalVariability={self.tx_kind!r}; "
+                             "this master ticks constant, fixed, countdown and triggered clocks")
+        self.tx_name = tx.name
+
+    def next_tick(self, t0, t):
+        """the first tick of a periodic Tx clock after t (ticks at t0 + shift + k period)"""
+        k = math.floor((t - t0 - self.shift) / self.period + 1e-6) + 1
+        return t0 + self.shift + max(k, 0) * self.period
+
+    def ticks_at(self, t0, t):
+        if self.period is None:
+            return False
+        k = round((t - t0 - self.shift) / self.period)
+        return k >= 0 and abs(t0 + self.shift + k * self.period - t) <= EPS
+
+
+def read_terminals(path, md, fmu_name):
+    """{name: Terminal} of the network terminals in terminalsAndIcons/terminalsAndIcons.xml
+    (FMI 3.0.2, 2.4.9; the terminal kind of 4____network_abstraction.adoc, "Bus Terminal")."""
+    with zipfile.ZipFile(path) as z:
+        try:
+            root = ET.fromstring(z.read("terminalsAndIcons/terminalsAndIcons.xml"))
+        except KeyError:
+            raise LsBusError(f"{path}: no terminalsAndIcons/terminalsAndIcons.xml: not an LS-BUS FMU") from None
+        # the clocks' intervalDecimal and shiftDecimal (FMPy 0.3 does not read them)
+        clocks = {c.get("name"): (c.get("intervalDecimal"), c.get("shiftDecimal"))
+                  for c in ET.fromstring(z.read("modelDescription.xml")).iter("Clock")}
+    variables = {v.name: v for v in md.modelVariables}
+    out = {}
+    for t in root.iter("Terminal"):
+        if t.get("terminalKind") != NETWORK_TERMINAL:
+            continue
+        members = {m.get("memberName"): m.get("variableName") for m in t.findall("TerminalMemberVariable")}
+        for m, name in members.items():
+            if name not in variables:
+                raise LsBusError(f"{path}: terminal {t.get('name')} member {m} names {name!r}, "
+                                 "which modelDescription.xml does not declare")
+        out[t.get("name")] = Terminal(fmu_name, t.get("name"), members, variables, clocks)
+    if not out:
+        raise LsBusError(f"{path}: terminalsAndIcons.xml has no terminal of kind {NETWORK_TERMINAL}")
+    return out
+
+
+# ---- one FMU instance -----------------------------------------------------------------------
+
+class Fmu:
+    """An FMI 3.0 CS instance with Event Mode and where it is: 'event' (in Event Mode, before
+    fmi3UpdateDiscreteStates), 'updated' (after it; 'need' says whether it asked for another
+    iteration) or 'step' (Step Mode)."""
+
+    def __init__(self, name, path, parameters=None, start_time=0.0, workdir=None):
+        self.name, self.path = name, Path(path)
+        if not self.path.is_file():
+            raise LsBusError(f"{self.path}: no such FMU (FMU {name})")
+        self.md = read_model_description(str(self.path))
+        if self.md.fmiVersion != "3.0" or not self.md.coSimulation or not self.md.coSimulation.hasEventMode:
+            raise LsBusError(f"{self.path}: FMU {name} is no FMI 3.0 Co-Simulation FMU with hasEventMode")
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.terminals = read_terminals(self.path, self.md, name)
+        self.dir = extract(str(self.path), unzipdir=workdir)
+        self.log = []
+        self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self.dir,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate(eventModeUsed=True, loggingOn=False,
+                             logMessage=lambda env, st, cat, msg: self.log.append((st, msg.decode(errors="replace"))))
+        self.fmu.enterInitializationMode(startTime=start_time)
+        for key, value in (parameters or {}).items():
+            self.set(key, value)
+        self.fmu.exitInitializationMode()        # in Event Mode now (FMI 3.0.2, 4.2.1: eventModeUsed)
+        self.mode, self.need = "event", False
+        self.next_event = math.inf               # nextEventTime of the last update
+        self.n_events = 0
+
+    def close(self):
+        try:
+            self.fmu.terminate()
+        except Exception:                         # an instance left in the error state
+            pass
+        self.fmu.freeInstance()
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def var(self, name):
+        if name not in self.vars:
+            raise LsBusError(f"{self.path}: FMU {self.name} has no variable {name!r}")
+        return self.vars[name]
+
+    def set(self, name, value):
+        v = self.var(name)
+        if v.type == "Float64":
+            self.fmu.setFloat64([v.valueReference], [float(value)])
+        elif v.type in ("Int32", "Enumeration"):
+            self.fmu.setInt32([v.valueReference], [int(value)])
+        elif v.type == "Boolean":
+            self.fmu.setBoolean([v.valueReference], [bool(value)])
+        else:
+            raise LsBusError(f"{self.path}: {name} of FMU {self.name} is a {v.type}: set it through a terminal")
+
+    def get(self, name):
+        v = self.var(name)
+        get = {"Float64": self.fmu.getFloat64, "Int32": self.fmu.getInt32, "Boolean": self.fmu.getBoolean}
+        if v.type not in get:
+            raise LsBusError(f"{self.path}: {name} of FMU {self.name} is a {v.type}, not a number")
+        return get[v.type]([v.valueReference])[0]
+
+    # -- the standard's call order (FMI 3.0.2, 5.2.2)
+    def fresh_event(self):
+        """Event Mode with nothing set yet: from Step Mode, or a further Event Mode at the
+        same time after an update that asked for no iteration."""
+        if self.mode == "updated" and not self.need:
+            self.fmu.enterStepMode()
+            self.mode = "step"
+        if self.mode == "step":
+            self.fmu.enterEventMode()
+            self.mode, self.need = "event", False
+            self.n_events += 1
+
+    def set_clocks(self, vrs):
+        if not vrs:
+            return
+        if self.mode == "step":
+            raise LsBusError(f"FMU {self.name}: fmi3SetClock in Step Mode (clocks tick in Event Mode, FMI 3.0.2, 5.2.2)")
+        if self.mode == "updated" and not self.need:
+            names = [v.name for v in self.md.modelVariables if v.valueReference in vrs]
+            raise LsBusError(f"FMU {self.name}: fmi3SetClock({', '.join(names)}) after fmi3UpdateDiscreteStates, "
+                             "which asked for no further event iteration: refused (FMI 3.0.2, 5.2.2: clocks, "
+                             "then inputs, then fmi3UpdateDiscreteStates)")
+        self.fmu.setClock(list(vrs), [True] * len(vrs))
+
+    def update(self):
+        need, terminate, _, _, defined, t_next = self.fmu.updateDiscreteStates()
+        if terminate:
+            raise LsBusError(f"FMU {self.name} asked to terminate the simulation")
+        self.mode, self.need = "updated", bool(need)
+        self.next_event = t_next if defined else math.inf
+        return self.need
+
+    def settle(self):
+        """fmi3UpdateDiscreteStates until the FMU asks for no further iteration"""
+        for _ in range(MAX_ITERATIONS):
+            if not self.update():
+                return
+        raise LsBusError(f"FMU {self.name}: discreteStatesNeedUpdate after {MAX_ITERATIONS} event iterations")
+
+    def leave_event_mode(self):
+        if self.mode != "step":
+            if self.mode == "event":
+                self.settle()
+            self.fmu.enterStepMode()
+            self.mode = "step"
+
+    def intervals(self, terminals):
+        """{terminal: interval} of the countdown Tx clocks that announce a new interval"""
+        if not terminals:
+            return {}
+        n = len(terminals)
+        vrs = (ctypes.c_uint32 * n)(*[t.tx_clock for t in terminals])
+        iv, q = (ctypes.c_double * n)(), (ctypes.c_int * n)()
+        self.fmu.getIntervalDecimal(vrs, iv, q)
+        return {t: iv[i] for i, t in enumerate(terminals) if q[i] == CHANGED}
+
+
+# ---- the master -------------------------------------------------------------------------------
+
+class Network:
+    """Nodes ({name: (fmu path, parameters)}, in their order within an instant), connected
+    through a bus simulation FMU (bus=(path, parameters): the k-th node's terminal to the
+    bus's k-th terminal) or, without bus, two nodes directly.
+
+    run(stop_time, inputs, outputs): inputs(t) -> {node: {variable: value}} set at each of
+    the node's ticks; outputs {node: [variables]} recorded after every step in
+    self.results[node][variable], beside self.time. Every Tx_Data routed is in self.frames
+    as (t, sender, receiver, terminal, bytes)."""
+
+    def __init__(self, nodes, bus=None, start_time=0.0):
+        self.t0 = self.t = float(start_time)
+        self.work = tempfile.mkdtemp(prefix="artibus-lsbus-")
+        self.nodes = [Fmu(name, path, params, start_time, f"{self.work}/{name}")
+                      for name, (path, params) in nodes.items()]
+        self.bus = Fmu("bus", bus[0], bus[1], start_time, f"{self.work}/bus") if bus else None
+        self.by_name = {f.name: f for f in self.nodes}
+        self.links = defaultdict(list)            # (fmu, terminal) -> [(fmu, terminal)]
+        for f in self.nodes:
+            if len(f.terminals) != 1:
+                raise LsBusError(f"{f.path}: node {f.name} has {len(f.terminals)} network terminals; "
+                                 "this master connects nodes of one terminal")
+        if self.bus:
+            bus_terms = list(self.bus.terminals.values())
+            if len(self.nodes) > len(bus_terms):
+                raise LsBusError(f"{self.bus.path}: {len(self.nodes)} nodes but the bus has "
+                                 f"{len(bus_terms)} terminals")
+            for f, bt in zip(self.nodes, bus_terms):
+                (nt,) = f.terminals.values()
+                self.links[(f, nt)].append((self.bus, bt))
+                self.links[(self.bus, bt)].append((f, nt))
+            self.countdown = [t for t in bus_terms if t.tx_kind == "countdown"]
+            self.bus_ticks = {}                  # terminal -> time its countdown clock ticks
+            self.bus_flagged = False
+        else:
+            if len(self.nodes) != 2:
+                raise LsBusError(f"without a bus simulation FMU two nodes connect directly, not {len(self.nodes)}")
+            (a, ta), (b, tb) = [(f, next(iter(f.terminals.values()))) for f in self.nodes]
+            self.links[(a, ta)].append((b, tb))
+            self.links[(b, tb)].append((a, ta))
+        self.frames = []
+        self.time, self.results = [], {}
+        self.n_instants = 0
+
+    def close(self):
+        for f in self.nodes + ([self.bus] if self.bus else []):
+            f.close()
+        shutil.rmtree(self.work, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # -- the bus simulation FMU
+    def _bus_read_intervals(self):
+        for term, iv in self.bus.intervals(self.countdown).items():
+            self.bus_ticks[term] = self.t + iv
+
+    def _bus_settle(self, pending):
+        """In the bus's Event Mode: fmi3UpdateDiscreteStates, then the countdown Tx clocks due
+        now in the further iterations it asks for; their Tx_Data routed to the nodes."""
+        if self.bus.mode == "event":
+            self.bus.update()
+        while True:
+            self._bus_read_intervals()
+            now = [t for t, tt in self.bus_ticks.items() if tt <= self.t + EPS]
+            if not now or not self.bus.need:
+                return
+            for term in now:
+                del self.bus_ticks[term]
+            self.bus.set_clocks([term.tx_clock for term in now])
+            self.bus.update()
+            data = self.bus.fmu.getBinary([term.tx_data for term in now])
+            for term, d in zip(now, data):
+                self._route(self.bus, term, bytes(d), pending)
+
+    def _bus_due(self, pending):
+        """the bus's operations due at this instant (frames that end now)"""
+        now = [t for t, tt in self.bus_ticks.items() if tt <= self.t + EPS]
+        if not now and not self.bus_flagged:
+            return
+        self.bus_flagged = False
+        self.bus.fresh_event()
+        if self.bus.mode == "event":
+            self._bus_read_intervals()             # announced by the step that ended here
+            now = [t for t, tt in self.bus_ticks.items() if tt <= self.t + EPS]
+        for term in now:
+            del self.bus_ticks[term]
+        self.bus.set_clocks([term.tx_clock for term in now])
+        self.bus.update()
+        data = self.bus.fmu.getBinary([term.tx_data for term in now]) if now else []
+        for term, d in zip(now, data):
+            self._route(self.bus, term, bytes(d), pending)
+        self._bus_settle(pending)
+
+    def _bus_send(self, term, data, pending):
+        """a node's Tx_Data into the bus's NodeK.Rx_Data: an Event Mode of the bus's own"""
+        self.bus.fresh_event()
+        self.bus.set_clocks([term.rx_clock])
+        self.bus.fmu.setBinary([term.rx_data], [data])
+        self._bus_settle(pending)
+
+    # -- routing through the terminals
+    def _route(self, src, term, data, pending):
+        """Tx_Data of (src, term) to every Rx_Data linked to it; zero-size data activate no
+        clock (4____network_abstraction.adoc, "Rx Clocks")"""
+        if not data:
+            return
+        for dst, dterm in self.links[(src, term)]:
+            self.frames.append((self.t, src.name, dst.name, dterm.name, data))
+            if dst is self.bus:
+                self._bus_send(dterm, data, pending)
+            else:
+                pending[(dst, dterm)].append(data)
+
+    def _node_event(self, f, ticking, rx, inputs):
+        """one Event Mode of a node: Float64 inputs, clocks, Rx_Data, fmi3UpdateDiscreteStates
+        (while it asks), Tx_Data copied"""
+        f.fresh_event()
+        for name, value in inputs.items():
+            f.set(name, value)
+        f.set_clocks([t.tx_clock for t in ticking] + [t.rx_clock for t in rx])
+        if rx:
+            f.fmu.setBinary([t.rx_data for t in rx], list(rx.values()))
+        f.settle()
+        if not ticking:
+            return {}
+        out = f.fmu.getBinary([t.tx_data for t in ticking])
+        return {t: bytes(d) for t, d in zip(ticking, out)}
+
+    def _instant(self, inputs):
+        """every event at self.t, in the order of the module's docstring"""
+        self.n_instants += 1
+        pending = defaultdict(list)
+        if self.bus:
+            self._bus_due(pending)
+        values = inputs(self.t) if inputs else {}
+        for f in self.nodes:
+            ticking = [t for t in f.terminals.values() if t.ticks_at(self.t0, self.t)]
+            rx = {t: b"".join(pending.pop((f, t))) for t in list(f.terminals.values()) if (f, t) in pending}
+            if not ticking and not rx and f.mode != "event":
+                continue
+            out = self._node_event(f, ticking, rx, values.get(f.name, {}) if ticking or f.mode == "event" else {})
+            for term, data in out.items():
+                self._route(f, term, data, pending)
+        for _ in range(MAX_ITERATIONS):           # data for nodes whose Event Mode was earlier
+            if not pending:
+                break
+            (f, term), chunks = next(iter(pending.items()))
+            del pending[(f, term)]
+            self._node_event(f, [], {term: b"".join(chunks)}, {})
+        else:
+            raise LsBusError(f"t = {self.t}: the nodes keep sending in the same instant ({MAX_ITERATIONS} rounds)")
+        if self.bus and self.bus.mode == "event":
+            self._bus_settle(pending)
+
+    def _next_point(self, stop_time):
+        """the next bus communication point: a periodic Tx tick, a countdown tick of the bus,
+        the bus's nextEventTime"""
+        t_next = stop_time
+        for f in self.nodes:
+            for term in f.terminals.values():
+                if term.period is not None:
+                    t_next = min(t_next, term.next_tick(self.t0, self.t))
+        if self.bus:
+            t_next = min([t_next, self.bus.next_event if self.bus.next_event > self.t + EPS else math.inf]
+                         + [tt for tt in self.bus_ticks.values() if tt > self.t + EPS])
+        return t_next
+
+    def _record(self, outputs):
+        self.time.append(self.t)
+        for name, names in outputs.items():
+            f = self.by_name[name]
+            rec = self.results.setdefault(name, {n: [] for n in names})
+            for n in names:
+                rec[n].append(f.get(n))
+
+    def run(self, stop_time, inputs=None, outputs=None):
+        outputs = outputs or {}
+        for name in outputs:
+            if name not in self.by_name:
+                raise LsBusError(f"outputs: no node {name!r} (nodes: {', '.join(self.by_name)})")
+        everyone = self.nodes + ([self.bus] if self.bus else [])
+        while True:
+            self._instant(inputs)
+            if self.t >= stop_time - EPS:
+                break
+            t_next = self._next_point(stop_time)
+            for f in everyone:
+                f.leave_event_mode()
+            for f in everyone:
+                event_needed, terminate, _, _ = f.fmu.doStep(self.t, t_next - self.t)
+                if terminate:
+                    raise LsBusError(f"FMU {f.name} asked to terminate the simulation at t = {t_next}")
+                if f is self.bus and event_needed:
+                    self.bus_flagged = True
+            self.t = t_next
+            self._record(outputs)
+        for f in everyone:
+            f.leave_event_mode()
+        return self
