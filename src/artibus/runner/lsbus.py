@@ -25,17 +25,20 @@ What it does, with the sections it follows:
   (2____common_concepts.adoc, "Composition with dedicated Bus Simulation FMU"), or, without a
   bus FMU, one node's Tx_Data -> the other's Rx_Data (the direct composition of two nodes).
 
-The order within an instant: first the bus's operations due now (frames that end now), then the
-nodes in the order given (sensors, the tractor ECU, the other ECUs, the actuators). Each node's
-Tx_Data goes to the bus at once, in an Event Mode of the bus's own at the same time, and what the
-bus answers in the same instant (wire time off) reaches the next nodes within their Event Mode
-of this instant. A node that receives data in the instant after its own Event Mode gets a further
-Event Mode at the same time with its Rx clock only.
-
-Known limit: CanBus arbitrates at each fmi3UpdateDiscreteStates among the frames it holds, so a
-frame of a node later in the order, sent in the same instant, waits for the frame already on the
-wire even if its identifier is lower (on a real bus they would arbitrate together). In the 36 m
-bus's network the order above sends the lower identifiers first, so it does not show there.
+The order within an instant (one Event Mode per FMU and instant where it can):
+1. the bus's operations due now (frames whose wire time ends now) go to their nodes;
+2. the nodes, in the order given (sensors, the tractor ECU, the other ECUs, the actuators):
+   each gets its Tx tick and what has arrived for it so far; without a bus, its Tx_Data reaches
+   the other node at once, within the same instant;
+3. all Tx_Data of the instant go to the bus in one Event Mode (fmi3SetClock of every
+   NodeK.Rx_Clock, then the binaries, then fmi3UpdateDiscreteStates), so frames sent in the
+   same instant arbitrate together, by identifier, as on the wire (4_4_1_can.adoc,
+   "Arbitration");
+4. what the bus answers within the instant (frames with wire time off, Confirm, Format Error)
+   reaches each node in a further Event Mode at the same time, with its Rx clock only.
+With the bus's wire time off a node thus receives the frames of its instant after its own Tx
+tick, in a second Event Mode at the same time; its next step sees the same inputs as in the
+direct composition. Only its very first Tx (at t0) is built before its first frames arrive.
 """
 import ctypes
 import math
@@ -261,6 +264,8 @@ class Network:
     as (t, sender, receiver, terminal, bytes)."""
 
     def __init__(self, nodes, bus=None, start_time=0.0):
+        if not bus and len(nodes) != 2:
+            raise LsBusError(f"without a bus simulation FMU two nodes connect directly, not {len(nodes)}")
         self.t0 = self.t = float(start_time)
         self.work = tempfile.mkdtemp(prefix="artibus-lsbus-")
         self.nodes = [Fmu(name, path, params, start_time, f"{self.work}/{name}")
@@ -285,8 +290,6 @@ class Network:
             self.bus_ticks = {}                  # terminal -> time its countdown clock ticks
             self.bus_flagged = False
         else:
-            if len(self.nodes) != 2:
-                raise LsBusError(f"without a bus simulation FMU two nodes connect directly, not {len(self.nodes)}")
             (a, ta), (b, tb) = [(f, next(iter(f.terminals.values()))) for f in self.nodes]
             self.links[(a, ta)].append((b, tb))
             self.links[(b, tb)].append((a, ta))
@@ -347,15 +350,16 @@ class Network:
             self._route(self.bus, term, bytes(d), pending)
         self._bus_settle(pending)
 
-    def _bus_send(self, term, data, pending):
-        """a node's Tx_Data into the bus's NodeK.Rx_Data: an Event Mode of the bus's own"""
+    def _bus_send(self, batch, pending):
+        """the nodes' Tx_Data of the instant into the bus's NodeK.Rx_Data, in one Event Mode"""
+        terms = list(batch)
         self.bus.fresh_event()
-        self.bus.set_clocks([term.rx_clock])
-        self.bus.fmu.setBinary([term.rx_data], [data])
+        self.bus.set_clocks([term.rx_clock for term in terms])
+        self.bus.fmu.setBinary([term.rx_data for term in terms], [batch[term] for term in terms])
         self._bus_settle(pending)
 
     # -- routing through the terminals
-    def _route(self, src, term, data, pending):
+    def _route(self, src, term, data, pending, batch=None):
         """Tx_Data of (src, term) to every Rx_Data linked to it; zero-size data activate no
         clock (4____network_abstraction.adoc, "Rx Clocks")"""
         if not data:
@@ -363,7 +367,7 @@ class Network:
         for dst, dterm in self.links[(src, term)]:
             self.frames.append((self.t, src.name, dst.name, dterm.name, data))
             if dst is self.bus:
-                self._bus_send(dterm, data, pending)
+                batch[dterm] = batch.get(dterm, b"") + data
             else:
                 pending[(dst, dterm)].append(data)
 
@@ -385,7 +389,7 @@ class Network:
     def _instant(self, inputs):
         """every event at self.t, in the order of the module's docstring"""
         self.n_instants += 1
-        pending = defaultdict(list)
+        pending, batch = defaultdict(list), {}
         if self.bus:
             self._bus_due(pending)
         values = inputs(self.t) if inputs else {}
@@ -396,7 +400,9 @@ class Network:
                 continue
             out = self._node_event(f, ticking, rx, values.get(f.name, {}) if ticking or f.mode == "event" else {})
             for term, data in out.items():
-                self._route(f, term, data, pending)
+                self._route(f, term, data, pending, batch)
+        if batch:
+            self._bus_send(batch, pending)
         for _ in range(MAX_ITERATIONS):           # data for nodes whose Event Mode was earlier
             if not pending:
                 break

@@ -1,0 +1,251 @@
+"""The LS-BUS master artibus.runner.lsbus (issue 24) on the FMI 3.0 LS-BUS nodes and CanBus.
+
+What is expected comes from elsewhere, computed here:
+- (a) the ECU node's outputs: the FMI 2.0 SteeringECU, run here, fed the Real signals the
+  frames carry (the DBC's encoding by cantools with artibus.can's E2E CRC, decoded again:
+  the resolution of each signal), at the same 10 ms ticks;
+- (b) through CanBus with wireTime off the bus adds no delay: the same outputs as (a);
+- (c) with wire time: each frame's delivery time from its bits (the closed form of
+  tests/test_canbus.py: 44 + 8 DLC bits, stuffing over SOF..CRC with the CRC-15, 3 bits
+  intermission, at 500 kbit/s), the frames of one tick back to back in identifier order
+  (ISO 11898-1 arbitration: the lowest identifier wins) from the tick on the 10 ms grid;
+- (d) the stale detection: stale in the nStale-th (3rd) cycle without a new frame
+  (SteeringECU's nStale, can_fallback.h), counted from the last frame the bus let through
+  before faultStart;
+- (e) the standard's call order (FMI 3.0.2, 5.2.2): a clock after fmi3UpdateDiscreteStates
+  that asked for no further iteration is refused.
+"""
+import math
+import struct
+
+import cantools
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+
+from artibus import ROOT, fmu_dir
+from artibus.can import e2e_crc
+from artibus.can.dbc import _conversion
+from artibus.runner.lsbus import LsBusError, Network
+
+from test_canbus import wire_time
+
+DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
+TS = 0.01
+RAD_DEG, DEG_RAD = _conversion("rad", "deg", "test"), _conversion("deg", "rad", "test")
+SENSORS = (("SensorA1_Angle", "RoadWheelAngleA1", "gamma1", "aliveA1"),
+           ("SensorG1_Angle", "ArtAngleG1", "dPsi[1]", "aliveG1"),
+           ("SensorG2_Angle", "ArtAngleG2", "dPsi[2]", "aliveG2"),
+           ("SensorA6_Angle", "RoadWheelAngleA6", "gammaA6", "aliveA6"))
+OUTS = ("gammaFront", "gammaRear", "fallback", "stale", "fault", "gammaFrontCalc", "gammaRearCalc",
+        "drivingDirection", "gamma1", "dPsi[1]", "dPsi[2]", "gammaA6")
+
+
+def fmu3(name):
+    path = fmu_dir() / "fmi3" / f"{name}.fmu"
+    if not path.is_file():
+        pytest.skip(f"{path} not built")
+    return path
+
+
+@pytest.fixture(scope="module")
+def db():
+    return cantools.database.load_file(str(DBC), strict=True)
+
+
+def signals(t):
+    """the plant's angles (rad) and the vehicle speed (m/s): backwards at 3 m/s, so module 1
+    (the tractor ECU) steers A1 and A2 from SensorA6_Angle and both hinges (SteeringECU.xml)"""
+    return {"gamma1": 0.05 * math.sin(t), "dPsi[1]": 0.2 * math.sin(2 * math.pi * t / 1.5) + 0.01,
+            "dPsi[2]": 0.15 * math.sin(0.8 * t), "gammaA6": 0.3 * math.sin(1.3 * t)}, -3.0 - 0.1 * math.sin(t)
+
+
+def inputs(t):
+    s, v = signals(t)
+    return {"sensors": s, "ecu": {"vVehicle": v}}
+
+
+def quantized(db, s, k):
+    """the Real inputs the FMI 2.0 ECU gets from tick k's frames: each signal encoded with
+    the DBC and decoded again, the alive counters k mod 16"""
+    out = {}
+    for msg, sig, name, alive in SENSORS:
+        m = db.get_message_by_name(msg)
+        data = bytearray(m.encode({sig: RAD_DEG * s[name], "AliveCounter": k % 16, "CRC": 0},
+                                  scaling=True, strict=True))
+        data[0] = e2e_crc(data, int(m.dbc.attributes["E2EDataID"].value))
+        out[name] = DEG_RAD * m.decode(bytes(data), scaling=True)[sig]
+        out[alive] = float(data[1] & 0x0F)
+    return out
+
+
+def fmi2_reference(tmp_path, db, n_steps, silent_from=None):
+    """SteeringECU (FMI 2.0, module 1) fed the frames' signals every 10 ms; a silent sensor
+    node keeps its last values and counters (the receiver sees no new frame)"""
+    path = fmu_dir() / "SteeringECU.fmu"
+    if not path.is_file():
+        pytest.skip(f"{path} not built")
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = extract(str(path), unzipdir=str(tmp_path / "ecu2"))
+    f = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="SteeringECU", instanceName="ecu2")
+
+    def feed(k):
+        s, v = signals(k * TS)
+        got = quantized(db, s, k) if silent_from is None or k < silent_from else {}
+        got["v"] = v
+        f.setReal([vr[n] for n in got], list(got.values()))
+
+    f.instantiate()
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    f.setInteger([vr["module"]], [1])
+    feed(0)
+    f.exitInitializationMode()
+    rows = []
+    for k in range(n_steps):
+        feed(k)
+        f.doStep(k * TS, TS)
+        rows.append(f.getReal([vr[n] for n in OUTS]))
+    f.terminate()
+    f.freeInstance()
+    return rows
+
+
+def network(bus=None):
+    nodes = {"sensors": (fmu3("SteeringSensors_LSBUS"), {}), "ecu": (fmu3("SteeringECU_LSBUS"), {"module": 1})}
+    return Network(nodes, bus=(fmu3("CanBus"), dict({"nNodes": 2}, **bus)) if bus is not None else None)
+
+
+def ecu_rows(net):
+    """the ECU node's outputs at the 10 ms grid (the steps of a run with wire time end
+    between ticks too)"""
+    rows = []
+    for i, t in enumerate(net.time):
+        if abs(t / TS - round(t / TS)) < 1e-6:
+            rows.append([net.results["ecu"][n][i] for n in OUTS])
+    return rows
+
+
+N = 150           # 1.5 s: one period of the hinge angle's sine
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory, db):
+    return fmi2_reference(tmp_path_factory.mktemp("ref"), db, N)
+
+
+def run(bus=None, t_stop=N * TS):
+    with network(bus) as net:
+        net.run(t_stop, inputs, {"ecu": list(OUTS)})
+        return ecu_rows(net), net.frames
+
+
+def test_direct_mode_the_ecu_commands_what_the_fmi2_ecu_commands(reference):
+    rows, frames = run()
+    assert len(rows) == N
+    assert rows == reference                        # exactly: the same C code, the same inputs
+    # it steers: A1 and A2 move backwards (not a test that passes on zeros)
+    assert max(abs(r[0]) for r in rows) > 0.01 and max(abs(r[1]) for r in rows) > 0.001
+    assert all(r[3] == 0 for r in rows)            # nothing stale
+    # 1 + 150 ticks of each node, every one a frame to the other
+    assert sum(1 for f in frames if f[1] == "sensors") == N + 1
+
+
+def test_through_canbus_without_wire_time_equals_direct_mode(reference):
+    with network(bus={"wireTime": False}) as net:
+        net.run(N * TS, inputs, {"ecu": list(OUTS)})
+        rows, frames, n_frames = ecu_rows(net), net.frames, net.bus.get("nFrames")
+    assert rows == reference
+    # the bus's deliveries are at the ticks themselves
+    assert {round(f[0] / TS, 6) % 1 for f in frames if f[1] == "bus"} == {0.0}
+    # every Transmit the nodes sent went over the bus
+    assert n_frames == sum(len(transmits(f[4])) for f in frames if f[2] == "bus") > 0
+
+
+def transmits(buf):
+    """[(id, data)] of the CAN Transmit operations (4_4_1_can.adoc, Transmit: OP Code 0x10,
+    Length, ID u32, Ide u8, Rtr u8, DL u16, Data)"""
+    out, pos = [], 0
+    while pos < len(buf):
+        code, length = struct.unpack_from("<II", buf, pos)
+        if code == 0x10:
+            can_id, _, _, dl = struct.unpack_from("<IBBH", buf, pos + 8)
+            out.append((can_id, bytes(buf[pos + 16:pos + 16 + dl])))
+        pos += length
+    return out
+
+
+@pytest.mark.slow
+def test_with_wire_time_every_frame_arrives_after_its_bits_in_identifier_order():
+    n_ticks = 30
+    with network(bus={}) as net:
+        net.run(n_ticks * TS, inputs, {"ecu": list(OUTS)})
+        frames = net.frames
+    sent = {}                                       # tick -> [(id, data)] both nodes sent
+    for t, src, dst, _, data in frames:
+        if dst == "bus":
+            k = round(t / TS)
+            assert abs(t - k * TS) < 1e-12          # sent on the 10 ms grid
+            sent.setdefault(k, []).extend(transmits(data))
+    got = [(t, src_dst, f) for t, src, dst, _, data in frames if src == "bus"
+           for src_dst in [dst] for f in transmits(data)]
+    assert len(sent) == n_ticks + 1
+    del sent[n_ticks]                               # sent at the stop time: the run ends there
+    for k, tick in sent.items():
+        assert {i for i, _ in tick} == {0x101, 0x102, 0x103, 0x104, 0x110, 0x118} or k == 0
+        t = k * TS
+        for i, d in sorted(tick):                  # arbitration: lowest identifier first
+            t += wire_time(i, d)
+            receiver = "ecu" if i < 0x110 else "sensors"
+            match = [g for g in got if g[2] == (i, d) and g[1] == receiver and k * TS < g[0] < (k + 1) * TS]
+            assert len(match) == 1, (k, hex(i))
+            assert match[0][0] == pytest.approx(t, abs=1e-12), (k, hex(i))
+        assert t - k * TS < TS                      # the tick's frames fit into the cycle
+
+
+def test_node_order_does_not_change_arbitration():
+    """the ECU first: its frames and the sensors' of the same tick still go by identifier"""
+    nodes = {"ecu": (fmu3("SteeringECU_LSBUS"), {"module": 1}), "sensors": (fmu3("SteeringSensors_LSBUS"), {})}
+    with Network(nodes, bus=(fmu3("CanBus"), {"nNodes": 2})) as net:
+        net.run(3 * TS, inputs)
+        order = [i for t, src, dst, _, data in net.frames if src == "bus" and 0.02 < t < 0.03
+                 for i, _ in transmits(data)]
+    assert order == [0x101, 0x102, 0x103, 0x104, 0x110, 0x118]
+
+
+@pytest.mark.parametrize("wire", [False, True])
+def test_a_silent_sensor_node_makes_the_ecu_stale_after_nstale_cycles(tmp_path, db, wire):
+    """CanBus faultSilentNode = 1 (the sensors) from 0.505 s: the last frames are those of the
+    tick at 0.50 s (k = 50); stale in the 3rd cycle without them, and the ECU as the FMI 2.0
+    ECU that gets no new frame after k = 50. With wire time the frames of tick k arrive
+    0.2-1.1 ms after it, so the ECU samples them at tick k + 1: one cycle later."""
+    n = 70
+    rows, _ = run(bus={"wireTime": wire, "faultSilentNode": 1, "faultStart": 0.505}, t_stop=n * TS)
+    stale = [r[OUTS.index("stale")] for r in rows]
+    first = stale.index(next(s for s in stale if s != 0))
+    # rows[k] is after the step from tick k; without wire time the ticks 51, 52, 53 have no
+    # new frame, with it the ticks 52, 53, 54 (tick 51 still gets tick 50's frames)
+    assert first == (54 if wire else 53)
+    assert all(s == 0 for s in stale[:first])
+    if not wire:
+        assert rows == fmi2_reference(tmp_path, db, n, silent_from=51)
+
+
+def test_a_clock_after_the_discrete_states_is_refused():
+    with network() as net:
+        ecu = net.by_name["ecu"]
+        (term,) = ecu.terminals.values()
+        ecu.set_clocks([term.tx_clock])
+        assert ecu.update() is False
+        with pytest.raises(LsBusError, match=r"ecu: fmi3SetClock\(SteeringCAN.Rx_Clock\) after "
+                                             r"fmi3UpdateDiscreteStates"):
+            ecu.set_clocks([term.rx_clock])
+        with pytest.raises(FMICallException):       # and the FMU itself refuses it
+            ecu.fmu.setClock([term.rx_clock], [True])
+
+
+def test_a_network_without_bus_is_two_nodes():
+    with pytest.raises(LsBusError, match="two nodes connect directly, not 1"):
+        Network({"ecu": (fmu3("SteeringECU_LSBUS"), {"module": 1})})
