@@ -249,3 +249,109 @@ def test_a_clock_after_the_discrete_states_is_refused():
 def test_a_network_without_bus_is_two_nodes():
     with pytest.raises(LsBusError, match="two nodes connect directly, not 1"):
         Network({"ecu": (fmu3("SteeringECU_LSBUS"), {"module": 1})})
+
+
+# ---- the whole steering network on CanBus --------------------------------------------------
+
+class Fmi2Ecu:
+    """the FMI 2.0 SteeringECU of one module, initialised with and fed the Real inputs"""
+
+    def __init__(self, tmp_path, module, first):
+        path = fmu_dir() / "SteeringECU.fmu"
+        if not path.is_file():
+            pytest.skip(f"{path} not built")
+        md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        d = extract(str(path), unzipdir=str(tmp_path / f"ecu{module}"))
+        self.f = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="SteeringECU", instanceName=f"m{module}")
+        self.f.instantiate()
+        self.f.setupExperiment(startTime=0.0)
+        self.f.enterInitializationMode()
+        self.f.setInteger([self.vr["module"]], [module])
+        self.feed(first)
+        self.f.exitInitializationMode()
+
+    def feed(self, values):
+        self.f.setReal([self.vr[n] for n in values], list(values.values()))
+
+    def get(self, names):
+        return self.f.getReal([self.vr[n] for n in names])
+
+    def close(self):
+        self.f.terminate()
+        self.f.freeInstance()
+
+
+def forwards(t):
+    s, v = signals(t)
+    return s, -v                                     # 3 m/s forwards: modules 2 and 3 steer
+
+
+def state_inputs(db, direction, v, k):
+    """TractorECU_State as the ECUs of modules 2 and 3 receive it: DrivingDirection and the
+    speed in km/h at the DBC's resolution, the alive counter"""
+    m = db.get_message_by_name("TractorECU_State")
+    kmh = _conversion("m/s", "km/h", "test") * v
+    d = m.decode(m.encode({"DrivingDirection": int(direction), "VehicleSpeed": kmh, "AliveCounter": k % 16, "CRC": 0},
+                          scaling=True, strict=True), scaling=True, decode_choices=False)
+    return {"direction": float(d["DrivingDirection"]), "v": _conversion("km/h", "m/s", "test") * d["VehicleSpeed"],
+            "aliveState": float(k % 16)}
+
+
+@pytest.mark.slow
+def test_the_steering_network_on_canbus_equals_the_fmi2_ecus(tmp_path, db):
+    """sensors, the three ECUs and the three actuator modules on CanBus without wire time:
+    module 2 and 3's ECUs get the sensors' frames and the tractor ECU's TractorECU_State of
+    their tick (the FMI 2.0 ECUs fed those signals give the same outputs), the actuators
+    the set-points their ECU sent at the tick, at 0.01 deg resolution, never stale"""
+    n = 100
+    ecu, act = fmu3("SteeringECU_LSBUS"), fmu3("SteeringActuator_LSBUS")
+    nodes = {"sensors": (fmu3("SteeringSensors_LSBUS"), {}), "ecu1": (ecu, {"module": 1}),
+             "ecu2": (ecu, {"module": 2}), "ecu3": (ecu, {"module": 3}),
+             "act1": (act, {"module": 1}), "act2": (act, {"module": 2}), "act3": (act, {"module": 3})}
+
+    def inp(t):
+        s, v = forwards(t)
+        return {"sensors": s, "ecu1": {"vVehicle": v}}
+
+    outs = {"ecu1": ["drivingDirection"], "ecu2": list(OUTS), "ecu3": list(OUTS),
+            "act2": ["cmdRx[1]", "cmdRx[2]", "stale"], "act3": ["cmdRx[1]", "cmdRx[2]", "stale"]}
+    with Network(nodes, bus=(fmu3("CanBus"), {"nNodes": 7, "wireTime": False})) as net:
+        net.run(n * TS, inp, outs)
+        res, n_time = net.results, len(net.time)
+    assert n_time == n
+
+    s0, v0 = forwards(0.0)
+    ref1 = Fmi2Ecu(tmp_path, 1, dict(quantized(db, s0, 0), v=v0))
+    direction0 = 0.0            # drivingDirection's start: the tractor ECU's first frame precedes its init
+    first = dict(quantized(db, s0, 0), **state_inputs(db, direction0, v0, 0))
+    refs = {m: Fmi2Ecu(tmp_path, m, first) for m in (2, 3)}
+    rows = {2: [], 3: []}
+    direction = direction0
+    try:
+        for k in range(n):
+            s, v = forwards(k * TS)
+            sens = quantized(db, s, k)
+            ref1.feed(dict(sens, v=v))
+            state = state_inputs(db, direction, v, k)
+            for m in (2, 3):
+                refs[m].feed(dict(sens, **state))
+                refs[m].f.doStep(k * TS, TS)
+                rows[m].append(refs[m].get(OUTS))
+            ref1.f.doStep(k * TS, TS)
+            direction = ref1.get(["drivingDirection"])[0]
+    finally:
+        for r in [ref1, *refs.values()]:
+            r.close()
+
+    for m in (2, 3):
+        got = [[res[f"ecu{m}"][o][k] for o in OUTS] for k in range(n)]
+        assert got == rows[m], m
+        assert max(abs(r[0]) for r in got) > 1e-3        # it steers
+        # the actuators: the set-points the ECU sent at tick k (its outputs of the step before),
+        # at the DBC's 0.01 deg
+        for k in range(1, n):
+            for i in (0, 1):
+                want = DEG_RAD * (round(RAD_DEG * rows[m][k - 1][i] / 0.01) * 0.01)
+                assert res[f"act{m}"][f"cmdRx[{i + 1}]"][k] == pytest.approx(want, abs=1e-12), (m, k, i)
+        assert not any(res[f"act{m}"]["stale"])
