@@ -177,7 +177,6 @@ def transmits(buf):
     return out
 
 
-@pytest.mark.slow
 def test_with_wire_time_every_frame_arrives_after_its_bits_in_identifier_order():
     n_ticks = 30
     with network(bus={}) as net:
@@ -298,7 +297,6 @@ def state_inputs(db, direction, v, k):
             "aliveState": float(k % 16)}
 
 
-@pytest.mark.slow
 def test_the_steering_network_on_canbus_equals_the_fmi2_ecus(tmp_path, db):
     """sensors, the three ECUs and the three actuator modules on CanBus without wire time:
     module 2 and 3's ECUs get the sensors' frames and the tractor ECU's TractorECU_State of
