@@ -43,6 +43,7 @@ direct composition. Only its very first Tx (at t0) is built before its first fra
 import ctypes
 import math
 import shutil
+import struct
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
@@ -61,6 +62,43 @@ MEMBERS = ("Rx_Data", "Tx_Data", "Rx_Clock", "Tx_Clock")
 
 class LsBusError(Exception):
     """A bad network, bad input or a refused call; the message names the FMU and the variable."""
+
+
+# ---- the CAN operations on the wire, for the log -------------------------------------------
+
+def can_transmits(buf):
+    """[(id, ide, data)] of the CAN Transmit operations of a buffer (fmi-ls-bus v1.0.0
+    4_4_1_can.adoc, Transmit: OP Code 0x10 u32, Length u32, ID u32, Ide u8, Rtr u8, DL u16,
+    Data); the other operations skipped by their Length; a malformed rest ends the scan (the
+    receiver answers it with a Format Error, 4____network_abstraction.adoc)"""
+    out, pos = [], 0
+    while pos + 8 <= len(buf):
+        code, length = struct.unpack_from("<II", buf, pos)
+        if length < 8 or pos + length > len(buf):
+            break
+        if code == 0x10 and length >= 16:
+            can_id, ide, _, dl = struct.unpack_from("<IBBH", buf, pos + 8)
+            if length == 16 + dl:
+                out.append((can_id, ide, bytes(buf[pos + 16:pos + length])))
+        pos += length
+    return out
+
+
+def write_can_log(frames, path):
+    """The frames on the wire, [(t, id, ide, data)] (Network.wire_frames), into a .blf or
+    .asc log by python-can's writers, as the Real-wired bench's --can-log writes them."""
+    import can
+    path = Path(path)
+    if path.suffix.lower() not in (".blf", ".asc"):
+        raise LsBusError(f"{path}: the CAN log is written as .blf or .asc (by its suffix)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writer = can.BLFWriter(str(path)) if path.suffix.lower() == ".blf" else can.ASCWriter(str(path))
+    try:
+        for t, can_id, ide, data in frames:
+            writer.on_message_received(can.Message(timestamp=t, arbitration_id=can_id, is_extended_id=bool(ide),
+                                                   dlc=len(data), data=data, channel=0))
+    finally:
+        writer.stop()
 
 
 # ---- what the FMU declares -----------------------------------------------------------------
@@ -296,6 +334,20 @@ class Network:
         self.frames = []
         self.time, self.results = [], {}
         self.n_instants = 0
+
+    def wire_frames(self):
+        """[(t, id, ide, data)] of each CAN frame once, at the time it reached its receivers
+        (with a bus FMU its deliveries, without one the sender's Tx_Data)"""
+        seen, out = set(), []
+        for t, src, dst, _, data in self.frames:
+            if self.bus and src != self.bus.name:
+                continue
+            for frame in can_transmits(data):
+                key = (t, src, frame)
+                if key not in seen:
+                    seen.add(key)
+                    out.append((t, *frame))
+        return out
 
     def close(self):
         for f in self.nodes + ([self.bus] if self.bus else []):
