@@ -245,6 +245,20 @@ def test_a_clock_after_the_discrete_states_is_refused():
             ecu.fmu.setClock([term.rx_clock], [True])
 
 
+def test_an_fmu_without_a_bus_terminal_is_refused_by_name():
+    path = fmu_dir() / "SteeringECU.fmu"
+    with pytest.raises(LsBusError, match=r"SteeringECU.fmu: FMU ecu is no FMI 3.0 Co-Simulation FMU"):
+        Network({"sensors": (fmu3("SteeringSensors_LSBUS"), {}), "ecu": (path, {})})
+
+
+def test_an_fmu_error_is_raised_with_its_message():
+    """a value outside its signal's range: the sensors node refuses it (logStatusError), the
+    master says when and what the FMU said"""
+    with network() as net:
+        with pytest.raises(LsBusError, match=r"t = 0.020000 s: .*sensors said: "):
+            net.run(0.05, lambda t: {"sensors": {"gamma1": 0.0 if t < 0.015 else 5.0}})
+
+
 def test_a_network_without_bus_is_two_nodes():
     with pytest.raises(LsBusError, match="two nodes connect directly, not 1"):
         Network({"ecu": (fmu3("SteeringECU_LSBUS"), {"module": 1})})
@@ -316,7 +330,7 @@ def test_the_steering_network_on_canbus_equals_the_fmi2_ecus(tmp_path, db):
             "act2": ["cmdRx[1]", "cmdRx[2]", "stale"], "act3": ["cmdRx[1]", "cmdRx[2]", "stale"]}
     with Network(nodes, bus=(fmu3("CanBus"), {"nNodes": 7, "wireTime": False})) as net:
         net.run(n * TS, inp, outs)
-        res, n_time = net.results, len(net.time)
+        res, n_time, frames = net.results, len(net.time), net.frames
     assert n_time == n
 
     s0, v0 = forwards(0.0)
@@ -353,6 +367,11 @@ def test_the_steering_network_on_canbus_equals_the_fmi2_ecus(tmp_path, db):
                 want = DEG_RAD * (round(RAD_DEG * rows[m][k - 1][i] / 0.01) * 0.01)
                 assert res[f"act{m}"][f"cmdRx[{i + 1}]"][k] == pytest.approx(want, abs=1e-12), (m, k, i)
         assert not any(res[f"act{m}"]["stale"])
+    # the actuators send only their Configuration (0x40, CAN_BAUDRATE) at t0, then zero-size
+    # Tx_Data at every tick, which activate no clock and reach no one
+    acts = [f for f in frames if f[1].startswith("act")]
+    assert [(f[0], f[1], struct.unpack_from("<I", f[4])[0], len(f[4])) for f in acts] == \
+        [(0.0, f"act{m}", 0x40, 13) for m in (1, 2, 3)]
 
 
 # ---- the frames in a CAN log ------------------------------------------------------------------

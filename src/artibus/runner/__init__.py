@@ -7,6 +7,8 @@
 - ``unit``: a component while it runs and its calls into the FMU;
 - ``plan``: the components' order and the multi-rate step plan;
 - ``core``, ``can_core``: the stepping core in C and its ctypes binding;
+- ``lsbus``: ``Network``, the FMI-LS-BUS 1.0 master for FMI 3.0 CAN nodes with clocks
+  (directly, or through a bus simulation FMU such as CanBus), in Python on FMPy;
 - ``results``, ``tables``: result files (``save``, units, partial results) and
   the pool of result tables.
 """

@@ -51,6 +51,7 @@ from collections import defaultdict
 from pathlib import Path
 
 from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
 CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2, 2.2.9.1)
@@ -488,6 +489,16 @@ class Network:
                 rec[n].append(f.get(n))
 
     def run(self, stop_time, inputs=None, outputs=None):
+        """simulate from the current time to stop_time; an FMU's error is raised as an
+        LsBusError with the time, the FMU and what its logger said"""
+        try:
+            return self._run(stop_time, inputs, outputs)
+        except FMICallException as e:
+            said = [(f.name, m) for f in self.nodes + ([self.bus] if self.bus else []) for st, m in f.log if st >= 3]
+            why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
+            raise LsBusError(f"t = {self.t:.6f} s: {e}{why}") from None
+
+    def _run(self, stop_time, inputs, outputs):
         outputs = outputs or {}
         for name in outputs:
             if name not in self.by_name:
