@@ -427,3 +427,39 @@ def test_the_can_log_has_every_frame_on_its_grid_with_the_encoders_bytes(tmp_pat
         got = {i: d for _, i, d in frames}
         for msg, sig, name, _ in SENSORS:
             assert got[db.get_message_by_name(msg).frame_id] == sensor_frame(db, msg, sig, s[name], k)
+
+
+def test_with_wire_time_the_ecu_works_one_cycle_later():
+    """with wire time the frames of tick k (sent at t_k, on the wire 0.2-1.1 ms) reach the ECU
+    after its tick k: it samples them at tick k + 1. So its outputs are those of the FMI 2.0
+    ECU fed the frames of tick k - 1 at tick k, and nothing before the first frame (the node
+    starts from its start values, as the FMI 2.0 ECU initialised without inputs)"""
+    db = cantools.database.load_file(str(DBC), strict=True)
+    n = 100
+    rows, _ = run(bus={}, t_stop=n * TS)
+    path = fmu_dir() / "SteeringECU.fmu"
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = extract(str(path))
+    f = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="SteeringECU", instanceName="late")
+    f.instantiate()
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    f.setInteger([vr["module"]], [1])
+    f.exitInitializationMode()
+    want = []
+    for k in range(n):
+        s, v = signals(k * TS)
+        got = dict(quantized(db, signals((k - 1) * TS)[0], k - 1) if k >= 1 else {}, v=v)
+        f.setReal([vr[x] for x in got], list(got.values()))
+        f.doStep(k * TS, TS)
+        want.append(f.getReal([vr[x] for x in OUTS]))
+    f.terminate()
+    f.freeInstance()
+    n_out = OUTS.index("gamma1")                     # the outputs, then the received inputs
+    assert [r[:n_out] for r in rows] == [w[:n_out] for w in want]
+    assert max(abs(r[0]) for r in rows) > 1e-3       # it steers
+    # the received inputs it shows at t_(k+1) are tick k's: they arrived within the cycle
+    for k, r in enumerate(rows):
+        q = quantized(db, signals(k * TS)[0], k)
+        assert r[n_out:] == [q[x] for x in OUTS[n_out:]], k
