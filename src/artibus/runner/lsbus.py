@@ -7,7 +7,8 @@ What it does, with the sections it follows:
 
 - the nodes' time-based Tx clocks (``intervalVariability`` constant or fixed, periodic with the
   description's ``intervalDecimal`` and ``shiftDecimal``) are the master's clock sources: they
-  tick at t0 + shift + k * interval (FMI 3.0.2, 2.4.7.4 "Time-based Clocks"; fmi-ls-bus v1.0.0
+  tick at t0 + shift + k * interval (FMI 3.0.2 docs/2_2_common_mechanisms.adoc, Clocks: periodic
+  time-based input clocks, set by the importer in Event Mode; fmi-ls-bus v1.0.0
   docs/4____network_abstraction.adoc, "Time-based Tx Clocks");
 - the bus simulation FMU's countdown Tx clocks are read with fmi3GetIntervalDecimal after each
   fmi3UpdateDiscreteStates (qualifier changed: a tick at t + interval), and an
@@ -39,6 +40,9 @@ The order within an instant (one Event Mode per FMU and instant where it can):
 With the bus's wire time off a node thus receives the frames of its instant after its own Tx
 tick, in a second Event Mode at the same time; its next step sees the same inputs as in the
 direct composition. Only its very first Tx (at t0) is built before its first frames arrive.
+
+``Network.wire_frames`` lists each CAN frame once, at its delivery; ``write_can_log`` writes them
+to .blf/.asc with python-can, as the Real-wired benches' --can-log does.
 """
 import ctypes
 import math
@@ -54,7 +58,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
-CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2, 2.2.9.1)
+CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2 headers, fmi3FunctionTypes.h)
 EPS = 1e-9           # s: two times this close are one instant
 MAX_ITERATIONS = 100  # event iterations per Event Mode before giving up
 NETWORK_TERMINAL = "org.fmi-ls-bus.network-terminal"
