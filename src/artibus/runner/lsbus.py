@@ -253,7 +253,8 @@ class Fmu:
         if not vrs:
             return
         if self.mode == "step":
-            raise LsBusError(f"FMU {self.name}: fmi3SetClock in Step Mode (clocks tick in Event Mode, FMI 3.0.2, 5.2.2)")
+            raise LsBusError(f"FMU {self.name}: fmi3SetClock in Step Mode (clocks tick in Event Mode, "
+                             "FMI 3.0.2, 5.2.2)")
         if self.mode == "updated" and not self.need:
             names = [v.name for v in self.md.modelVariables if v.valueReference in vrs]
             raise LsBusError(f"FMU {self.name}: fmi3SetClock({', '.join(names)}) after fmi3UpdateDiscreteStates, "
