@@ -463,3 +463,17 @@ def test_with_wire_time_the_ecu_works_one_cycle_later():
     for k, r in enumerate(rows):
         q = quantized(db, signals(k * TS)[0], k)
         assert r[n_out:] == [q[x] for x in OUTS[n_out:]], k
+
+
+def test_the_tx_ticks_are_the_periods_multiples():
+    """t0 + k * 10 ms, none skipped or doubled, from any time between them"""
+    with network() as net:
+        (term,) = net.by_name["ecu"].terminals.values()
+        assert term.period == TS and term.shift == 0.0          # intervalDecimal="0.01" of the description
+        for k in range(0, 1000, 7):
+            tk = k * TS
+            assert term.ticks_at(0.0, tk) and not term.ticks_at(0.0, tk + 1e-6)
+            for t in (tk - 5e-10, tk, tk + 5e-10):              # the instant t_k itself, within EPS = 1 ns
+                assert term.next_tick(0.0, t) == (k + 1) * TS
+            if k:
+                assert term.next_tick(0.0, tk - 5e-9) == tk     # 5 ns before it: another instant

@@ -138,8 +138,9 @@ class Terminal:
         self.tx_name = tx.name
 
     def next_tick(self, t0, t):
-        """the first tick of a periodic Tx clock after t (ticks at t0 + shift + k period)"""
-        k = math.floor((t - t0 - self.shift) / self.period + 1e-6) + 1
+        """the first tick of a periodic Tx clock after the instant t, i.e. later than t + EPS
+        (ticks at t0 + shift + k period), the same instants as ticks_at"""
+        k = math.floor((t + EPS - t0 - self.shift) / self.period) + 1
         return t0 + self.shift + max(k, 0) * self.period
 
     def ticks_at(self, t0, t):
