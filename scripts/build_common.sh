@@ -77,14 +77,15 @@ cross_build() {
   local inst="$1/sundials-install" targets
   ARTIBUS_SUNDIALS_JOBS="$jobs" CACHE_CC="$cc" bash scripts/build_sundials.sh "$dir" \
     -DCMAKE_TOOLCHAIN_FILE="$toolchain"
-  if [ ! -f "$dir/CMakeCache.txt" ]; then
-    quiet cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
-      -DCMAKE_BUILD_TYPE=Release -DCMAKE_FIND_ROOT_PATH="$inst" \
-      -DSUNDIALS_DIR="$inst/lib/cmake/sundials" \
-      -DEIGEN3_INCLUDE_DIR=/usr/include/eigen3   # Debian's libeigen3-dev (header-only)
-  fi
+  # configured every time (quick with its cache): the targets named below must exist even
+  # when CMakeLists.txt gained an FMU since this folder was configured
+  quiet cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_FIND_ROOT_PATH="$inst" \
+    -DSUNDIALS_DIR="$inst/lib/cmake/sundials" \
+    -DEIGEN3_INCLUDE_DIR=/usr/include/eigen3   # Debian's libeigen3-dev (header-only)
   # only the FMUs and their importers (each fmu_check_<Name> needs its <Name>)
-  targets="$(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p' CMakeLists.txt)"
+  # (an FMI-LS-BUS node, add_fmu(<Name> LSBUS ...), is FMI 3.0 only: no fmu_check_<Name>)
+  targets="$(grep -v '^add_fmu([A-Za-z0-9_]* LSBUS' CMakeLists.txt | sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p')"
   if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$dir/CMakeCache.txt"; then   # and the FMI 3.0 builds: <platform>/fmi3/
     targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
     targets="$targets CanBus_fmi3"   # FMI 3.0 only, not an add_fmu (CMakeLists.txt, issue 24)
