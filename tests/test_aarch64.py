@@ -32,7 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 ARM = Path(os.environ.get("ARTIBUS_AARCH64_BUILD", ROOT / "build-aarch64"))
 NATIVE = Path(os.environ.get("ARTIBUS_BUILD", ROOT / "build"))
 FMU_DIR = fmu_dir()
-NAMES = re.findall(r"^add_fmu\((\w+)", (ROOT / "CMakeLists.txt").read_text(), re.M)
+# the FMUs built in FMI 2.0 (add_fmu(<Name> LSBUS ...): an FMI-LS-BUS node, FMI 3.0 only, no fmu_check)
+NAMES = re.findall(r"^add_fmu\((\w+)\s+(?!LSBUS\b)", (ROOT / "CMakeLists.txt").read_text(), re.M)
 SYSROOT = "/usr/aarch64-linux-gnu"       # Debian's libc6-arm64-cross
 
 FMI2_FUNCTIONS = set(re.findall(r"FMI2_Export\s+\w+TYPE\s+(fmi2\w+);",

@@ -314,7 +314,7 @@ def _yaml(tmp_path, text):
     (dict(grid={"Drivr.vSet": "1,2"}), ["Drivr.vSet", "no component 'Drivr'"]),
     (dict(grid={"Driver.vSpeed": "1,2"}), ["Driver.vSpeed", "no parameter or input"]),
     (dict(grid={"Driver.vSet": "1,fast"}), ["Driver.vSet", "'fast'", "not a Real"]),
-    (dict(grid={"Driver.road": "1,2.5"}), ["Driver.road", "2.5", "not an Integer"]),
+    (dict(grid={"Driver.road": "1,2.5"}), ["Driver.road", "2.5", "not an Enumeration value"]),
     (dict(grid={"Driver.vSet": "1:2"}), ["1:2", "malformed range"]),
     (dict(grid={"Driver.vSet": "5:1:1"}), ["5:1:1", "malformed range"]),
     (dict(grid={"Driver.vSet": "1:5:0"}), ["1:5:0", "malformed range"]),

@@ -86,7 +86,7 @@ def test_heavy_rear_rebinds_the_vehicle_for_plant_and_controller():
     the controller its m2, f2, b2 through the same mapping; nothing else
     changes, and variants named before it keep their values."""
     o = ssp.variant_overrides("Scania18m_Damping", ["option1", "heavyRear"])
-    assert o["Controller.option"] == 1
+    assert o["Controller.option"] == "angleError"     # option 1: the variant names its item (ssv:Enumeration)
     assert o["Bus.m[2]"] == 10131.0 and o["Bus.lHr[1]"] == 5.107 and o["Bus.xA[3]"] == 0.167
     assert o["Controller.m2"] == 10131.0 and o["Controller.f2"] == 5.107 and o["Controller.b2"] == -0.167
     assert o["Bus.FzFromMasses"] is False
