@@ -29,6 +29,8 @@ from conftest import packer_inputs
 
 ROOT = Path(__file__).resolve().parents[1]
 NAMES = re.findall(r"^add_fmu\((\w+)", (ROOT / "CMakeLists.txt").read_text(), re.M)
+# and the FMI 3.0-only ones: the LS-BUS nodes are add_fmu(<Name> LSBUS ...) above; the bus simulation
+NAMES += ["CanBus"]
 PAPERS = {k: v for k, v in json.loads((ROOT / "src/models/papers.json").read_text(encoding="utf-8")).items()
           if not k.startswith("_")}
 REPO_PATH = re.compile(r"(?<![\w/.])(?:src|ssp|tests|scripts|docs|modelDescription|benchmarks|build[\w-]*|fmus|"
@@ -36,7 +38,10 @@ REPO_PATH = re.compile(r"(?<![\w/.])(?:src|ssp|tests|scripts|docs|modelDescripti
 
 
 def fmu(name):
+    """The FMI 2.0 build, or for an FMU built in FMI 3.0 only (the LS-BUS ones) that one."""
     p = fmu_dir() / f"{name}.fmu"
+    if not p.is_file() and (fmu_dir() / "fmi3" / f"{name}.fmu").is_file():
+        p = fmu_dir() / "fmi3" / f"{name}.fmu"
     if not p.is_file():
         pytest.skip(f"{p} not built (scripts/setup.sh)")
     return p
@@ -67,7 +72,10 @@ def test_no_labels_issues_or_repository_paths(name):
 def test_papers_cited_in_full(name):
     html = page(name)
     readme = (ROOT / "src/models" / name / "README.md").read_text(encoding="utf-8")
-    xml = (ROOT / "modelDescription" / f"{name}.xml").read_text(encoding="utf-8")
+    xml = next(p for p in (ROOT / "modelDescription" / f"{name}.xml",          # FMI 2.0 (and 3.0)
+                           ROOT / "modelDescription" / "lsbus" / f"{name}.xml",  # an LS-BUS node
+                           ROOT / "modelDescription" / "fmi3" / f"{name}.xml")   # FMI 3.0 only
+               if p.is_file()).read_text(encoding="utf-8")
     cited = set(re.findall(r"\b[Ss]eeds? (\d{3})\b", readme + xml)) & set(PAPERS)
     listed = re.findall(r'<li id="ref-(\d{3})"', html)
     assert sorted(listed) == sorted(cited), f"{name}: references {listed}, the texts cite {sorted(cited)}"
@@ -106,7 +114,7 @@ def test_runtime_licences(name):
         html = z.read("documentation/index.html").decode("utf-8")
     lic = "documentation/licenses/"
     assert lic + "GCC-runtime-library-exception-3.1.txt" in names
-    win64 = f"binaries/win64/{name}.dll" in names
+    win64 = f"binaries/win64/{name}.dll" in names or f"binaries/x86_64-windows/{name}.dll" in names
     assert (lic + "mingw-w64-runtime.txt" in names) == win64, f"{name}: the mingw-w64 notice iff win64"
     assert ('href="licenses/mingw-w64-runtime.txt"' in html) == win64
     text = (ROOT / "licenses/GCC-runtime-library-exception-3.1.txt").read_text()

@@ -600,6 +600,7 @@ SEED_RE = re.compile(r"\b[Ss]eeds? (\d{3})\b")
 #: outside the repository has (the names of artibus's benches and parameter sets)
 PATH_RULES = (
     (re.compile(r"\.venv/bin/(\w+)"), r"\1"),
+    (re.compile(r"\bfmus/fmi3/(\w+\.fmu)"), r"\1"),
     (re.compile(r"\bfmus/(\w+\.fmu)"), r"\1"),
     (re.compile(r"`ssp/parameters/(\w+\.ssv)`"), r"artibus's parameter set `\1`"),
     (re.compile(r"`ssp/benches/(\w+)`"), r"artibus's bench `\1`"),
@@ -843,7 +844,7 @@ def main(argv=None):
     if uses_eigen(root, files):
         libraries.append("Eigen")
     libraries.append("GCC")
-    if "win64" in platforms:
+    if "win64" in platforms or "x86_64-windows" in platforms:   # FMI 2.0's folder, FMI 3.0's tuple
         libraries.append("mingw-w64")
     why_not = needs_beyond_libc(files, system)
 

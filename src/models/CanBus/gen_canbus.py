@@ -26,6 +26,8 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
+ROOT = Path(__file__).resolve().parents[3]     # the repository
+
 MIME = 'application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0"'
 MEMBERS = {"Rx_Data": ("Binary", 1), "Tx_Data": ("Binary", 2), "Rx_Clock": ("Clock", 3),
            "Tx_Clock": ("Clock", 4), "BusNotifications": ("Boolean", 5)}
@@ -143,8 +145,46 @@ def pack(xml, binaries, readme, out):
             z.write(f, f"binaries/{platform}/CanBus{Path(f).suffix}")
         z.writestr("terminalsAndIcons/terminalsAndIcons.xml", terminals(xml))
         z.writestr("extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml", MANIFEST)
-        if readme and Path(readme).is_file():
-            z.write(readme, "documentation/README.md")
+        for name, text in documentation(xml, readme, [p for p, _ in binaries]).items():
+            z.writestr(f"documentation/{name}", text)
+
+
+def documentation(xml, readme, platforms):
+    """documentation/: index.html (the model's text rendered as the other FMUs' pages are,
+    for a reader of the FMU alone: its section on how it is built left out, no repository
+    paths; the variables; the licences) and licenses/, as src/fmi/package_fmu.py writes them:
+    artibus's licence, GCC's runtime exception, the mingw-w64 runtime's notice with a win64 DLL."""
+    import html
+    sys.path.insert(0, str(ROOT / "src" / "fmi"))
+    import package_fmu as pf
+    text = Path(readme).read_text(encoding="utf-8") if readme and Path(readme).is_file() else ""
+    text = re.split(r"^## How it is built\s*$", text, flags=re.M)[0]
+    text = text.replace("by `src/fmi/lsbus_can.c`, which the network FMUs share", "by the same C code as in "
+                        "artibus's FMI-LS-BUS network FMUs")
+    text = pf.for_outside(text, {}, {})
+    if pf.REPO_PATH_RE.search(text):
+        raise DeclarationError(f"{readme}: a repository path in the FMU's documentation: "
+                               f"{pf.REPO_PATH_RE.search(text).group(0)!r}")
+    libraries = ["artibus", "GCC"] + (["mingw-w64"] if "x86_64-windows" in platforms else [])
+    out = {}
+    lic = []
+    for lib in libraries:
+        src, fname = pf.LICENSE_FILES[lib]
+        out[f"licenses/{fname}"] = (ROOT / src).read_text(encoding="utf-8")
+        lic.append(f'<li><a href="licenses/{fname}">{fname}</a>: {html.escape(pf.LICENSE_TEXT[lib])}</li>')
+    rows = "".join(
+        f"<tr><td><code>{html.escape(v.get('name'))}</code></td><td>{v.tag}</td>"
+        f"<td>{html.escape(v.get('causality', 'local'))}</td><td>{html.escape(v.get('start', ''))}</td>"
+        f"<td>{html.escape(v.get('description', ''))}</td></tr>"
+        for v in ET.parse(xml).getroot().find("ModelVariables"))
+    out["index.html"] = (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>CanBus</title></head><body>\n'
+        + pf.markdown(text)
+        + f"\n<h2>Platforms</h2><p>{html.escape(', '.join(sorted(platforms)))}</p>"
+        + "\n<h2>Licences</h2><p>What this FMU contains and under which licence:</p><ul>" + "".join(lic) + "</ul>"
+        + "\n<h2>Variables</h2><table><tr><th>name</th><th>type</th><th>causality</th><th>start</th>"
+          "<th>description</th></tr>" + rows + "</table>\n</body></html>\n")
+    return out
 
 
 def main(argv):
