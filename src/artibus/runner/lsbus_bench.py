@@ -1,7 +1,8 @@
 """A bench whose steering network runs as FMI-LS-BUS 1.0 FMUs (issue 24): the plant stays
 the runner's FMI 2.0 components, the network is an artibus.runner.lsbus.Network ticked once
 per network period by the runner, through the interface of artibus.can.network.Network
-(start, tick, finish, settle, since_series, close) in the Python loop of Simulation._run.
+(start, tick, finish, settle, since_series, close) in the Python loop of Simulation._run;
+Simulation attaches it to every bench with the annotation below.
 
 The bench's System names the network in an ``org.artibus.lsbus`` annotation::
 
@@ -124,13 +125,20 @@ class LsBusSteering:
         if abs(r - round(r)) > 1e-9 or round(r) < 1:
             raise ArtibusError(f"{self.ssd}: the LS-BUS period {self.period} s is not a multiple of the base step "
                                f"{sim.base_step} s")
+        if sim.can is not None:
+            raise ArtibusError(f"{self.ssd}: a bench with both an org.artibus.can and an {ANNOTATION} network")
         sim.can, sim.can_ratio = self, int(round(r))
 
     # -- the runner's CAN-network interface (artibus.can.network.Network)
     def settle(self):
         """the initialisation's rounds: the nodes initialise in their own Initialization Mode"""
 
+    def core_support(self):
+        """why the C stepping core does not run this bench (artibus.runner.core._core_stepper)"""
+        return "an FMI-LS-BUS network (its master, artibus.runner.lsbus, runs in Python)"
+
     def start(self, t0):
+        self.close()
         self.net = Network(self.nodes, bus=(self.bus_path, {"nNodes": len(self.nodes), "wireTime": self.wire_time}),
                            start_time=t0)
 
@@ -156,19 +164,11 @@ class LsBusSteering:
 
 
 def run(ssp="Bus36m_Circle_LSBUS", wire_time=None, stop_time=None, record=None):
-    """run a bench with an org.artibus.lsbus network (the Python loop); returns the Result
-    and the network's event-mode entries and frames"""
-    from artibus.bench import ssp as ssp_mod
+    """run a bench with an org.artibus.lsbus network; returns the Result, each FMU's Event
+    Mode entries and the number of CAN frames on the wire"""
     from artibus.runner.simulation import Simulation
-    from artibus.runner.simulation import _read_bench
-    bench = _read_bench(ssp_mod.ssp_path(ssp, None))
-    steering = LsBusSteering(bench.file, wire_time)
-    with Simulation(ssp, stimuli=steering.stimuli(), record=record) as sim:
-        steering.bind(sim)
-        try:
-            result = sim.run(stop_time=stop_time, core=False)
-            events = {f.name: f.n_events for f in steering.net.nodes + [steering.net.bus]}
-            frames = len(steering.net.wire_frames())
-        finally:
-            steering.close()
-    return result, events, frames
+    with Simulation(ssp, record=record, lsbus_wire_time=wire_time) as sim:
+        result = sim.run(stop_time=stop_time)
+        net = sim.can.net
+        events = {f.name: f.n_events for f in net.nodes + [net.bus]}
+        return result, events, len(net.wire_frames())

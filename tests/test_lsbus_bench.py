@@ -1,0 +1,80 @@
+"""Bus36m_Circle_LSBUS (issue 24): the network of Bus36m_Circle_CAN as FMI-LS-BUS FMUs on CanBus,
+ticked by the runner (artibus.runner.lsbus_bench).
+
+What is expected comes from elsewhere, computed here: the Real-wired bench Bus36m_Circle_CAN,
+run by the runner with its own CAN model (artibus.can.network: the DBC's encoding, E2E CRC,
+alive counter, the frames of the senders' outputs of the step before delivered before the
+receivers step). With CanBus's wireTime off the LS-BUS nodes get the same bytes at the same
+instants (tests/test_lsbus_runner.py checks the nodes against the FMI 2.0 ECUs), so the plant
+must follow the same trajectory: KPIs and signals within 1e-9 relative. With wire time on each
+frame arrives after its bits on the wire, after the receivers' Tx tick: one cycle (10 ms) later
+(docs/guide/can.md, the LS-BUS section); its figures are printed, not graded.
+"""
+import math
+import time
+
+import numpy as np
+import pytest
+
+from artibus import fmu_dir
+from artibus.bench import script
+from artibus.runner.lsbus_bench import run as run_lsbus
+from artibus.runner.simulation import run as run_bench
+
+pytestmark = pytest.mark.slow
+SIGNALS = ("Bus.FjointY[1]", "Bus.FjointY[2]", "Bus.xAxle[4]", "Bus.yAxle[4]", "Bus.xAxle[6]", "Bus.yAxle[6]",
+           "Driver.delta", "Driver.s")
+
+
+def needs(*names):
+    for n in names:
+        if not (fmu_dir() / "fmi3" / f"{n}.fmu").is_file():
+            pytest.skip(f"{fmu_dir() / 'fmi3' / n}.fmu not built")
+
+
+@pytest.fixture(scope="module")
+def runs():
+    needs("CanBus", "SteeringECU_LSBUS", "SteeringActuator_LSBUS", "SteeringSensors_LSBUS")
+    w = time.perf_counter()
+    ref = run_bench("Bus36m_Circle_CAN")
+    w_ref = time.perf_counter() - w
+    w = time.perf_counter()
+    off, events, frames = run_lsbus("Bus36m_Circle_LSBUS", wire_time=False)
+    w_off = time.perf_counter() - w
+    on, _, _ = run_lsbus("Bus36m_Circle_LSBUS", wire_time=True)
+    print(f"\nwall: Bus36m_Circle_CAN {w_ref:.1f} s, Bus36m_Circle_LSBUS {w_off:.1f} s (70 s simulated); "
+          f"Event Mode entries {events}; {frames} frames on the wire")
+    return ref, off, on, events
+
+
+def kpis(r):
+    return {k.name: k.value for k in script.load("Bus36m_Circle_LSBUS").kpis(r)}
+
+
+def test_wire_time_off_the_kpis_equal_bus36m_circle_can(runs):
+    ref, off, _, _ = runs
+    # the comparison means something: the ECUs steer modules 2 and 3 in the reference
+    assert np.max(np.abs(ref["Act2.delta[1]"])) > 0.05 and np.max(np.abs(ref["Act3.delta[2]"])) > 0.05
+    assert len(off.time) == len(ref.time) and off.time[-1] == pytest.approx(70.0)
+    for n in SIGNALS:
+        assert np.allclose(off[n], ref[n], rtol=1e-9, atol=1e-9 * np.max(np.abs(ref[n]))), n
+    k_ref, k_off = kpis(ref), kpis(off)
+    assert set(k_ref) == set(k_off)
+    for name in ("max deviation of A4 from the A2 trace", "max deviation of A6 from the A2 trace"):
+        assert name in k_ref
+    for name, v in k_ref.items():
+        if isinstance(v, float) and math.isfinite(v):
+            assert k_off[name] == pytest.approx(v, rel=1e-9, abs=1e-300), name
+
+
+def test_wire_time_on_the_figures_with_one_cycle_of_latency(runs):
+    ref, off, on, _ = runs
+    k_off, k_on = kpis(off), kpis(on)
+    print("\nKPI (wire time off = Bus36m_Circle_CAN | wire time on, one cycle later):")
+    for name, v in k_off.items():
+        if isinstance(v, float):
+            print(f"  {name}: {v:.6g} | {k_on[name]:.6g} ({k_on[name] - v:+.3g})")
+    # the wire time does reach the plant (the frames come a cycle later); the figures are shown,
+    # not graded (the issue's acceptance: "within the stated latency effect")
+    assert not np.array_equal(on["Bus.FjointY[1]"], off["Bus.FjointY[1]"])
+    assert all(math.isfinite(v) for v in k_on.values() if isinstance(v, float))
