@@ -113,7 +113,8 @@ def _sources(bench, fmi=None):
         if ref is None or not ref.startswith("resources/"):
             continue
         name = ref[len("resources/"):]
-        if fmi is not None and name.endswith(".fmu"):
+        # (fmi picks the components' builds; an org.artibus.lsbus network names its FMI 3.0 nodes itself)
+        if fmi is not None and name.endswith(".fmu") and etree.QName(el).localname == "Component":
             files[ref] = build_of(ref, fmi, f"{ssd_file}:{el.sourceline}: <{etree.QName(el).localname}>")
             continue
         candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name,

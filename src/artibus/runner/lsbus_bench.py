@@ -6,15 +6,16 @@ Simulation attaches it to every bench with the annotation below.
 
 The bench's System names the network in an ``org.artibus.lsbus`` annotation::
 
-    <LsBus xmlns="urn:artibus" period="0.01" bus="resources/fmi3/CanBus.fmu" wireTime="false">
+    <LsBus xmlns="urn:artibus" period="0.01" wireTime="false">
+      <Bus source="resources/fmi3/CanBus.fmu"/>
       <Node name="ECU1" source="resources/fmi3/SteeringECU_LSBUS.fmu"><Parameter name="module" value="1"/></Node>
       <Input node="ECU1" variable="vVehicle" from="Bus.vx[1]"/>
       <Output node="Act1" variable="delta[2]" to="Bus.delta[2]"/>
     </LsBus>
 
 Nodes in the order of their instant (artibus.runner.lsbus), the k-th node on the bus's k-th
-terminal (nNodes = the number of nodes). Sources are looked up in the FMI 3.0 builds
-(fmus/fmi3/<Name>.fmu, artibus.fmu_dir). What each tick k at time t does, as the Real-wired
+terminal (nNodes = the number of nodes). The sources are packed in the .ssp (artibus pack
+packs every ``source``) and run from its unpacked copy. What each tick k at time t does, as the Real-wired
 bench's CAN tick (artibus.can.network: the frames from the senders' outputs of the step
 before, delivered before the receivers step):
 
@@ -28,10 +29,8 @@ Not yet: the nodes as SSP 2.0 components (ssc:Binary, ssc:Clock connectors, each
 as its four connections); the C stepping core (the run takes the Python loop).
 """
 import xml.etree.ElementTree as ET
-import zipfile
 from pathlib import Path
 
-from artibus import fmu_dir
 from artibus.base import ArtibusError
 from artibus.runner.lsbus import Network
 
@@ -39,28 +38,23 @@ ANNOTATION = "org.artibus.lsbus"
 NS = "{urn:artibus}"
 
 
-def read_spec(ssd):
-    """the LsBus element of the System's org.artibus.lsbus annotation, or None"""
-    ssp = Path(ssd).parent
-    if ssp.suffix == ".ssp" and ssp.is_file():           # the .ssd inside its pack
-        with zipfile.ZipFile(ssp) as z:
-            root = ET.fromstring(z.read(Path(ssd).name))
-    else:
-        root = ET.parse(ssd).getroot()
+def read_spec(path, label=None):
+    """the LsBus element of the System's org.artibus.lsbus annotation in the .ssd at path
+    (label: how messages name it), or None"""
+    root = ET.parse(path).getroot()
     for a in root.iter("{http://ssp-standard.org/SSP1/SystemStructureCommon}Annotation"):
         if a.get("type") == ANNOTATION:
             el = a.find(f"{NS}LsBus")
             if el is None:
-                raise ArtibusError(f"{ssd}: annotation {ANNOTATION} without an <LsBus xmlns=\"urn:artibus\">")
+                raise ArtibusError(f"{label or path}: annotation {ANNOTATION} without an <LsBus xmlns=\"urn:artibus\">")
             return el
     return None
 
 
-def _fmu(ssd, source):
-    name = source.rpartition("/")[2]
-    path = fmu_dir() / "fmi3" / name
-    if not source.startswith("resources/fmi3/") or not path.is_file():
-        raise ArtibusError(f"{ssd}: <LsBus> source=\"{source}\": no FMI 3.0 build {path}")
+def _fmu(ssd, root, source):
+    path = Path(root) / (source or "")
+    if not source or not path.is_file():
+        raise ArtibusError(f"{ssd}: <LsBus> source=\"{source}\": no such file in the .ssp")
     return path
 
 
@@ -74,8 +68,9 @@ def _number(text):
 class LsBusSteering:
     """The LS-BUS network of a bench, with the runner's CAN-network interface."""
 
-    def __init__(self, ssd, wire_time=None):
-        el = read_spec(ssd)
+    def __init__(self, ssd, root, wire_time=None):
+        """ssd: the .ssd (its label in messages, or inside its .ssp); root: the unpacked .ssp"""
+        el = read_spec(Path(root) / "SystemStructure.ssd", ssd)
         if el is None:
             raise ArtibusError(f"{ssd}: no {ANNOTATION} annotation naming an LS-BUS network")
         self.ssd = ssd
@@ -89,8 +84,9 @@ class LsBusSteering:
         self.nodes = {}
         for n in el.findall(f"{NS}Node"):
             params = {p.get("name"): _number(p.get("value")) for p in n.findall(f"{NS}Parameter")}
-            self.nodes[n.get("name")] = (_fmu(ssd, n.get("source")), params)
-        self.bus_path = _fmu(ssd, el.get("bus"))
+            self.nodes[n.get("name")] = (_fmu(ssd, root, n.get("source")), params)
+        bus = el.find(f"{NS}Bus")
+        self.bus_path = _fmu(ssd, root, bus.get("source") if bus is not None else None)
         self.inputs = [(i.get("node"), i.get("variable"), i.get("from")) for i in el.findall(f"{NS}Input")]
         self.outputs = [(o.get("node"), o.get("variable"), o.get("to")) for o in el.findall(f"{NS}Output")]
         for node, var, _ in self.inputs + self.outputs:

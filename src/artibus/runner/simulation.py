@@ -130,7 +130,7 @@ class Simulation(_Setup):
             # unpacked once per content and kept (artibus.cache), or into a temporary directory
             self._tmp, self._tmp_owned = cache.unpacked(self.ssp)
             from artibus.runner.lsbus_bench import LsBusSteering, read_spec
-            steering = LsBusSteering(where, lsbus_wire_time) if read_spec(where) is not None else None
+            steering = LsBusSteering(where, self._tmp, lsbus_wire_time) if read_spec(Path(self._tmp) / "SystemStructure.ssd", where) is not None else None
             if steering is not None:      # the network's outputs onto the plant's inputs
                 stimuli = {**steering.stimuli(), **(stimuli or {})}
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
