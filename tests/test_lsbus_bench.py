@@ -18,12 +18,20 @@ import pytest
 
 from artibus import fmu_dir
 from artibus.bench import script
-from artibus.runner.lsbus_bench import run as run_lsbus
-from artibus.runner.simulation import run as run_bench
+from artibus.runner.simulation import Simulation, run as run_bench
 
 pytestmark = pytest.mark.slow
 SIGNALS = ("Bus.FjointY[1]", "Bus.FjointY[2]", "Bus.xAxle[4]", "Bus.yAxle[4]", "Bus.xAxle[6]", "Bus.yAxle[6]",
            "Driver.delta", "Driver.s")
+
+
+def run_lsbus(bench, wire_time):
+    """the bench's Result, each FMU's Event Mode entries, the CAN frames on the wire"""
+    with Simulation(bench, lsbus_wire_time=wire_time) as sim:
+        result = sim.run()
+        assert sim.stepping.startswith("Python loop")
+        net = sim.can.net
+        return result, {f.name: f.n_events for f in net.nodes + [net.bus]}, len(net.wire_frames())
 
 
 def needs(*names):

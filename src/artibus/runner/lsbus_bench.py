@@ -97,6 +97,7 @@ class LsBusSteering:
         self.base = {}
         self.net = None
         self.ticks = 0
+        self.wall = 0.0        # (the CAN network's time in the C core's ticks: none here)
 
     def stimuli(self):
         """{"Comp.input": f(t)} for Simulation: the network's outputs onto the plant's inputs"""
@@ -158,13 +159,3 @@ class LsBusSteering:
             self.net.close()
             self.net = None
 
-
-def run(ssp="Bus36m_Circle_LSBUS", wire_time=None, stop_time=None, record=None):
-    """run a bench with an org.artibus.lsbus network; returns the Result, each FMU's Event
-    Mode entries and the number of CAN frames on the wire"""
-    from artibus.runner.simulation import Simulation
-    with Simulation(ssp, record=record, lsbus_wire_time=wire_time) as sim:
-        result = sim.run(stop_time=stop_time)
-        net = sim.can.net
-        events = {f.name: f.n_events for f in net.nodes + [net.bus]}
-        return result, events, len(net.wire_frames())
