@@ -151,6 +151,18 @@ class LsBusSteering:
     def finish(self):
         pass
 
+    def summary(self, duration):
+        """what the run's log prints of the network (artibus.report.runs), as the CAN network's summary"""
+        net = self.net
+        frames = net.wire_frames()
+        ids = {}
+        for _, can_id, _, _ in frames:
+            ids[can_id] = ids.get(can_id, 0) + 1
+        per_id = ", ".join(f"0x{i:03X} {n}" for i, n in sorted(ids.items()))
+        events = ", ".join(f"{f.name} {f.n_events}" for f in net.nodes + [net.bus])
+        return (f"FMI-LS-BUS ({self.bus_path.name}, wireTime {'on' if self.wire_time else 'off'}): {len(frames)} frames "
+                f"in {duration:g} s, bus load {100 * net.bus.get('busLoad'):.1f} % ({per_id}); Event Mode entries: {events}")
+
     def since_series(self):
         return {}
 
