@@ -32,7 +32,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from artibus.base import ArtibusError
-from artibus.runner.lsbus import Network
+from artibus.runner.lsbus import Network, write_can_log
 
 ANNOTATION = "org.artibus.lsbus"
 NS = "{urn:artibus}"
@@ -96,6 +96,7 @@ class LsBusSteering:
         self.value = {to: 0.0 for _, _, to in self.outputs}   # the plant inputs, as of the last tick
         self.base = {}
         self.net = None
+        self.log = None        # a .blf or .asc file for the frames on the wire (Simulation's can_log)
         self.ticks = 0
         self.wall = 0.0        # (the CAN network's time in the C core's ticks: none here)
 
@@ -149,7 +150,8 @@ class LsBusSteering:
             self.value[to] = self.net.by_name[node].get(var)
 
     def finish(self):
-        pass
+        if self.log is not None:
+            write_can_log(self.net.wire_frames(), self.log)
 
     def summary(self, duration):
         """what the run's log prints of the network (artibus.report.runs), as the CAN network's summary"""

@@ -131,8 +131,9 @@ class Simulation(_Setup):
             self._tmp, self._tmp_owned = cache.unpacked(self.ssp)
             from artibus.runner.lsbus_bench import LsBusSteering, read_spec
             steering = LsBusSteering(where, self._tmp, lsbus_wire_time) if read_spec(Path(self._tmp) / "SystemStructure.ssd", where) is not None else None
-            if steering is not None:      # the network's outputs onto the plant's inputs
+            if steering is not None:      # the network's outputs onto the plant's inputs; its frames' log
                 stimuli = {**steering.stimuli(), **(stimuli or {})}
+                steering.log, can_log = can_log, None
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
                         set(cut or ()))
             if steering is not None:
