@@ -163,7 +163,8 @@ class LsBusSteering:
         per_id = ", ".join(f"0x{i:03X} {n}" for i, n in sorted(ids.items()))
         events = ", ".join(f"{f.name} {f.n_events}" for f in net.nodes + [net.bus])
         return (f"FMI-LS-BUS ({self.bus_path.name}, wireTime {'on' if self.wire_time else 'off'}): {len(frames)} frames "
-                f"in {duration:g} s, bus load {100 * net.bus.get('busLoad'):.1f} % ({per_id}); Event Mode entries: {events}")
+                f"in {duration:g} s, bus load {100 * net.bus.get('busLoad'):.1f} % ({per_id}); Event Mode entries: {events}"
+                + (f"\n    log: {self.log}" if self.log is not None else ""))
 
     def since_series(self):
         return {}
