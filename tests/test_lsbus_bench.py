@@ -144,3 +144,22 @@ def test_the_can_log_has_the_can_bench_s_frames_byte_for_byte(tmp_path):
         # the alive counter k mod 16 in bits 8-11
         for i, data in got[k]:
             assert data[0] == e2e_crc(bytearray(data), data_id[i]) and data[1] & 0x0F == k % 16, (k, hex(i))
+
+
+def test_backwards_equals_bus36m_circle_can_backwards():
+    """driven backwards (the A6 end leads): the tractor ECU steers A1 and A2 from the driver's
+    A6 angle, the sensors send Act1's A1 angle; the same signals and KPIs as
+    Bus36m_Circle_CAN_Backwards within 1e-9"""
+    needs("CanBus", "SteeringECU_LSBUS", "SteeringActuator_LSBUS", "SteeringSensors_LSBUS")
+    ref = run_bench("Bus36m_Circle_CAN_Backwards")
+    got, _, _ = run_lsbus("Bus36m_Circle_LSBUS_Backwards", False)
+    assert np.max(np.abs(ref["Act1.delta[1]"])) > 0.05 and np.max(np.abs(ref["Act2.delta[1]"])) > 0.05
+    assert len(got.time) == len(ref.time)
+    for n in SIGNALS:
+        assert np.allclose(got[n], ref[n], rtol=1e-9, atol=1e-9 * np.max(np.abs(ref[n]))), n
+    k_ref = {k.name: k.value for k in script.load("Bus36m_Circle_LSBUS_Backwards").kpis(ref)}
+    k_got = {k.name: k.value for k in script.load("Bus36m_Circle_LSBUS_Backwards").kpis(got)}
+    assert k_ref.keys() == k_got.keys() and len(k_ref) >= 4
+    for name, v in k_ref.items():
+        if isinstance(v, float) and math.isfinite(v):
+            assert k_got[name] == pytest.approx(v, rel=1e-9, abs=1e-300), name

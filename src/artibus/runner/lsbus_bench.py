@@ -19,7 +19,7 @@ packs every ``source``) and run from its unpacked copy. What each tick k at time
 bench's CAN tick (artibus.can.network: the frames from the senders' outputs of the step
 before, delivered before the receivers step):
 
-1. the Inputs: the plant's outputs at t, set at the nodes' Tx ticks of t;
+1. the Inputs: the plant's outputs (or another node's) at t, set at the nodes' Tx ticks of t;
 2. the network's instant at t and its steps to t + period (lsbus.Network.advance);
 3. the Outputs: the nodes' outputs at t + period, fed to the plant's inputs (as stimuli on
    their start values) for its steps from t, as the Real-wired actuators' outputs reach
@@ -110,6 +110,9 @@ class LsBusSteering:
         self.src = []
         for node, var, frm in self.inputs:
             comp, _, name = frm.partition(".")
+            if comp in self.nodes:               # another node's output, as of the tick (read in tick)
+                self.src.append((node, var, comp, name))
+                continue
             if comp not in units or name not in units[comp].out_names:
                 raise ArtibusError(f"{self.ssd}: <LsBus> Input from=\"{frm}\": not an output of the bench's components")
             u = units[comp]
@@ -144,7 +147,7 @@ class LsBusSteering:
         self.ticks += 1
         values = {}
         for node, var, out, j in self.src:
-            values.setdefault(node, {})[var] = out[j]
+            values.setdefault(node, {})[var] = self.net.by_name[out].get(j) if isinstance(out, str) else out[j]
         self.net.advance(t + self.period, lambda _t: values)
         for node, var, to in self.outputs:
             self.value[to] = self.net.by_name[node].get(var)
