@@ -15,6 +15,7 @@ import pytest
 from artibus import ArtibusError, ROOT, fmu_path
 from artibus.bench import ssp
 from artibus.runner import Simulation, core_library_path
+from artibus.runner.lsbus_bench import read_spec
 
 from test_runner import L0, LEAD_FOLLOW, NS, QUIET, component, connection, make_ssp, nested_bench
 
@@ -50,7 +51,11 @@ def assert_bit_for_bit(a, b):
 
 # --- the benches ---------------------------------------------------------------------
 
-@pytest.mark.parametrize("bench", ssp.bench_names())
+#: the benches the core steps: not those with an FMI-LS-BUS network, whose master runs in Python
+#: (artibus.runner.lsbus_bench; tests/test_lsbus_bench.py)
+CORE_BENCHES = [b for b in ssp.bench_names() if read_spec(ssp.BENCH_DIR / b / "SystemStructure.ssd") is None]
+
+@pytest.mark.parametrize("bench", CORE_BENCHES)
 def test_every_bench_bit_for_bit(bench):
     """The CAN benches too: the core ticks their network (tests/test_can_core.py)."""
     core, python = both(bench)
@@ -248,7 +253,7 @@ def initialised(sim, core):
     return state
 
 
-@pytest.mark.parametrize("bench", ssp.bench_names())
+@pytest.mark.parametrize("bench", CORE_BENCHES)
 def test_initialisation_of_every_bench_bit_for_bit(bench):
     """Every unit's inputs, outputs and inputs last set after the rounds to the fixed
     point in the core (artibus_core_settle), the Python loop's, bit for bit."""

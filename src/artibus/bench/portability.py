@@ -46,6 +46,7 @@ APPLIED = {
 #: annotation types artibus reads (the others' content is not applied)
 ANNOTATIONS = {ANNOTATION: "per-component communication steps",
                CAN_ANNOTATION: "connections routed over CAN",
+               "org.artibus.lsbus": "an FMI-LS-BUS network of FMI 3.0 nodes (artibus.runner.lsbus_bench)",
                "org.artibus.variant": "a variant's stop time",
                "org.artibus.source": "where a value is from (documentation)"}
 #: attribute values the runner does not implement: (element, attribute) -> {value: why}, or a

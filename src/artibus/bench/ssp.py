@@ -113,7 +113,7 @@ def _sources(bench, fmi=None):
         if ref is None or not ref.startswith("resources/"):
             continue
         name = ref[len("resources/"):]
-        if fmi is not None and name.endswith(".fmu"):
+        if fmi is not None and name.endswith(".fmu") and etree.QName(el).localname == "Component":  # (LS-BUS: FMI 3)
             files[ref] = build_of(ref, fmi, f"{ssd_file}:{el.sourceline}: <{etree.QName(el).localname}>")
             continue
         candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name,

@@ -504,6 +504,35 @@ class Network:
             why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
             raise LsBusError(f"t = {self.t:.6f} s: {e}{why}") from None
 
+    def advance(self, t_end, inputs=None, outputs=None):
+        """the instant at the current time, then the steps to t_end (cut at the bus
+        communication points, each with its instant); t_end's own instant is left to the next
+        call (a master that ticks the network once per macro step, artibus.runner.lsbus_bench)"""
+        try:
+            everyone = self.nodes + ([self.bus] if self.bus else [])
+            while True:
+                self._instant(inputs)
+                t_next = self._next_point(t_end)
+                self._step_all(everyone, t_next)
+                self._record(outputs or {})
+                if self.t >= t_end - EPS:
+                    return self
+        except FMICallException as e:
+            said = [(f.name, m) for f in self.nodes + ([self.bus] if self.bus else []) for st, m in f.log if st >= 3]
+            why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
+            raise LsBusError(f"t = {self.t:.6f} s: {e}{why}") from None
+
+    def _step_all(self, everyone, t_next):
+        for f in everyone:
+            f.leave_event_mode()
+        for f in everyone:
+            event_needed, terminate, _, _ = f.fmu.doStep(self.t, t_next - self.t)
+            if terminate:
+                raise LsBusError(f"FMU {f.name} asked to terminate the simulation at t = {t_next}")
+            if f is self.bus and event_needed:
+                self.bus_flagged = True
+        self.t = t_next
+
     def _run(self, stop_time, inputs, outputs):
         outputs = outputs or {}
         for name in outputs:
@@ -514,16 +543,7 @@ class Network:
             self._instant(inputs)
             if self.t >= stop_time - EPS:
                 break
-            t_next = self._next_point(stop_time)
-            for f in everyone:
-                f.leave_event_mode()
-            for f in everyone:
-                event_needed, terminate, _, _ = f.fmu.doStep(self.t, t_next - self.t)
-                if terminate:
-                    raise LsBusError(f"FMU {f.name} asked to terminate the simulation at t = {t_next}")
-                if f is self.bus and event_needed:
-                    self.bus_flagged = True
-            self.t = t_next
+            self._step_all(everyone, self._next_point(stop_time))
             self._record(outputs)
         for f in everyone:
             f.leave_event_mode()

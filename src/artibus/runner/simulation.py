@@ -89,7 +89,8 @@ class Simulation(_Setup):
     """A bench, set up and ready to run (the set-up: artibus.runner.setup)."""
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
-                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False, fmi=None):
+                 stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False, fmi=None,
+                 lsbus_wire_time=None):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
         the start of each of the component's steps. cut: inputs ("comp.input")
@@ -108,7 +109,10 @@ class Simulation(_Setup):
         the bench. What the bench holds that the runner does not apply is
         printed as warnings, once (artibus.bench.portability). fmi: None (the
         builds the bench's .ssd names), "2" or "3" (every FMU's build of that
-        FMI version: a bench of ssp/benches by name, artibus.bench.ssp.ssp_path)."""
+        FMI version: a bench of ssp/benches by name, artibus.bench.ssp.ssp_path).
+        A bench with an org.artibus.lsbus annotation runs its FMI-LS-BUS network
+        (artibus.runner.lsbus_bench) in place of a CAN network; lsbus_wire_time:
+        its bus's wireTime (None: the annotation's)."""
         self.can = None
         self.single_rate = single_rate
         if algorithm not in ("gauss-seidel", "jacobi"):
@@ -125,8 +129,15 @@ class Simulation(_Setup):
         try:
             # unpacked once per content and kept (artibus.cache), or into a temporary directory
             self._tmp, self._tmp_owned = cache.unpacked(self.ssp)
+            from artibus.runner.lsbus_bench import LsBusSteering, read_spec
+            steering = LsBusSteering(where, self._tmp, lsbus_wire_time) if read_spec(Path(self._tmp) / "SystemStructure.ssd", where) is not None else None
+            if steering is not None:      # the network's outputs onto the plant's inputs; its frames' log
+                stimuli = {**steering.stimuli(), **(stimuli or {})}
+                steering.log, can_log = can_log, None
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
                         set(cut or ()))
+            if steering is not None:
+                steering.bind(self)
         except BaseException:
             self.close()
             raise

@@ -1,0 +1,179 @@
+"""A bench whose steering network runs as FMI-LS-BUS 1.0 FMUs (issue 24): the plant stays
+the runner's FMI 2.0 components, the network is an artibus.runner.lsbus.Network ticked once
+per network period by the runner, through the interface of artibus.can.network.Network
+(start, tick, finish, settle, since_series, close) in the Python loop of Simulation._run;
+Simulation attaches it to every bench with the annotation below.
+
+The bench's System names the network in an ``org.artibus.lsbus`` annotation::
+
+    <LsBus xmlns="urn:artibus" period="0.01" wireTime="false">
+      <Bus source="resources/fmi3/CanBus.fmu"/>
+      <Node name="ECU1" source="resources/fmi3/SteeringECU_LSBUS.fmu"><Parameter name="module" value="1"/></Node>
+      <Input node="ECU1" variable="vVehicle" from="Bus.vx[1]"/>
+      <Output node="Act1" variable="delta[2]" to="Bus.delta[2]"/>
+    </LsBus>
+
+Nodes in the order of their instant (artibus.runner.lsbus), the k-th node on the bus's k-th
+terminal (nNodes = the number of nodes). The sources are packed in the .ssp (artibus pack
+packs every ``source``) and run from its unpacked copy. What each tick k at time t does, as the Real-wired
+bench's CAN tick (artibus.can.network: the frames from the senders' outputs of the step
+before, delivered before the receivers step):
+
+1. the Inputs: the plant's outputs (or another node's) at t, set at the nodes' Tx ticks of t;
+2. the network's instant at t and its steps to t + period (lsbus.Network.advance);
+3. the Outputs: the nodes' outputs at t + period, fed to the plant's inputs (as stimuli on
+   their start values) for its steps from t, as the Real-wired actuators' outputs reach
+   the plant in the same macro step (Gauss-Seidel, the actuators before the plant).
+
+Not yet: the nodes as SSP 2.0 components (ssc:Binary, ssc:Clock connectors, each terminal
+as its four connections); the C stepping core (the run takes the Python loop).
+"""
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from artibus.base import ArtibusError
+from artibus.runner.lsbus import Network, write_can_log
+
+ANNOTATION = "org.artibus.lsbus"
+NS = "{urn:artibus}"
+
+
+def read_spec(path, label=None):
+    """the LsBus element of the System's org.artibus.lsbus annotation in the .ssd at path
+    (label: how messages name it), or None"""
+    root = ET.parse(path).getroot()
+    for a in root.iter("{http://ssp-standard.org/SSP1/SystemStructureCommon}Annotation"):
+        if a.get("type") == ANNOTATION:
+            el = a.find(f"{NS}LsBus")
+            if el is None:
+                raise ArtibusError(f"{label or path}: annotation {ANNOTATION} without an <LsBus xmlns=\"urn:artibus\">")
+            return el
+    return None
+
+
+def _fmu(ssd, root, source):
+    path = Path(root) / (source or "")
+    if not source or not path.is_file():
+        raise ArtibusError(f"{ssd}: <LsBus> source=\"{source}\": no such file in the .ssp")
+    return path
+
+
+def _number(text):
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
+
+
+class LsBusSteering:
+    """The LS-BUS network of a bench, with the runner's CAN-network interface."""
+
+    def __init__(self, ssd, root, wire_time=None):
+        """ssd: the .ssd (its label in messages, or inside its .ssp); root: the unpacked .ssp"""
+        el = read_spec(Path(root) / "SystemStructure.ssd", ssd)
+        if el is None:
+            raise ArtibusError(f"{ssd}: no {ANNOTATION} annotation naming an LS-BUS network")
+        self.ssd = ssd
+        try:
+            self.period = float(el.get("period"))
+        except (TypeError, ValueError):
+            self.period = float("nan")
+        if not self.period > 0:
+            raise ArtibusError(f"{ssd}: <LsBus period=\"{el.get('period')}\">: expected a time > 0 in s")
+        self.wire_time = (el.get("wireTime", "false") == "true") if wire_time is None else bool(wire_time)
+        self.nodes = {}
+        for n in el.findall(f"{NS}Node"):
+            params = {p.get("name"): _number(p.get("value")) for p in n.findall(f"{NS}Parameter")}
+            self.nodes[n.get("name")] = (_fmu(ssd, root, n.get("source")), params)
+        bus = el.find(f"{NS}Bus")
+        self.bus_path = _fmu(ssd, root, bus.get("source") if bus is not None else None)
+        self.inputs = [(i.get("node"), i.get("variable"), i.get("from")) for i in el.findall(f"{NS}Input")]
+        self.outputs = [(o.get("node"), o.get("variable"), o.get("to")) for o in el.findall(f"{NS}Output")]
+        for node, var, _ in self.inputs + self.outputs:
+            if node not in self.nodes:
+                raise ArtibusError(f"{ssd}: <LsBus> names node {node!r}, not one of its Nodes "
+                                   f"({', '.join(self.nodes)})")
+        self.value = {to: 0.0 for _, _, to in self.outputs}   # the plant inputs, as of the last tick
+        self.base = {}
+        self.net = None
+        self.log = None        # a .blf or .asc file for the frames on the wire (Simulation's can_log)
+        self.ticks = 0
+        self.wall = 0.0        # (the CAN network's time in the C core's ticks: none here)
+
+    def stimuli(self):
+        """{"Comp.input": f(t)} for Simulation: the network's outputs onto the plant's inputs"""
+        return {to: (lambda t, to=to: self.value[to] - self.base.get(to, 0.0)) for _, _, to in self.outputs}
+
+    def bind(self, sim):
+        """attach to a Simulation made with stimuli(): the plant's output buffers to read"""
+        units = {u.path: u for u in sim.units}
+        self.src = []
+        for node, var, frm in self.inputs:
+            comp, _, name = frm.partition(".")
+            if comp in self.nodes:               # another node's output, as of the tick (read in tick)
+                self.src.append((node, var, comp, name))
+                continue
+            if comp not in units or name not in units[comp].out_names:
+                raise ArtibusError(f"{self.ssd}: <LsBus> Input from=\"{frm}\": not an output of the bench's components")
+            u = units[comp]
+            self.src.append((node, var, u.raw.out, u.column(name)))
+        for u in sim.units:
+            for i, _, base in u.stimuli:
+                key = f"{u.path}.{u.in_names[i]}"
+                if key in self.value:
+                    self.base[key] = base or 0.0
+        r = self.period / sim.base_step
+        if abs(r - round(r)) > 1e-9 or round(r) < 1:
+            raise ArtibusError(f"{self.ssd}: the LS-BUS period {self.period} s is not a multiple of the base step "
+                               f"{sim.base_step} s")
+        if sim.can is not None:
+            raise ArtibusError(f"{self.ssd}: a bench with both an org.artibus.can and an {ANNOTATION} network")
+        sim.can, sim.can_ratio = self, int(round(r))
+
+    # -- the runner's CAN-network interface (artibus.can.network.Network)
+    def settle(self):
+        """the initialisation's rounds: the nodes initialise in their own Initialization Mode"""
+
+    def core_support(self):
+        """why the C stepping core does not run this bench (artibus.runner.core._core_stepper)"""
+        return "an FMI-LS-BUS network (its master, artibus.runner.lsbus, runs in Python)"
+
+    def start(self, t0):
+        self.close()
+        self.net = Network(self.nodes, bus=(self.bus_path, {"nNodes": len(self.nodes), "wireTime": self.wire_time}),
+                           start_time=t0)
+
+    def tick(self, k, t):
+        self.ticks += 1
+        values = {}
+        for node, var, out, j in self.src:
+            values.setdefault(node, {})[var] = self.net.by_name[out].get(j) if isinstance(out, str) else out[j]
+        self.net.advance(t + self.period, lambda _t: values)
+        for node, var, to in self.outputs:
+            self.value[to] = self.net.by_name[node].get(var)
+
+    def finish(self):
+        if self.log is not None:
+            write_can_log(self.net.wire_frames(), self.log)
+
+    def summary(self, duration):
+        """what the run's log prints of the network (artibus.report.runs), as the CAN network's summary"""
+        net = self.net
+        frames = net.wire_frames()
+        ids = {}
+        for _, can_id, _, _ in frames:
+            ids[can_id] = ids.get(can_id, 0) + 1
+        per_id = ", ".join(f"0x{i:03X} {n}" for i, n in sorted(ids.items()))
+        events = ", ".join(f"{f.name} {f.n_events}" for f in net.nodes + [net.bus])
+        return (f"FMI-LS-BUS ({self.bus_path.name}, wireTime {'on' if self.wire_time else 'off'}): {len(frames)} frames "
+                f"in {duration:g} s, bus load {100 * net.bus.get('busLoad'):.1f} % ({per_id}); Event Mode entries: {events}"
+                + (f"\n    log: {self.log}" if self.log is not None else ""))
+
+    def since_series(self):
+        return {}
+
+    def close(self):
+        if self.net is not None:
+            self.net.close()
+            self.net = None
+
