@@ -129,8 +129,14 @@ class Simulation(_Setup):
         try:
             # unpacked once per content and kept (artibus.cache), or into a temporary directory
             self._tmp, self._tmp_owned = cache.unpacked(self.ssp)
-            from artibus.runner.lsbus_bench import LsBusSteering, read_spec
-            steering = LsBusSteering(where, self._tmp, lsbus_wire_time) if read_spec(Path(self._tmp) / "SystemStructure.ssd", where) is not None else None
+            # a bench with an FMI-LS-BUS network (its annotation in the .ssd): only then its modules
+            # (FMPy's FMI 3.0 classes) and a second reading of the .ssd; every other run pays nothing
+            ssd = Path(self._tmp) / "SystemStructure.ssd"
+            steering = None
+            if b"org.artibus.lsbus" in ssd.read_bytes():
+                from artibus.runner.lsbus_bench import LsBusSteering, read_spec
+                if read_spec(ssd, where) is not None:
+                    steering = LsBusSteering(where, self._tmp, lsbus_wire_time)
             if steering is not None:      # the network's outputs onto the plant's inputs; its frames' log
                 stimuli = {**steering.stimuli(), **(stimuli or {})}
                 steering.log, can_log = can_log, None
