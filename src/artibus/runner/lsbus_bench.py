@@ -31,7 +31,7 @@ as its four connections); the C stepping core (the run takes the Python loop).
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from artibus.base import ArtibusError
+from artibus.base import ArtibusError, parse_integer, parse_real
 from artibus.runner.lsbus import Network, write_can_log
 
 ANNOTATION = "org.artibus.lsbus"
@@ -58,11 +58,18 @@ def _fmu(ssd, root, source):
     return path
 
 
-def _number(text):
+def _number(ssd, name, text):
+    """A <Parameter value=>: artibus.base's integer or decimal syntax (as everywhere else in the
+    runner), a clear error naming the file, parameter and value otherwise."""
     try:
-        return int(text)
+        return parse_integer(text)
     except ValueError:
-        return float(text)
+        pass
+    try:
+        return parse_real(text)
+    except ValueError:
+        raise ArtibusError(f"{ssd}: <LsBus> <Parameter name=\"{name}\" value=\"{text}\">: "
+                           "not a decimal number") from None
 
 
 class LsBusSteering:
@@ -83,7 +90,7 @@ class LsBusSteering:
         self.wire_time = (el.get("wireTime", "false") == "true") if wire_time is None else bool(wire_time)
         self.nodes = {}
         for n in el.findall(f"{NS}Node"):
-            params = {p.get("name"): _number(p.get("value")) for p in n.findall(f"{NS}Parameter")}
+            params = {p.get("name"): _number(ssd, p.get("name"), p.get("value")) for p in n.findall(f"{NS}Parameter")}
             self.nodes[n.get("name")] = (_fmu(ssd, root, n.get("source")), params)
         bus = el.find(f"{NS}Bus")
         self.bus_path = _fmu(ssd, root, bus.get("source") if bus is not None else None)
