@@ -142,3 +142,18 @@ def pytest_collection_modifyitems(config, items):
         if dropped:
             config.hook.pytest_deselected(items=dropped)
         items[:] = kept
+
+
+def fmu3(name):
+    """fmus/fmi3/<name>.fmu, the FMI 3.0 build (the LS-BUS FMUs have no other); skipped if not built."""
+    path = fmu_dir() / "fmi3" / f"{name}.fmu"
+    if not path.is_file():
+        pytest.skip(f"{path} not built")
+    return path
+
+
+@pytest.fixture(scope="module")
+def db():
+    """ssp/can/Bus36m.dbc as cantools reads it (strict), for the CAN frames' expected bytes."""
+    import cantools
+    return cantools.database.load_file(str(ROOT / "ssp" / "can" / "Bus36m.dbc"), strict=True)

@@ -8,7 +8,6 @@ import math
 import random
 from ctypes import CDLL, POINTER, c_double, c_int, c_ubyte, c_uint, c_uint8, c_uint32
 
-import cantools
 import pytest
 
 from artibus import ROOT
@@ -43,11 +42,6 @@ def lib():
     lib.bus36m_e2e_crc.argtypes = [POINTER(c_ubyte), c_int, c_uint8]
     lib.bus36m_e2e_crc.restype = c_uint8
     return lib
-
-
-@pytest.fixture(scope="module")
-def db():
-    return cantools.database.load_file(str(DBC), strict=True)
 
 
 def data_signals(m):

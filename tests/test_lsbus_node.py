@@ -26,24 +26,13 @@ from fmpy.validation import validate_fmu
 from artibus import ROOT, fmu_dir
 from artibus.can import e2e_crc
 from artibus.can.dbc import _conversion
+from conftest import fmu3
 
 DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
 NODES = ["SteeringECU_LSBUS", "SteeringActuator_LSBUS", "SteeringSensors_LSBUS"]
 TS = 0.01
 RAD_DEG, DEG_RAD = _conversion("rad", "deg", "test"), _conversion("deg", "rad", "test")
 MS_KMH, KMH_MS = _conversion("m/s", "km/h", "test"), _conversion("km/h", "m/s", "test")
-
-
-def fmu3(name):
-    path = fmu_dir() / "fmi3" / f"{name}.fmu"
-    if not path.is_file():
-        pytest.skip(f"{path} not built")
-    return path
-
-
-@pytest.fixture(scope="module")
-def db():
-    return cantools.database.load_file(str(DBC), strict=True)
 
 
 # ---- the operations, from the standard's tables ---------------------------------------

@@ -30,6 +30,7 @@ from artibus.can.dbc import _conversion
 from artibus.runner.lsbus import LsBusError, Network
 
 from test_canbus import wire_time
+from conftest import fmu3
 
 DBC = ROOT / "ssp" / "can" / "Bus36m.dbc"
 TS = 0.01
@@ -40,18 +41,6 @@ SENSORS = (("SensorA1_Angle", "RoadWheelAngleA1", "gamma1", "aliveA1"),
            ("SensorA6_Angle", "RoadWheelAngleA6", "gammaA6", "aliveA6"))
 OUTS = ("gammaFront", "gammaRear", "fallback", "stale", "fault", "gammaFrontCalc", "gammaRearCalc",
         "drivingDirection", "gamma1", "dPsi[1]", "dPsi[2]", "gammaA6")
-
-
-def fmu3(name):
-    path = fmu_dir() / "fmi3" / f"{name}.fmu"
-    if not path.is_file():
-        pytest.skip(f"{path} not built")
-    return path
-
-
-@pytest.fixture(scope="module")
-def db():
-    return cantools.database.load_file(str(DBC), strict=True)
 
 
 def signals(t):
