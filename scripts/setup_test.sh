@@ -49,6 +49,26 @@ if [ -x "$fmi_sim/bin/fmi-sim" ] && [ "$(readlink .tools/bin/fmi-sim 2>/dev/null
   ln -sfn "$fmi_sim/bin/fmi-sim" .tools/bin/fmi-sim
 fi
 
+# fmirs (tools/fmirs): a small command line on fmi-rs (crates.io), the engine of the
+# Modelica Association's importer fmusim, which itself is on no package registry
+# (docs/developer/fmi3.md, "fmusim"); tests/test_fmirs.py validates and simulates
+# every FMU with it. Built once per version of its sources into the cache, linked
+# as .tools/bin/fmirs; without cargo its tests say so and are skipped.
+fmirs_key="$(cat tools/fmirs/Cargo.toml tools/fmirs/Cargo.lock tools/fmirs/src/main.rs | sha256sum | cut -c1-12)"
+fmirs="$CACHE/fmirs-$fmirs_key"
+if [ ! -x "$fmirs/bin/fmirs" ] && command -v cargo >/dev/null 2>&1; then
+  echo "setup: building fmirs (fmi-rs 0.3.4 from crates.io) into $fmirs (about 3 minutes, once per machine)"
+  (
+    flock 9
+    [ -x "$fmirs/bin/fmirs" ] || cargo install -q --path tools/fmirs --locked --root "$fmirs" \
+      || echo "setup: fmirs could not be built; its tests will be skipped"
+  ) 9>"$fmirs.lock"
+fi
+if [ -x "$fmirs/bin/fmirs" ] && [ "$(readlink .tools/bin/fmirs 2>/dev/null)" != "$fmirs/bin/fmirs" ]; then
+  mkdir -p .tools/bin
+  ln -sfn "$fmirs/bin/fmirs" .tools/bin/fmirs
+fi
+
 # the Modelica Reference-FMUs (FMI 2.0), a test set of FMUs made by others
 # (tests/test_reference_fmus.py): built from their sources in the crate fmi-sys
 # (crates.io) once per machine into the cache, linked as .tools/reference-fmus/

@@ -223,6 +223,7 @@ def docs_root(tmp_path_factory):
     for name in (".venv", "fmus", "ssp", "scripts", "docs", "src", "modelDescription"):
         if (ROOT / name).exists():
             (d / name).symlink_to(ROOT / name)
+    (d / "out").mkdir()          # ./run.sh made it: a page run alone (-k) finds it as after the README's
     if not (ROOT / ".venv" / "bin" / "artibus").exists():
         pytest.skip("no .venv/bin/artibus: run ./run.sh first")
     return d

@@ -9,8 +9,8 @@ same model code and fmu_core.c as FMI 2.0).
 - Each FMU's default experiment run as FMI 3.0 equals its FMI 2.0 run within 1e-12
   relative on every output (the same model code: bit for bit is expected), in
   Co-Simulation (also with Event Mode, and with early return allowed) and, where
-  offered, Model Exchange: the four modes fmusim would run (fmusim itself cannot be
-  installed here: it is on none of the package registries, docs/developer/fmi3.md).
+  offered, Model Exchange: the four modes fmusim would run (fmusim's engine fmi-rs runs them too:
+  tests/test_fmirs.py).
 - FMU state: get, serialize, deserialize, set, continue: the same outputs bit for bit as
   the uninterrupted run; a corrupted serialized state is refused.
 - Misuse: a call in the wrong state, a NaN input, an out-of-range parameter, a Model
