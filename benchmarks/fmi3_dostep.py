@@ -7,8 +7,9 @@ Each FMU's binary is loaded by a small C program (benchmarks/dostep_timer.c, com
 cc when this runs: no Python between the calls), instantiated, initialised at its start
 values, then stepped with its default experiment's step size STEPS times, timed around the
 loop; REPEAT fresh processes per version, FMI 2.0 and 3.0 in turn (so a busy moment of the
-machine hits both); the median of the repeats is printed with the ratio FMI 3.0 / FMI 2.0
-(target of issue 23: within 5 %). The inputs stay at their start values: each FMU's own
+machine hits both); the fastest (best) of the repeats is printed with the ratio FMI 3.0 /
+FMI 2.0 (target of issue 23: within 5 %), beside the medians' ratio: the best is the FMU's
+own cost, what the other processes of a busy machine add shows in the median. The inputs stay at their start values: each FMU's own
 cost per step with nothing changing.
 
 usage: .venv/bin/python benchmarks/fmi3_dostep.py [--steps N] [--repeat R] [NAME...]
@@ -61,7 +62,7 @@ def per_step_us(timer, path, version, steps):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--steps", type=int, default=1000)
+    ap.add_argument("--steps", type=int, default=20000, help="a multiple of 1000")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("names", nargs="*")
     a = ap.parse_args(argv)
@@ -71,14 +72,15 @@ def main(argv=None):
     if not names:
         sys.exit(f"no FMI 3.0 FMUs in {fmu_dir() / 'fmi3'}: build them first")
     timer = _timer()
-    print(f"{'FMU':22s} {'fmi2DoStep us':>14s} {'fmi3DoStep us':>14s} {'3/2':>7s}")
+    print(f"{'FMU':22s} {'fmi2DoStep us':>14s} {'fmi3DoStep us':>14s} {'3/2 best':>9s} {'3/2 median':>11s}")
     for name in names:
         t2, t3 = [], []
         for _ in range(a.repeat):      # interleaved, so a slow moment hits both
             t2.append(per_step_us(timer, fmu_dir() / f"{name}.fmu", 2, a.steps))
             t3.append(per_step_us(timer, fmu_dir() / "fmi3" / f"{name}.fmu", 3, a.steps))
+        b2, b3 = min(t2), min(t3)
         m2, m3 = statistics.median(t2), statistics.median(t3)
-        print(f"{name:22s} {m2:14.3f} {m3:14.3f} {m3 / m2:7.3f}")
+        print(f"{name:22s} {b2:14.3f} {b3:14.3f} {b3 / b2:9.3f} {m3 / m2:11.3f}")
 
 
 if __name__ == "__main__":
