@@ -2,7 +2,9 @@
 # The Modelica Reference-FMUs (BSD-2-Clause), FMI 2.0, built from their sources
 # for the tests (tests/test_reference_fmus.py): BouncingBall, Dahlquist,
 # Feedthrough, Resource, Stair, VanDerPol as FMI 2.0 FMUs (each both Model
-# Exchange and Co-Simulation; the tests use Co-Simulation), linux64.
+# Exchange and Co-Simulation; the tests use Co-Simulation), linux64, and the same
+# six as FMI 3.0 (FMI_VERSION=3, x86_64-linux) in fmi3/: Feedthrough has every FMI 3.0
+# variable type, Stair ends the run through fmi3DoStep's terminateSimulation.
 #
 # Their sources come from crates.io: the crate fmi-sys carries the FMI 3.0
 # standard's sources, whose docs/Reference-FMUs is the Reference-FMUs' own
@@ -18,12 +20,12 @@ set -euo pipefail
 
 FMI_SYS_VERSION=0.5.0
 MODELS="BouncingBall Dahlquist Feedthrough Resource Stair VanDerPol"
-out="$CACHE/reference-fmus-fmi-sys-$FMI_SYS_VERSION"
+out="$CACHE/reference-fmus-fmi-sys-$FMI_SYS_VERSION-fmi23b"
 link="$ROOT/.tools/reference-fmus"
 
 have_all() {
   local m
-  for m in $MODELS; do [ -f "$out/$m.fmu" ] || return 1; done
+  for m in $MODELS; do [ -f "$out/$m.fmu" ] && [ -f "$out/fmi3/$m.fmu" ] || return 1; done
 }
 
 if ! have_all; then
@@ -34,9 +36,9 @@ if ! have_all; then
   (
     flock 9
     have_all && exit 0
-    echo "reference-fmus: building the Reference-FMUs (FMI 2.0) from the crate fmi-sys $FMI_SYS_VERSION into $out"
+    echo "reference-fmus: building the Reference-FMUs (FMI 2.0 and 3.0) from the crate fmi-sys $FMI_SYS_VERSION into $out"
     crate="$out.crate"
-    rm -rf "$crate" "$out.build" "$out.src"
+    rm -rf "$crate" "$out.build" "$out.build3" "$out.src"
     mkdir -p "$crate/src"
     printf '[package]\nname = "artibus-reference-fmus"\nversion = "0.0.0"\nedition = "2021"\npublish = false\n\n[dependencies]\nfmi-sys = "=%s"\n' \
       "$FMI_SYS_VERSION" >"$crate/Cargo.toml"
@@ -70,18 +72,32 @@ for m in sys.argv[2:]:
             return v.group(0)
         return head.replace("<ScalarVariable ", '<ScalarVariable variability="discrete" ', 1) + body
     f.write_text(re.sub(r"(<ScalarVariable [^>]*>)(\s*<\w+)", fix, text), encoding="utf-8")
+    # FMI 3.0: these sources predate the release and say fmiVersion="3.0-rc.2"; their C API
+    # (include/fmi3*.h) is the released 3.0's, line for line, and the descriptions pass
+    # the 3.0 schema (tests/test_reference_fmus.py checks it): declared "3.0"
+    f3 = Path(sys.argv[1]) / m / "FMI3.xml"
+    f3.write_text(f3.read_text(encoding="utf-8").replace('fmiVersion="3.0-rc.2"', 'fmiVersion="3.0"'), encoding="utf-8")
 PY
     QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet \
       cmake -S "$out.src" -B "$out.build" -DFMI_VERSION=2 -DCMAKE_BUILD_TYPE=Release
     # shellcheck disable=SC2086
     QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet \
       cmake --build "$out.build" -j2 --target $MODELS
-    mkdir -p "$out"
+    mkdir -p "$out/fmi3"
     for m in $MODELS; do cp "$out.build/dist/$m.fmu" "$out/$m.fmu"; done
+    # the FMI 3.0 builds, from the same sources (their FMI3.xml need no fix: an Int32 or
+    # Boolean without a variability is discrete by FMI 3.0's default)
+    QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet \
+      cmake -S "$out.src" -B "$out.build3" -DFMI_VERSION=3 -DCMAKE_BUILD_TYPE=Release \
+      -DCMAKE_C_FLAGS=-Wno-error=stringop-truncation    # Resource's strncpy warning is an error with -Werror in their FMI 3.0 build
+    # shellcheck disable=SC2086
+    QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet \
+      cmake --build "$out.build3" -j2 --target $MODELS
+    for m in $MODELS; do cp "$out.build3/dist/$m.fmu" "$out/fmi3/$m.fmu"; done
     cp "$src_dir/LICENSE.txt" "$out/LICENSE.txt"
     echo "fmi-sys $FMI_SYS_VERSION (crates.io): fmi-standard3/docs/Reference-FMUs, FMI_VERSION=2," \
-      "Integer/Boolean/String variables without a variability declared discrete" >"$out/SOURCE.txt"
-    rm -rf "$out.build" "$out.src" "$crate"
+      "Integer/Boolean/String variables without a variability declared discrete; fmi3/: FMI_VERSION=3, fmiVersion 3.0-rc.2 declared 3.0" >"$out/SOURCE.txt"
+    rm -rf "$out.build" "$out.build3" "$out.src" "$crate"
   ) 9>"$out.lock"
 fi
 if have_all && [ "$(readlink "$link" 2>/dev/null)" != "$out" ]; then

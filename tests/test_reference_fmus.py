@@ -1,4 +1,4 @@
-"""The Modelica Reference-FMUs (FMI 2.0 Co-Simulation: BouncingBall, Dahlquist,
+"""The Modelica Reference-FMUs (FMI 2.0 and FMI 3.0 Co-Simulation: BouncingBall, Dahlquist,
 Feedthrough, Resource, Stair, VanDerPol), built from their sources by
 scripts/build_reference_fmus.sh (docs/developer/tests.md: from which sources, how), run
 through `artibus simulate` and in benches of ours against FMPy's simulate_fmu:
@@ -7,7 +7,11 @@ a tool we never saw, whose FMUs follow the standard, gives the same table.
 Stair ends the simulation itself at t = 9 s (fmi2DoStep returns fmi2Discard and
 fmi2GetBooleanStatus(fmi2Terminated) says true): a normal end, exit 0, the
 results under the final name; its counter is 1 + floor(t) (it counts the
-seconds), up to 10 at t = 9 s."""
+seconds), up to 10 at t = 9 s. Their FMI 3.0 Stair ends nothing in Co-Simulation
+without Event Mode (their fmi3DoStep always says terminateSimulation = false), so
+FMI 3.0's terminateSimulation is checked on an FMU of ours whose fmi3DoStep is made to
+say it. FMI 3.0 Feedthrough has every variable type: each width is set at its bounds and
+read back, a value outside them refused."""
 import math
 import zipfile
 from pathlib import Path
@@ -25,8 +29,8 @@ REFERENCE_DIR = ROOT / ".tools" / "reference-fmus"
 MODELS = ["BouncingBall", "Dahlquist", "Feedthrough", "Resource", "Stair", "VanDerPol"]
 
 
-def reference_fmu(name):
-    path = REFERENCE_DIR / f"{name}.fmu"
+def reference_fmu(name, version=2):
+    path = REFERENCE_DIR / ("fmi3" if version == 3 else "") / f"{name}.fmu"
     if not path.is_file():
         pytest.skip(f"{path} not built (scripts/setup.sh builds it with scripts/build_reference_fmus.sh; needs cargo)")
     return path
@@ -46,9 +50,10 @@ def fmpy_table(path, step, stop_time=None, **kw):
     return list(r.dtype.names), np.column_stack([r[n].astype(float) for n in r.dtype.names])
 
 
+@pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("name", MODELS)
-def test_artibus_simulate_equals_fmpy(name, tmp_path, capsys):
-    fmu = reference_fmu(name)
+def test_artibus_simulate_equals_fmpy(name, version, tmp_path, capsys):
+    fmu = reference_fmu(name, version)
     out = tmp_path / f"{name}.csv"
     assert cli.main(["simulate", str(fmu), "-o", str(out)]) == 0
     names, ours = read_csv(out)
@@ -56,6 +61,10 @@ def test_artibus_simulate_equals_fmpy(name, tmp_path, capsys):
     de = md.defaultExperiment
     step = float(de.stepSize) if de.stepSize else float(de.stopTime) / 500
     theirs_names, theirs = fmpy_table(fmu, step)
+    binary = [v.name for v in md.modelVariables if v.causality == "output" and v.type in ("Binary", "Clock")]
+    if binary:                         # FMI 3.0 Feedthrough's Binary_output: no number, not in our table
+        keep = [i for i, n in enumerate(theirs_names) if n not in binary]
+        theirs_names, theirs = [theirs_names[i] for i in keep], theirs[:, keep]
     assert names == theirs_names
     assert ours.shape == theirs.shape
     np.testing.assert_allclose(ours, theirs, rtol=1e-11, atol=1e-300)   # the CSV's 12 digits
@@ -180,3 +189,99 @@ def test_a_sweep_case_that_stair_ends_is_terminated_not_failed(tmp_path):
     assert row["status"] == "terminated", row
     assert "Stair ended the simulation at t = 9 s" in row["error"]
     assert series["time"][-1] == pytest.approx(9.0)
+
+
+# ---- FMI 3.0 --------------------------------------------------------------------------
+
+WIDTHS = {"Int8": (-2**7, 2**7 - 1), "UInt8": (0, 2**8 - 1), "Int16": (-2**15, 2**15 - 1),
+          "UInt16": (0, 2**16 - 1), "Int32": (-2**31, 2**31 - 1), "UInt32": (0, 2**32 - 1),
+          "Int64": (-2**53, 2**53), "UInt64": (0, 2**53)}     # (64 bits: what a float column holds exactly)
+
+
+@pytest.mark.parametrize("end", [0, 1], ids=["lowest", "highest"])
+def test_feedthrough_fmi3_passes_every_width_at_its_bounds(end, tmp_path):
+    """FMI 3.0 Feedthrough's outputs are its inputs (their readme): each integer width at its
+    bound comes back exactly, a Float32 as the float32 nearest to what was set, a Boolean."""
+    fmu = reference_fmu("Feedthrough", 3)
+    out = tmp_path / "f.csv"
+    sets = {f"{t}_input": bounds[end] for t, bounds in WIDTHS.items()}
+    sets.update({"Float32_continuous_input": 0.1, "Float64_continuous_input": -2.5, "Boolean_input": bool(end)})
+    assert cli.main(["simulate", str(fmu), "--stop-time", "0.1", "-o", str(out)]
+                    + [f"--set={k}={'true' if v is True else 'false' if v is False else v}" for k, v in sets.items()]) == 0
+    names, table = read_csv(out)
+    last = dict(zip(names, table[-1]))
+    for t, bounds in WIDTHS.items():       # the CSV's 12 digits hold 32 bits exactly
+        assert last[f"{t}_output"] == pytest.approx(bounds[end], rel=0 if "32" in t or "8" in t or "16" in t
+                                                    else 1e-11), t
+    r = simulate(fmu, parameters=sets, stop_time=0.1)      # the table itself: exact, 64 bits up to 2**53
+    row = dict(zip(r.names, r.array()[-1]))
+    for t, bounds in WIDTHS.items():
+        assert row[f"{t}_output"] == bounds[end], t
+    assert last["Float32_continuous_output"] == pytest.approx(float(np.float32(0.1)), rel=1e-11)  # the CSV's 12 digits
+    assert last["Float32_continuous_output"] != pytest.approx(0.1, rel=1e-11)
+    assert last["Float64_continuous_output"] == -2.5
+    assert last["Boolean_output"] == float(end)
+
+
+@pytest.mark.parametrize("name,value,words", [
+    ("Int8_input", 128, "outside the range of an FMI 3.0 Int8 (-128..127)"),
+    ("UInt8_input", -1, "outside the range of an FMI 3.0 UInt8 (0..255)"),
+    ("UInt64_input", 2**64, "outside the range of an FMI 3.0 UInt64"),
+    ("Int64_input", -2**63 - 1, "outside the range of an FMI 3.0 Int64"),
+    ("UInt16_input", 1.5, "not an integer"),
+    ("Binary_input", "00", "Binary"),
+])
+def test_feedthrough_fmi3_refuses_a_value_outside_its_type(name, value, words, tmp_path, capsys):
+    fmu = reference_fmu("Feedthrough", 3)
+    out = tmp_path / "f.csv"
+    assert cli.main(["simulate", str(fmu), "--set", f"{name}={value}", "-o", str(out)]) != 0
+    err = capsys.readouterr().err
+    assert words in err and name in err and "Traceback" not in err, err
+    assert not out.exists()
+
+
+def test_fmi3_terminate_simulation_ends_the_run(tmp_path, monkeypatch, capsys):
+    """fmi3DoStep saying terminateSimulation (FMI 3.0 4.2.1) at its lastSuccessfulTime ends the
+    run there as a normal end: the rows up to that time, exit 0, the end said."""
+    from artibus.fmu.result import Termination
+    from fmpy.fmi3 import FMU3Slave
+    from conftest import fmu3
+    real = FMU3Slave.doStep
+
+    def step(self, t, h, *a, **k):
+        event, _, early, last = real(self, t, h, *a, **k)
+        return (event, True, early, last) if t + h > 0.45 else (event, False, early, last)
+
+    monkeypatch.setattr(FMU3Slave, "doStep", step)
+    r = simulate(fmu3("TrainGuidance"), stop_time=2.0, step=0.1)
+    assert r.terminated == Termination("TrainGuidance", pytest.approx(0.5), "terminateSimulation")
+    assert r.array()[-1, 0] == pytest.approx(0.5) and len(r.rows) == 6    # 0, 0.1, ..., 0.5
+    out = tmp_path / "t.csv"
+    assert cli.main(["simulate", str(fmu3("TrainGuidance")), "--stop-time", "2", "--step", "0.1", "-o", str(out)]) == 0
+    assert "TrainGuidance ended the simulation at t = 0.5 s (terminateSimulation)" in capsys.readouterr().out
+    assert len(read_csv(out)[1]) == 6
+
+
+@pytest.mark.parametrize("core", [True, False], ids=["C core", "Python loop"])
+@pytest.mark.parametrize("folder", ["", "fmi3/"], ids=["resources", "resources-fmi3"])
+def test_a_bench_of_fmi3_reference_fmus_equals_fmpy(core, folder, tmp_path):
+    """FMI 3.0 FMUs of others in a bench (their .ssd source resources/<Name>.fmu or
+    resources/fmi3/<Name>.fmu), in either loop: Dahlquist's x as FMPy computes it alone"""
+    elements = "".join(
+        f'<ssd:Component name="{m}" source="resources/{folder}{m}.fmu" type="application/x-fmu-sharedlibrary">'
+        f'<ssd:Connectors><ssd:Connector name="{c}" kind="output"><ssc:{t}/></ssd:Connector></ssd:Connectors>'
+        '</ssd:Component>' for m, c, t in (("Stair", "counter", "Integer"), ("Dahlquist", "x", "Real")))
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="S">'
+           f'<ssd:System name="S"><ssd:Elements>{elements}</ssd:Elements></ssd:System>'
+           f'<ssd:DefaultExperiment startTime="0" stopTime="10"/></ssd:SystemStructureDescription>')
+    ssp = tmp_path / "S.ssp"
+    with zipfile.ZipFile(ssp, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        for m in ("Stair", "Dahlquist"):
+            z.write(reference_fmu(m, 3), f"resources/{folder}{m}.fmu")
+    with Simulation(ssp, step=0.2, record=["Dahlquist.x"]) as sim:
+        r = sim.run(core=core)
+        assert sim.stepping.startswith("C core" if core else "Python loop")
+    _, theirs = fmpy_table(reference_fmu("Dahlquist", 3), 0.2)
+    assert len(r.time) == 51
+    np.testing.assert_array_equal(r["Dahlquist.x"], theirs[:, 1])

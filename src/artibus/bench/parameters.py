@@ -11,6 +11,7 @@ from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssv
 
 from artibus.base import ArtibusError, ROOT, parse_integer, parse_real
+from artibus.bench.fmi import INTEGER_RANGE
 
 PARAMETER_DIR = ROOT / "ssp" / "parameters"
 
@@ -125,6 +126,10 @@ def coerce(v, value, finite=True):
         return x
     if t == "Integer":
         return _integer(value, text)
+    if t == "Float32":                     # FMI 3.0 (an FMU of others): a Real, as float32 holds it
+        return coerce(_Real, value, finite)
+    if t in INTEGER_RANGE:                 # FMI 3.0's other integer widths, in their range
+        return _integer(value, text, INTEGER_RANGE[t], f"the range of an FMI 3.0 {t}")
     if t == "Boolean":
         if isinstance(value, bool):
             return value
@@ -153,7 +158,11 @@ def coerce(v, value, finite=True):
     raise ValueError(f"type {t} is not supported")
 
 
-def _integer(value, text):
+class _Real:                               # coerce's view of a Float32 (FMI 3.0)
+    type = "Real"
+
+
+def _integer(value, text, bounds=(-2**31, 2**31 - 1), what="the 32-bit range of an FMI 2.0 Integer"):
     if isinstance(value, bool):
         raise ValueError("a Boolean is not an Integer")
     if isinstance(value, int):
@@ -173,8 +182,8 @@ def _integer(value, text):
             k = int(x)
     else:
         raise ValueError(f"not an integer: {type(value).__name__}")
-    if not -2**31 <= k < 2**31:
-        raise ValueError("outside the 32-bit range of an FMI 2.0 Integer")
+    if not bounds[0] <= k <= bounds[1]:
+        raise ValueError(f"outside {what} ({bounds[0]}..{bounds[1]})")
     return k
 
 
@@ -221,7 +230,7 @@ def check_against(values, fmu, source, prefix="", origins=None):
             value = values[name] = coerce(v, value)
         except ValueError as e:
             raise ArtibusError(f"{label}: not a valid {v.type} for {md.modelName}.{name}: {e}") from None
-        if v.type in ("Real", "Integer"):
+        if v.type in ("Real", "Integer", "Float32") or v.type in INTEGER_RANGE:
             x = float(value)
             if v.min is not None and x < float(v.min) or v.max is not None and x > float(v.max):
                 raise ArtibusError(f"{label} is outside [{v.min}, {v.max}] of {md.modelName}")
@@ -233,6 +242,8 @@ def _model_description(path):
     if not Path(str(path)).is_file():
         raise ArtibusError(f"{path}: no such FMU file")
     try:
-        return read_model_description(str(path))
+        md = read_model_description(str(path))
     except Exception as e:
-        raise ArtibusError(f"{path}: not a readable FMI 2.0 FMU: {e}") from None
+        raise ArtibusError(f"{path}: not a readable FMI 2.0 or 3.0 FMU: {e}") from None
+    from artibus.bench.fmi import fmi2_view     # FMI 3.0: checked in FMI 2.0's type names
+    return fmi2_view(md, strict=False)

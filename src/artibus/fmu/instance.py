@@ -8,7 +8,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from artibus import cache
 from artibus.base import ArtibusError
-from artibus.bench.fmi import FMI2_TYPE, fmi2_view  # noqa: F401
+from artibus.bench.fmi import FMI2_TYPE, INTEGER_RANGE, fmi2_view  # noqa: F401
 
 
 def _callbacks(log):
@@ -150,13 +150,20 @@ class Fmu:
             self.md = _model_description(self.path)
         except Exception as e:   # not a zip, no or a broken modelDescription.xml
             raise ArtibusError(f"{self.path}: not a readable FMI 2.0 or 3.0 FMU: {e}") from None
-        if self.md.fmiVersion not in ("2.0", "3.0") or self.md.coSimulation is None:
-            raise ArtibusError(f"{self.path}: {self.md.modelName} is not an FMI 2.0 or 3.0 "
-                               "co-simulation FMU")
+        if self.md.fmiVersion not in ("2.0", "3.0"):
+            raise ArtibusError(f"{self.path}: {self.md.modelName} says fmiVersion=\"{self.md.fmiVersion}\": "
+                               "artibus runs FMI 2.0 and 3.0 FMUs")
+        if self.md.coSimulation is None:
+            raise ArtibusError(f"{self.path}: {self.md.modelName} has no Co-Simulation interface "
+                               "(artibus runs FMUs in Co-Simulation)")
         self.fmi = int(self.md.fmiVersion[0])
+        #: FMI 3.0: each variable's own type (Float32, UInt16, ...), whose get/set it is read with
+        self.fmi3_type = {}
         if self.fmi == 3:    # as FMI 2.0 names the types (the same variables: tests/test_fmi3.py)
+            self.fmi3_type = {v.name: "Int64" if v.type == "Enumeration" else v.type
+                              for v in self.md.modelVariables}
             try:
-                self.md = fmi2_view(self.md)
+                self.md = fmi2_view(self.md, strict=False)
             except ArtibusError as e:
                 raise ArtibusError(f"{self.path}: {e}") from None
         self.vars = {v.name: v for v in self.md.modelVariables if v.causality != "independent"}
@@ -221,7 +228,12 @@ class Fmu:
                                    f"for {self.md.modelName}: {e}") from None
             vr = [v.valueReference]
             if self.fmi == 3:
-                getattr(self.slave, f"set{FMI3_ACCESSOR[v.type]}")(vr, [x])
+                t = self.fmi3_type[name]
+                lo, hi = INTEGER_RANGE.get(t, (None, None))
+                if lo is not None and not lo <= x <= hi:
+                    raise ArtibusError(f"{self.instance_name}.{name} = {value!r}: outside the range of an "
+                                       f"FMI 3.0 {t} ({lo}..{hi}) for {self.md.modelName}")
+                getattr(self.slave, f"set{t}")(vr, [x])
             elif v.type == "Real":
                 self.slave.setReal(vr, [x])
             elif v.type in ("Integer", "Enumeration"):
@@ -243,7 +255,7 @@ class Fmu:
         by_type = {}
         for i, n in enumerate(names):
             v = self.var(n)
-            t = FMI3_ACCESSOR[v.type] if self.fmi == 3 else "Integer" if v.type == "Enumeration" else v.type
+            t = self.fmi3_type[n] if self.fmi == 3 else "Integer" if v.type == "Enumeration" else v.type
             by_type.setdefault(t, []).append((i, v.valueReference))
         for t, items in by_type.items():
             got = getattr(self.slave, f"get{t}")([vr for _, vr in items])
@@ -262,7 +274,14 @@ class Fmu:
             self.slave.enterInitializationMode()
 
     def do_step(self, t, h):
+        """One step from t to t + h. None, or where the FMU ended the simulation itself:
+        FMI 3.0's fmi3DoStep with terminateSimulation (FMI 3.0 4.2.1; an FMI 2.0 FMU says so
+        with fmi2Discard, an FMICallException, artibus.fmu.result.terminated)."""
+        if self.fmi == 3:
+            _, terminate, _, last = self.slave.doStep(t, h)
+            return last if terminate else None
         self.slave.doStep(t, h)
+        return None
 
     def last_successful_time(self):
         """where a failed step stopped (fmi2GetRealStatus(fmi2LastSuccessfulTime);

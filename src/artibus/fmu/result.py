@@ -21,13 +21,14 @@ class SimulationError(ArtibusError):
 @dataclass(frozen=True)
 class Termination:
     """An FMU ended the run, as FMI 2.0 lets it (fmi2DoStep returned fmi2Discard
-    and fmi2GetBooleanStatus(fmi2Terminated) says true, FMI 2.0.4 section 4.2.3):
-    a normal end at ``time`` (its fmi2LastSuccessfulTime), not a failure."""
+    and fmi2GetBooleanStatus(fmi2Terminated) says true, FMI 2.0.4 section 4.2.3)
+    or FMI 3.0 (fmi3DoStep's terminateSimulation): a normal end at ``time`` (its fmi2LastSuccessfulTime), not a failure."""
     component: str      # the component (a bench) or the model (an FMU alone) that ended it
     time: float         # s
+    how: str = "fmi2Terminated"   # FMI 3.0: fmi3DoStep's "terminateSimulation" (FMI 3.0 4.2.1)
 
     def __str__(self):
-        return f"{self.component} ended the simulation at t = {self.time:g} s (fmi2Terminated)"
+        return f"{self.component} ended the simulation at t = {self.time:g} s ({self.how})"
 
 
 #: FMI 2.0's fmi2Discard and the status kinds asked after it (fmi2Functions.h)

@@ -7,6 +7,7 @@ the result up to its last successful time, with ``Result.terminated``."""
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
+from artibus.bench.fmi import NOT_NUMBERS
 from artibus.bench.units import unit_of
 from artibus.fmu.instance import Fmu, claim_logger_proxy
 from artibus.fmu.result import Result, SimulationError, Termination, terminated
@@ -69,9 +70,13 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         if step is None:
             step = default_step(fmu.md, start_time, stop_time)
             check_times(start_time, stop_time, step, f"{path}: default experiment")
-        if outputs is None:
-            outputs = [v.name for v in fmu.md.modelVariables if v.causality == "output"]
+        if outputs is None:      # (a Binary or a Clock is no number for the table: not recorded)
+            outputs = [v.name for v in fmu.md.modelVariables if v.causality == "output"
+                       and v.type not in NOT_NUMBERS]
         types = [fmu.var(n).type for n in outputs]
+        for n, ty in zip(outputs, types):
+            if ty in NOT_NUMBERS:
+                raise ArtibusError(f"{path}: {n} is an FMI 3.0 {ty}: not a number a result table can hold")
         from artibus.runner.results import check_room      # as `run` does: refused before it starts
         check_room(int(round((stop_time - start_time) / step)) + 1, len(outputs) + 1, path)
         strings = [n for n, t in zip(outputs, types) if t == "String"]
@@ -96,7 +101,12 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             n = int(round((stop_time - start_time) / step))
             for i in range(n):
                 try:
-                    fmu.do_step(t, step)
+                    t_end = fmu.do_step(t, step)
+                    if t_end is not None:              # FMI 3.0 terminateSimulation: a normal end
+                        if t_end > t:
+                            record(t_end)
+                        result.terminated = Termination(fmu.md.modelName, t_end, "terminateSimulation")
+                        break
                 except FMICallException as e:
                     t_end = terminated(fmu.slave, e.status) if e.function == "fmi2DoStep" else None
                     if t_end is None:

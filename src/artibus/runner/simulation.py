@@ -387,7 +387,8 @@ class Simulation(_Setup):
         if t_end is None:
             return None
         self._finish_step(u, plan, k, t, h)
-        return Termination(u.path, t_end if t_end == t_end else t + h)
+        return Termination(u.path, t_end if t_end == t_end else t + h,
+                           "terminateSimulation" if u.raw.fmi == 3 else "fmi2Terminated")
 
     def _finish_step(self, ended, plan, k, t, h):
         """The rest of base step k after ``ended`` ended the simulation in its
