@@ -5,7 +5,8 @@
 #   everything scripts/setup.sh builds, with every platform's binaries
 #   (scripts/setup.sh --all-platforms: the win64 DLLs packed into each FMU, and
 #   the Wine prefix the win64 tests run them in),
-#   the test extras in .venv (pytest, pytest-xdist, mkdocs, nbclient, libcosimpy),
+#   the test extras in .venv (pytest, pytest-xdist, mkdocs, nbclient, libcosimpy, ecospy,
+#   fmu-manipulation-toolbox),
 #   fmi-sim (crates.io), a second importer every FMU is run in,
 #   the Modelica Reference-FMUs (built from the crate fmi-sys), FMUs made by others,
 #   the FMI-LS-BUS C headers (from the same crate), the standard's own operation macros.
@@ -23,7 +24,7 @@ bash scripts/setup.sh --all-platforms
 
 stamp=".venv/.artibus-installed-test"
 if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-  step "installing the test extras into .venv (pytest, mkdocs, nbclient, libcosimpy; about 30 s)" \
+  step "installing the test extras into .venv (pytest, mkdocs, nbclient, libcosimpy, ecospy, fmu-manipulation-toolbox; about 30 s)" \
     .venv/bin/python -m pip install -q -e '.[test]'
   touch "$stamp"
 fi
