@@ -146,3 +146,17 @@ def test_canbus_tx_data_read_with_the_standards_macros(official, tmp_path, db, u
     for node in range(2, 9):
         frames = [o for (_, k, _), ops in zip(raw, got) if k == node for o in ops]
         assert frames == [transmit_fields(i, want[i]) for i in sorted(want)], node
+
+
+def test_the_examples_operations_built_by_hand_are_the_standards(official, tmp_path):
+    """test_lsbus_examples's hand-built operations of the fmi-ls-bus-examples node and bus,
+    read with the standard's macros: each as the example's App.c builds it"""
+    from test_lsbus_examples import EXAMPLE_CONFIG, EXAMPLE_FRAME, arbitration_lost, bus_error, confirm
+    from test_canbus import transmit
+    buf = EXAMPLE_CONFIG + transmit(*EXAMPLE_FRAME) + confirm(0x1) + arbitration_lost(0x201) + bus_error(0x1, 4, 1, 1)
+    (ops,) = parsed(official, tmp_path, [buf])
+    assert ops == [("Configuration", {"type": "1", "baudrate": "100000"}),
+                   ("Configuration", {"type": "4", "behavior": "1"}),
+                   transmit_fields(0x1, bytes([1, 2, 3, 4])),
+                   ("Confirm", {"id": "1"}), ("ArbitrationLost", {"id": "513"}),
+                   ("BusError", {"id": "1", "code": "4", "flag": "1", "sender": "1"})]
