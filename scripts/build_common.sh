@@ -17,6 +17,10 @@
 #                   file an argument names (a toolchain file) and of the version
 #                   of the compiler $CACHE_CC (default cc), so a change of any
 #                   makes a new entry;
+#   crate_source NAME VERSION DIR  the crate NAME (=VERSION) from crates.io, downloaded with
+#                   cargo (its ordinary client: a throw-away Cargo.toml in DIR and `cargo
+#                   fetch`; nothing is compiled) into cargo's registry; prints the folder
+#                   it was unpacked in; QUIET_LOG and QUIET_TAG as for quiet; DIR removed;
 #   cross_build DIR TOOLCHAIN CC JOBS  a cross build into DIR with cmake/TOOLCHAIN:
 #                   SUNDIALS for it (scripts/build_sundials.sh, cached; CC names its
 #                   compiler for the cache key), then every FMU's binary and its importer
@@ -70,6 +74,23 @@ apt_install() {
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "$@" >/dev/null
   }
   step "installing the Debian packages$missing (apt; a minute or two on a fresh machine)" _apt $missing
+}
+
+crate_source() {
+  local name="$1" version="$2" crate="$3"
+  rm -rf "$crate"
+  mkdir -p "$crate/src"
+  printf '[package]\nname = "artibus-crate-source"\nversion = "0.0.0"\nedition = "2021"\npublish = false\n\n[dependencies]\n%s = "=%s"\n' \
+    "$name" "$version" >"$crate/Cargo.toml"
+  echo 'fn main() {}' >"$crate/src/main.rs"
+  quiet cargo fetch --manifest-path "$crate/Cargo.toml" >&2 || { rm -rf "$crate"; return 1; }
+  # where cargo unpacked it (its registry under CARGO_HOME)
+  cargo metadata --offline --format-version 1 --manifest-path "$crate/Cargo.toml" 2>/dev/null \
+    | python3 -c 'import json, sys, os
+m = json.load(sys.stdin)
+p = next(p for p in m["packages"] if p["name"] == sys.argv[1])
+print(os.path.dirname(p["manifest_path"]))' "$name"
+  rm -rf "$crate"
 }
 
 cross_build() {

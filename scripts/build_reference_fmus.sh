@@ -16,7 +16,7 @@
 #
 # usage: scripts/build_reference_fmus.sh
 set -euo pipefail
-. "$(dirname "$0")/build_common.sh"     # CACHE, quiet
+. "$(dirname "$0")/build_common.sh"     # CACHE, quiet, crate_source
 
 FMI_SYS_VERSION=0.5.0
 MODELS="BouncingBall Dahlquist Feedthrough Resource Stair VanDerPol"
@@ -37,19 +37,9 @@ if ! have_all; then
     flock 9
     have_all && exit 0
     echo "reference-fmus: building the Reference-FMUs (FMI 2.0 and 3.0) from the crate fmi-sys $FMI_SYS_VERSION into $out"
-    crate="$out.crate"
-    rm -rf "$crate" "$out.build" "$out.build3" "$out.src"
-    mkdir -p "$crate/src"
-    printf '[package]\nname = "artibus-reference-fmus"\nversion = "0.0.0"\nedition = "2021"\npublish = false\n\n[dependencies]\nfmi-sys = "=%s"\n' \
-      "$FMI_SYS_VERSION" >"$crate/Cargo.toml"
-    echo 'fn main() {}' >"$crate/src/main.rs"
-    QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet cargo fetch --manifest-path "$crate/Cargo.toml"
-    # where cargo unpacked fmi-sys (its registry under CARGO_HOME)
-    src_dir="$(cargo metadata --offline --format-version 1 --manifest-path "$crate/Cargo.toml" 2>/dev/null \
-      | python3 -c 'import json, sys, os
-m = json.load(sys.stdin)
-p = next(p for p in m["packages"] if p["name"] == "fmi-sys")
-print(os.path.join(os.path.dirname(p["manifest_path"]), "fmi-standard3", "docs", "Reference-FMUs"))')"
+    rm -rf "$out.build" "$out.build3" "$out.src"
+    src_dir="$(QUIET_LOG="$out.log" QUIET_TAG=reference-fmus crate_source fmi-sys "$FMI_SYS_VERSION" "$out.crate")"
+    src_dir="$src_dir/fmi-standard3/docs/Reference-FMUs"
     if [ ! -f "$src_dir/CMakeLists.txt" ]; then
       echo "reference-fmus: no Reference-FMUs sources in the crate fmi-sys $FMI_SYS_VERSION ($src_dir)" >&2
       exit 1
@@ -97,7 +87,7 @@ PY
     cp "$src_dir/LICENSE.txt" "$out/LICENSE.txt"
     echo "fmi-sys $FMI_SYS_VERSION (crates.io): fmi-standard3/docs/Reference-FMUs, FMI_VERSION=2," \
       "Integer/Boolean/String variables without a variability declared discrete; fmi3/: FMI_VERSION=3, fmiVersion 3.0-rc.2 declared 3.0" >"$out/SOURCE.txt"
-    rm -rf "$out.build" "$out.build3" "$out.src" "$crate"
+    rm -rf "$out.build" "$out.build3" "$out.src"
   ) 9>"$out.lock"
 fi
 if have_all && [ "$(readlink "$link" 2>/dev/null)" != "$out" ]; then

@@ -5,9 +5,11 @@
 #   everything scripts/setup.sh builds, with every platform's binaries
 #   (scripts/setup.sh --all-platforms: the win64 DLLs packed into each FMU, and
 #   the Wine prefix the win64 tests run them in),
-#   the test extras in .venv (pytest, pytest-xdist, mkdocs, nbclient, libcosimpy),
+#   the test extras in .venv (pytest, pytest-xdist, mkdocs, nbclient, libcosimpy, ecospy,
+#   fmu-manipulation-toolbox),
 #   fmi-sim (crates.io), a second importer every FMU is run in,
-#   the Modelica Reference-FMUs (built from the crate fmi-sys), FMUs made by others.
+#   the Modelica Reference-FMUs (built from the crate fmi-sys), FMUs made by others,
+#   the FMI-LS-BUS C headers (from the same crate), the standard's own operation macros.
 # The third-party builds (SUNDIALS linux/win64, fmi-sim, the Wine prefix) are cached
 # outside the clone ($ARTIBUS_CACHE, scripts/build_common.sh). Safe to run again.
 set -euo pipefail
@@ -22,7 +24,7 @@ bash scripts/setup.sh --all-platforms
 
 stamp=".venv/.artibus-installed-test"
 if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-  step "installing the test extras into .venv (pytest, mkdocs, nbclient, libcosimpy; about 30 s)" \
+  step "installing the test extras into .venv (pytest, mkdocs, nbclient, libcosimpy, ecospy, fmu-manipulation-toolbox; about 30 s)" \
     .venv/bin/python -m pip install -q -e '.[test]'
   touch "$stamp"
 fi
@@ -73,3 +75,8 @@ fi
 # (tests/test_reference_fmus.py): built from their sources in the crate fmi-sys
 # (crates.io) once per machine into the cache, linked as .tools/reference-fmus/
 bash scripts/build_reference_fmus.sh || echo "setup: the Reference-FMUs could not be built; their tests will be skipped"
+
+# the FMI-LS-BUS 1.0 C headers (the Modelica Association's, from the crate fmi-sys on
+# crates.io), the standard's own operation macros our codec and FMUs are checked against
+# (tests/test_lsbus_official_headers.py): once per machine into the cache, linked as .tools/fmi-ls-bus/
+bash scripts/fetch_lsbus_headers.sh || echo "setup: the FMI-LS-BUS headers could not be fetched; their tests will be skipped"

@@ -149,7 +149,8 @@ def unzipped():
 
 class Importer:
     """A master for CanBus alone: the nodes' operations handed in by send(), the bus's
-    operations for each node recorded as (time, node, ops) in self.rx."""
+    operations for each node recorded as (time, node, ops) in self.rx, and each Tx_Data
+    as it came, (time, node, bytes), in self.raw."""
 
     def __init__(self, unzipped, **params):
         path, md, d = unzipped
@@ -171,6 +172,7 @@ class Importer:
         self.event_mode, self.updated, self.need = True, False, False
         self.ticks = {}                            # node -> the time its Tx clock ticks
         self.rx = []
+        self.raw = []
 
     def close(self):
         try:
@@ -215,6 +217,7 @@ class Importer:
             for k, data in zip(now, self.fmu.getBinary([vr(k, TX_DATA) for k in now])):
                 if data:
                     self.rx.append((self.t, k, parse(data)))
+                    self.raw.append((self.t, k, bytes(data)))
 
     def send(self, ops):
         """{node: bytes} sent in the same instant, in the standard's order: clocks, binaries,

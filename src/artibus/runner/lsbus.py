@@ -21,6 +21,8 @@ What it does, with the sections it follows:
   the FMU sees it (FMI 3.0.2, 5.2.2);
 - the Rx clocks are triggered: a node's Rx_Clock ticks when Tx data arrive for it; a zero-size
   Tx_Data activates nothing (4____network_abstraction.adoc, "Rx Clocks");
+- a terminal's Rx_Data/Tx_Data must declare the CAN MIME type of FMI-LS-BUS 1.x (version 1.0.0
+  or a pre-release of it, as the fmi-ls-bus-examples' "1.0.0-beta.1"; ``check_mime``);
 - Tx_Data is copied (``bytes``) before the next FMU is called, and routed through the
   terminals: node Tx_Data -> CanBus NodeK.Rx_Data, CanBus NodeK.Tx_Data -> node Rx_Data
   (2____common_concepts.adoc, "Composition with dedicated Bus Simulation FMU"), or, without a
@@ -46,6 +48,7 @@ to .blf/.asc with python-can, as the Real-wired benches' --can-log does.
 """
 import ctypes
 import math
+import re
 import shutil
 import struct
 import tempfile
@@ -150,6 +153,27 @@ class Terminal:
         return k >= 0 and abs(t0 + self.shift + k * self.period - t) <= EPS
 
 
+CAN_MIME = "application/org.fmi-standard.fmi-ls-bus.can"
+SEMVER = re.compile(r"(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)(-[0-9A-Za-z.-]+)?(\+[0-9A-Za-z.-]+)?")
+
+
+def check_mime(path, name, mime):
+    """A terminal's Rx_Data/Tx_Data carries CAN operations of FMI-LS-BUS 1.x: the MIME type
+    application/org.fmi-standard.fmi-ls-bus.can with a version parameter of major version 1
+    (fmi-ls-bus v1.0.0 4____network_abstraction.adoc, "MIME Types": the version marks the set
+    of operations and follows semantic versioning, so 1.x keeps 1.0.0's operations). A
+    pre-release of it is taken too: the fmi-ls-bus-examples declare version="1.0.0-beta.1",
+    and their headers (fmi-ls-bus 468127f) lay out every CAN operation as v1.0.0's do.
+    Anything else (another bus, version 2, no version) is an LsBusError naming it."""
+    parts = [s.strip() for s in (mime or "").split(";")]
+    params = dict(p.split("=", 1) for p in parts[1:] if "=" in p)
+    version = params.get("version", "").strip().strip('"')
+    m = SEMVER.fullmatch(version)
+    if parts[0].lower() != CAN_MIME or not m or m.group(1) != "1":
+        raise LsBusError(f"{path}: {name} has mimeType {mime!r}; this master connects FMI-LS-BUS CAN "
+                         f'terminals: {CAN_MIME}; version="1.x.y" (1.0.0 or a pre-release of it)')
+
+
 def read_terminals(path, md, fmu_name):
     """{name: Terminal} of the network terminals in terminalsAndIcons/terminalsAndIcons.xml
     (FMI 3.0.2, 2.4.9; the terminal kind of 4____network_abstraction.adoc, "Bus Terminal")."""
@@ -158,9 +182,10 @@ def read_terminals(path, md, fmu_name):
             root = ET.fromstring(z.read("terminalsAndIcons/terminalsAndIcons.xml"))
         except KeyError:
             raise LsBusError(f"{path}: no terminalsAndIcons/terminalsAndIcons.xml: not an LS-BUS FMU") from None
-        # the clocks' intervalDecimal and shiftDecimal (FMPy 0.3 does not read them)
-        clocks = {c.get("name"): (c.get("intervalDecimal"), c.get("shiftDecimal"))
-                  for c in ET.fromstring(z.read("modelDescription.xml")).iter("Clock")}
+        # the clocks' intervalDecimal and shiftDecimal, the binaries' mimeType (FMPy 0.3 reads neither)
+        md_root = ET.fromstring(z.read("modelDescription.xml"))
+        clocks = {c.get("name"): (c.get("intervalDecimal"), c.get("shiftDecimal")) for c in md_root.iter("Clock")}
+        mimes = {b.get("name"): b.get("mimeType") for b in md_root.iter("Binary")}
     variables = {v.name: v for v in md.modelVariables}
     out = {}
     for t in root.iter("Terminal"):
@@ -171,6 +196,9 @@ def read_terminals(path, md, fmu_name):
             if name not in variables:
                 raise LsBusError(f"{path}: terminal {t.get('name')} member {m} names {name!r}, "
                                  "which modelDescription.xml does not declare")
+        for m in ("Rx_Data", "Tx_Data"):
+            if m in members:
+                check_mime(path, members[m], mimes.get(members[m]))
         out[t.get("name")] = Terminal(fmu_name, t.get("name"), members, variables, clocks)
     if not out:
         raise LsBusError(f"{path}: terminalsAndIcons.xml has no terminal of kind {NETWORK_TERMINAL}")
