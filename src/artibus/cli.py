@@ -161,7 +161,8 @@ def cmd_pack(args):
     if args.fmi:
         raise ArtibusError("--fmi: a portable pack has the builds the bench's .ssd names")
     from artibus.bench.portable import pack_portable
-    benches = args.bench or [b for b in ssp.bench_names() if ssp.read(ssp.ssp_path(b)).can is None]
+    benches = args.bench or [b for b in ssp.bench_names()                  # (pack_portable says why not the others)
+                             if (r := ssp.read(ssp.ssp_path(b))).can is None and r.version == "1.0"]
     if args.output and len(benches) != 1:
         raise ArtibusError("-o names one portable pack: give one BENCH")
     if args.variant and len(benches) != 1:
