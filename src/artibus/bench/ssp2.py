@@ -39,8 +39,6 @@ from artibus.bench.ssd import NS
 SCHEMA_DIR = Path(__file__).parent / "schema" / "ssp2"
 #: the LS-BUS CAN MIME type of Rx_Data/Tx_Data (fmi-ls-bus 1.0, 4_4_1_can.adoc)
 CAN_MIME = 'application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0"'
-#: bytes every .ssd with an LS-BUS network holds (a fast test before it is parsed)
-MARKER = b"application/org.fmi-standard.fmi-ls-bus"
 NETWORK_TERMINAL = "org.fmi-ls-bus.network-terminal"
 MEMBERS = ("Tx_Data", "Tx_Clock", "Rx_Data", "Rx_Clock")
 #: the member each member is connected to (4____network_abstraction.adoc, "Bus Terminal")
@@ -309,8 +307,11 @@ def read_network(root, where, fmu):
                                f"mime-type=\"{kinds[b][1].get('mime-type')}\"")
         if a in member or b in member:
             if not (a in member and b in member and member[a][1].startswith("Tx") and PEER[member[a][1]] == member[b][1]):
-                raise ArtibusError(f"{head}: a bus terminal's Tx member is connected to a terminal's Rx member "
-                                   "(fmi-ls-bus 1.0, \"Bus Terminal\": Tx_Data -> Rx_Data, Tx_Clock -> Rx_Clock)")
+                what = " to ".join(f"{'.'.join(x)} ({'member ' + member[x][1] if x in member else 'no terminal member'})"
+                                   for x in (a, b))
+                raise ArtibusError(f"{head}: connects {what}; a bus terminal's Tx member is connected to a "
+                                   "terminal's Rx member, from Tx to Rx (fmi-ls-bus 1.0, \"Bus Terminal\": "
+                                   "Tx_Data -> Rx_Data, Tx_Clock -> Rx_Clock)")
             for x, y in ((a, b), (b, a)):
                 if x in links:
                     raise ArtibusError(f"{head}: {'.'.join(x)} is connected twice")

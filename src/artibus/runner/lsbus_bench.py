@@ -43,11 +43,8 @@ from artibus.runner.lsbus import Network, write_can_log
 def read_spec(path, label=None):
     """the parsed SSP 2.0 .ssd at path (label: how messages name it) when its System has
     FMI-LS-BUS components (artibus.bench.ssp2.lsbus_components), else None"""
-    data = Path(path).read_bytes()
-    if ssp2.MARKER not in data:
-        return None
     try:
-        root = etree.fromstring(data)
+        root = etree.fromstring(Path(path).read_bytes())
     except etree.XMLSyntaxError as e:
         raise ArtibusError(f"{label or path}: not well-formed XML: {e}") from None
     return root if ssp2.lsbus_components(root) else None

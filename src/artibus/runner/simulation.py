@@ -129,12 +129,12 @@ class Simulation(_Setup):
         try:
             # unpacked once per content and kept (artibus.cache), or into a temporary directory
             self._tmp, self._tmp_owned = cache.unpacked(self.ssp)
-            # a bench with an FMI-LS-BUS network (SSP 2.0 components with the LS-BUS MIME type,
-            # artibus.bench.ssp2.MARKER): only then its modules (FMPy's FMI 3.0 classes) and a second
-            # reading of the .ssd; every other run pays nothing
+            # an SSP 2.0 bench, which may have an FMI-LS-BUS network (artibus.bench.ssp2): only then
+            # its modules (FMPy's FMI 3.0 classes) and a second reading of the .ssd; every SSP 1.0
+            # bench's run pays nothing
             ssd = Path(self._tmp) / "SystemStructure.ssd"
             steering = None
-            if b"application/org.fmi-standard.fmi-ls-bus" in ssd.read_bytes():
+            if self.bench.version == "2.0":
                 from artibus.runner.lsbus_bench import LsBusSteering, read_spec
                 if read_spec(ssd, where) is not None:
                     steering = LsBusSteering(where, self._tmp, lsbus_wire_time)
