@@ -106,6 +106,9 @@ def _info_ssp(path):
     for c in bench.connections:
         tr = f"  (x {c.factor:g} + {c.offset:g})" if (c.factor, c.offset) != (1.0, 0.0) else ""
         print(f"  {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}{tr}")
+    if bench.version == "2.0":           # its FMI-LS-BUS network (artibus.bench.ssp2)
+        from artibus.bench.ssp2 import network_lines
+        print("", *network_lines(ssp.ssp_path(path)), sep="\n")
     return 0
 
 

@@ -321,12 +321,9 @@ def check_bench(bench, out=print):
         out(f"    {what}")
         out(f"      another master: {other}")
     if b.version == "2.0":       # its FMI-LS-BUS network, read and checked as the runner reads it
-        from artibus.bench.ssp2 import network_of_ssp
-        net = network_of_ssp(path)
-        if net is not None:
-            out(f"  FMI-LS-BUS network (SSP 2.0): {len(net.nodes)} nodes on {net.bus[0]}, every {net.period:g} s "
-                f"(each terminal as its four connections): " + ", ".join(
-                    f"{n}.{t} - {net.bus[0]}.{bt}" for n, (t, bt) in net.terminals.items()))
+        from artibus.bench.ssp2 import network_lines
+        for line in network_lines(path):
+            out(f"  {line}")
     conv = [(p, k, v) for p, c in b.components.items() for k, v in c.converted.items()]
     if conv:
         out(f"  values converted to the FMU's units ({len(conv)}):")

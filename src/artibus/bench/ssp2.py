@@ -403,3 +403,21 @@ def network_of_ssp(ssp):
                                    f"source=\"{c.get('source')}\">: not in the .ssp")
             return io.BytesIO(z.read(c.get("source")))
         return read_network(root, where, fmu)
+
+
+def network_lines(ssp):
+    """what ``artibus info``/``artibus check`` print of a packed bench's FMI-LS-BUS network ([] without)"""
+    net = network_of_ssp(ssp)
+    if net is None:
+        return []
+    bus, source, params = net.bus
+    out = [f"FMI-LS-BUS network (SSP 2.0): {len(net.nodes)} nodes on {bus} ({source}, wireTime "
+           f"{'on' if params['wireTime'] else 'off'}), ticked every {net.period:g} s (the nodes' Tx_Clock); "
+           "each terminal as its four connections:"]
+    for name, (src, p) in net.nodes.items():
+        term, bus_term = net.terminals[name]
+        values = ", ".join(f"{k} = {v}" for k, v in p.items())
+        out.append(f"  {name}: {src}, {term} <-> {bus}.{bus_term}" + (f"; {values}" if values else ""))
+    out += [f"  {frm} -> {node}.{var}" for node, var, frm in net.inputs]
+    out += [f"  {node}.{var} -> {to}" for node, var, to in net.outputs]
+    return out
