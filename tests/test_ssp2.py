@@ -255,3 +255,21 @@ def test_the_portable_pack_refuses_an_ssp_2_0_bench_saying_why():
     from artibus.bench.portable import pack_portable
     with pytest.raises(ArtibusError, match="SSP 1.0 only"):
         pack_portable("Bus36m_Circle_LSBUS")
+
+
+def test_an_ssp_2_0_bench_without_a_network_runs_as_its_ssp_1_0_twin(tmp_path):
+    """Bus36m_Circle with version="2.0" (valid SSP 2.0 as it is: 2.0 keeps 1.0's elements): the
+    same components, connections and result, bit for bit, over 1 s"""
+    import numpy as np
+    from artibus.runner import Simulation
+    path = edited(tmp_path, lambda s: s.replace('version="1.0" name="Bus36m_Circle"', 'version="2.0" name="Bus36m_Circle"'),
+                  bench="Bus36m_Circle")
+    one, two = ssp.read(ssp.ssp_path("Bus36m_Circle")), ssp.read(path)
+    assert (one.version, two.version) == ("1.0", "2.0")
+    assert list(one.components) == list(two.components)
+    assert [(c.start, c.end) for c in one.connections] == [(c.start, c.end) for c in two.connections]
+    with Simulation("Bus36m_Circle") as a, Simulation(path) as b:
+        ra, rb = a.run(stop_time=1.0), b.run(stop_time=1.0)
+        assert a.can is None and b.can is None
+    assert ra.names == rb.names and len(ra.time) > 50
+    np.testing.assert_array_equal(ra.array(), rb.array())

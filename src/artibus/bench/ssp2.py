@@ -215,7 +215,10 @@ def _check_connector(comp, conn, var, where):
     head = f"{where}:{conn.sourceline}: <Connector name=\"{name}\"> of {comp.get('name')}"
     if var is None:
         raise ArtibusError(f"{head}: the FMU has no variable {name!r}")
-    kind = etree.QName(t).localname if t is not None else var.tag
+    if t is None:
+        raise ArtibusError(f"{head}: no type; the connectors of an FMI-LS-BUS FMU give theirs (ssc:Binary with "
+                           "its mime-type, ssc:Clock, ssc:Float64, ...)")
+    kind = etree.QName(t).localname
     if FMI3_TYPE.get(kind, kind) != var.tag:
         raise ArtibusError(f"{head}: an ssc:{kind}, but the FMU's {name} is a {var.tag}")
     if conn.get("kind") != var.get("causality"):
@@ -233,6 +236,157 @@ def _check_connector(comp, conn, var, where):
     return kind, t
 
 
+def _kind_name(kind):
+    return f"an ssc:{kind}" if kind else "a connector without a type"
+
+
+def _connectors(comps, fmus, where):
+    """({(component, connector): (its type's name, the type element)} of the LS-BUS components,
+    each checked against its FMU variable; {(component, connector): (terminal, member)} of the
+    terminal members, each terminal complete: its four members (4, "Bus Terminal") as connectors
+    of their types, the data of the LS-BUS CAN MIME type)"""
+    kinds, member = {}, {}
+    for c in comps:
+        name, f = c.get("name"), fmus[c.get("name")]
+        for k in c.iterfind("ssd:Connectors/ssd:Connector", NS):
+            kinds[(name, k.get("name"))] = _check_connector(c, k, f.variables.get(k.get("name")), where)
+        for term, members in f.terminals.items():
+            if f.is_bus and not any((name, members.get(m)) in kinds for m in MEMBERS):
+                continue                     # a terminal of the bus no node is connected to
+            for m in MEMBERS:
+                key = (name, members.get(m))
+                if key not in kinds:
+                    raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{name}\">: no <Connector "
+                                       f"name=\"{members.get(m)}\">, the member {m} of its bus terminal {term} "
+                                       "(terminalsAndIcons.xml; fmi-ls-bus 1.0, \"Bus Terminal\")")
+                kind, t = kinds[key]
+                want = "Binary" if m.endswith("_Data") else "Clock"
+                head = f"{where}:{t.getparent().sourceline}: <Connector name=\"{members[m]}\"> of {name}"
+                if kind != want:
+                    raise ArtibusError(f"{head}: an ssc:{kind}, but the terminal member {m} is an ssc:{want}")
+                if want == "Binary" and t.get("mime-type") != CAN_MIME:
+                    raise ArtibusError(f"{head}: <Binary mime-type=\"{t.get('mime-type')}\">: the runner's master "
+                                       f"runs FMI-LS-BUS CAN ({CAN_MIME})")
+                member[key] = (term, m)
+    return kinds, member
+
+
+def _plant_kinds(system, by_name, kinds):
+    """kinds completed with the other components' connectors that connections name"""
+    for c in system.iterfind("ssd:Connections/ssd:Connection", NS):
+        for e, k in (("startElement", "startConnector"), ("endElement", "endConnector")):
+            el = by_name.get(c.get(e))
+            if el is None or (c.get(e), c.get(k)) in kinds or etree.QName(el).localname != "Component":
+                continue
+            conn = el.find(f"ssd:Connectors/ssd:Connector[@name='{c.get(k)}']", NS)
+            if conn is not None:
+                t = _type(conn)
+                kinds[(c.get(e), c.get(k))] = (etree.QName(t).localname if t is not None else None, t)
+
+
+def _connections(system, by_name, fmus, kinds, member, bus, where):
+    """({terminal member: the member it is connected to}, the Real inputs of the nodes, their
+    outputs) of the connections with an LS-BUS component at an end, each checked: the types equal
+    (a Binary to a Binary of its MIME type, a Clock to a Clock, a number to a number), a terminal
+    member from Tx to Rx (4, "Bus Terminal"), once; a Real one from an output to an input, with
+    no transformation"""
+    links, inputs, outputs = {}, [], []
+    for c in system.iterfind("ssd:Connections/ssd:Connection", NS):
+        a, b = (c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector"))
+        if a[0] not in fmus and b[0] not in fmus:
+            continue
+        head = f"{where}:{c.sourceline}: {_label(c)}"
+        for end in (a, b):
+            if end[0] not in by_name:
+                raise ArtibusError(f"{head}: no element {end[0]!r} in the System")
+            if end not in kinds:
+                raise ArtibusError(f"{head}: {end[0]} has no connector {end[1]!r}")
+        (ka, ta), (kb, tb) = kinds[a], kinds[b]
+        if not ((ka == kb) if {ka, kb} & {"Binary", "Clock"} else (ka in REAL and kb in REAL)):
+            raise ArtibusError(f"{head}: connects {_kind_name(ka)} ({'.'.join(a)}) to {_kind_name(kb)} "
+                               f"({'.'.join(b)})")
+        if ka == "Binary" and ta.get("mime-type") != tb.get("mime-type"):
+            raise ArtibusError(f"{head}: connects mime-type=\"{ta.get('mime-type')}\" to "
+                               f"mime-type=\"{tb.get('mime-type')}\"")
+        if a in member or b in member:
+            if not (a in member and b in member and member[a][1].startswith("Tx")
+                    and PEER[member[a][1]] == member[b][1]):
+                what = " to ".join(f"{'.'.join(x)} ({'member ' + member[x][1] if x in member else 'no terminal member'})"
+                                   for x in (a, b))
+                raise ArtibusError(f"{head}: connects {what}; a terminal's Tx member is connected to a terminal's "
+                                   "Rx member, from Tx to Rx (fmi-ls-bus 1.0, \"Bus Terminal\": Tx_Data -> Rx_Data, "
+                                   "Tx_Clock -> Rx_Clock)")
+            for x, y in ((a, b), (b, a)):
+                if x in links:
+                    raise ArtibusError(f"{head}: {'.'.join(x)} is connected twice")
+                links[x] = y
+            continue
+        if any(isinstance(t.tag, str) and etree.QName(t).localname.endswith("Transformation") for t in c):
+            raise ArtibusError(f"{head}: a transformation on a connection to an FMI-LS-BUS FMU is not applied")
+        if bus in (a[0], b[0]):
+            raise ArtibusError(f"{head}: the bus simulation FMU {bus}'s signals are not connected by the runner")
+        for end, t, want in ((a, ta, "output"), (b, tb, "input")):
+            if end[0] in fmus and t.getparent().get("kind") != want:
+                raise ArtibusError(f"{head}: {'.'.join(end)} has kind=\"{t.getparent().get('kind')}\", not {want}")
+        if b[0] in fmus:
+            inputs.append((b[0], b[1], ".".join(a)))
+        else:
+            outputs.append((a[0], a[1], ".".join(b)))
+    return links, inputs, outputs
+
+
+def _placement(comps, fmus, links, member, bus, where):
+    """[(node, its terminal, the bus terminal)] in the bus's terminal order: each node's one
+    terminal as its four connections to one terminal of the bus, the nodes on the bus's first
+    terminals (artibus.runner.lsbus.Network: the k-th node on the k-th terminal)"""
+    bus_terms, placed = list(fmus[bus].terminals), {}
+    for c in comps:
+        name = c.get("name")
+        if name == bus:
+            continue
+        head = f"{where}:{c.sourceline}: <Component name=\"{name}\">"
+        terms = fmus[name].terminals
+        if len(terms) != 1:
+            raise ArtibusError(f"{head}: {len(terms)} bus terminals; the runner's master connects nodes of one")
+        ((term, members),) = terms.items()
+        peers = set()
+        for m in MEMBERS:
+            peer = links.get((name, members[m]))
+            if peer is None:
+                raise ArtibusError(f"{head}: its terminal {term}'s member {m} ({members[m]}) is connected to "
+                                   "nothing; each terminal is its four connections to a terminal of the bus "
+                                   "simulation FMU")
+            if peer[0] != bus:
+                raise ArtibusError(f"{head}: {members[m]} is connected to {'.'.join(peer)}, not to the bus "
+                                   f"simulation FMU {bus}")
+            peers.add(member[peer][0])
+        if len(peers) != 1:
+            raise ArtibusError(f"{head}: its terminal {term} is connected to several terminals of {bus} "
+                               f"({', '.join(sorted(peers))})")
+        placed[bus_terms.index(peers.pop())] = (name, term)
+    if sorted(placed) != list(range(len(placed))):
+        raise ArtibusError(f"{where}: the nodes are on {bus}'s terminals {', '.join(bus_terms[k] for k in sorted(placed))}; "
+                           f"the runner's master connects them to its first terminals in order "
+                           f"({', '.join(bus_terms[:len(placed)])})")
+    return [(*placed[k], bus_terms[k]) for k in sorted(placed)]
+
+
+def _period(net, fmus, where):
+    """the runner's tick: the nodes' time-based Tx clocks' interval, one for all"""
+    periods = {}
+    for name, (term, _) in net.terminals.items():
+        tx = fmus[name].variables[fmus[name].terminals[term]["Tx_Clock"]]
+        try:
+            if tx.get("intervalVariability") in ("constant", "fixed"):
+                periods[name] = parse_real(tx.get("intervalDecimal"))
+        except (TypeError, ValueError):
+            pass
+    if len(set(periods.values())) != 1 or len(periods) != len(net.nodes) or not min(periods.values()) > 0:
+        raise ArtibusError(f"{where}: the nodes' Tx_Clock periods {periods or 'none'}: the runner ticks the network "
+                           "with one period, every node's time-based (constant or fixed) Tx_Clock interval")
+    return next(iter(periods.values()))
+
+
 def read_network(root, where, fmu):
     """The Network of the .ssd's FMI-LS-BUS components (lsbus_components), or None without any.
     fmu(component element) -> the FMU (a path or a file object)."""
@@ -247,146 +401,34 @@ def read_network(root, where, fmu):
     by_name = {c.get("name"): c for c in system.iterfind("ssd:Elements/*", NS)}
     fmus = {c.get("name"): read_fmu(fmu(c), f"{where}:{c.sourceline}: <Component name=\"{c.get('name')}\" "
                                             f"source=\"{c.get('source')}\">") for c in comps}
-    # every connector of an LS-BUS component against its FMU variable; each type and the member it is
-    kinds, member = {}, {}
-    for c in comps:
-        f = fmus[c.get("name")]
-        for k in c.iterfind("ssd:Connectors/ssd:Connector", NS):
-            kinds[(c.get("name"), k.get("name"))] = _check_connector(c, k, f.variables.get(k.get("name")), where)
-        for term, members in f.terminals.items():
-            if f.is_bus and not any((c.get("name"), members.get(m)) in kinds for m in MEMBERS):
-                continue                     # a terminal of the bus no node is connected to
-            for m in MEMBERS:
-                key = (c.get("name"), members.get(m))
-                if key not in kinds:
-                    raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{c.get('name')}\">: no "
-                                       f"<Connector name=\"{members.get(m)}\">, the member {m} of its bus terminal "
-                                       f"{term} (terminalsAndIcons.xml; fmi-ls-bus 1.0, \"Bus Terminal\")")
-                kind, t = kinds[key]
-                want = "Binary" if m.endswith("_Data") else "Clock"
-                if kind != want:
-                    raise ArtibusError(f"{where}: <Connector name=\"{members[m]}\"> of {c.get('name')}: an "
-                                       f"ssc:{kind}, but the terminal member {m} is an ssc:{want}")
-                if want == "Binary" and t.get("mime-type") != CAN_MIME:
-                    raise ArtibusError(f"{where}: <Connector name=\"{members[m]}\"> of {c.get('name')}: "
-                                       f"<Binary mime-type=\"{t.get('mime-type')}\">: the runner's master runs "
-                                       f"FMI-LS-BUS CAN ({CAN_MIME})")
-                member[key] = (term, m)
-    for c in system.iterfind("ssd:Connections/ssd:Connection", NS):   # the plant's connectors' types
-        for e, k in (("startElement", "startConnector"), ("endElement", "endConnector")):
-            el = by_name.get(c.get(e))
-            if el is None or (c.get(e), c.get(k)) in kinds or etree.QName(el).localname != "Component":
-                continue
-            conn = el.find(f"ssd:Connectors/ssd:Connector[@name='{c.get(k)}']", NS)
-            if conn is not None:
-                t = _type(conn)
-                kinds[(c.get(e), c.get(k))] = (etree.QName(t).localname if t is not None else None, t)
     buses = [c.get("name") for c in comps if fmus[c.get("name")].is_bus]
     if len(buses) != 1:
         raise ArtibusError(f"{where}: {len(buses)} bus simulation FMUs (isBusSimulationFMU=\"true\" in "
                            f"fmi-ls-manifest.xml) among the FMI-LS-BUS components "
                            f"{', '.join(c.get('name') for c in comps)}; the runner connects the nodes through one")
     (bus,) = buses
-    links, net = {}, Network(period=None, bus=None, nodes={})
-    for c in system.iterfind("ssd:Connections/ssd:Connection", NS):
-        a, b = (c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector"))
-        if a[0] not in fmus and b[0] not in fmus:
-            continue
-        head = f"{where}:{c.sourceline}: {_label(c)}"
-        for end in (a, b):
-            if end not in kinds and end[0] in by_name:
-                raise ArtibusError(f"{head}: {end[0]} has no connector {end[1]!r}")
-            if end[0] not in by_name:
-                raise ArtibusError(f"{head}: no element {end[0]!r} in the System")
-        ka, kb = kinds.get(a, (None,))[0], kinds.get(b, (None,))[0]
-        same = (ka == kb) if {ka, kb} & {"Binary", "Clock"} else (ka in REAL and kb in REAL)
-        if not same:
-            raise ArtibusError(f"{head}: connects an ssc:{ka} ({'.'.join(a)}) to an ssc:{kb} ({'.'.join(b)})")
-        if ka == "Binary" and kinds[a][1].get("mime-type") != kinds[b][1].get("mime-type"):
-            raise ArtibusError(f"{head}: connects mime-type=\"{kinds[a][1].get('mime-type')}\" to "
-                               f"mime-type=\"{kinds[b][1].get('mime-type')}\"")
-        if a in member or b in member:
-            if not (a in member and b in member and member[a][1].startswith("Tx") and PEER[member[a][1]] == member[b][1]):
-                what = " to ".join(f"{'.'.join(x)} ({'member ' + member[x][1] if x in member else 'no terminal member'})"
-                                   for x in (a, b))
-                raise ArtibusError(f"{head}: connects {what}; a bus terminal's Tx member is connected to a "
-                                   "terminal's Rx member, from Tx to Rx (fmi-ls-bus 1.0, \"Bus Terminal\": "
-                                   "Tx_Data -> Rx_Data, Tx_Clock -> Rx_Clock)")
-            for x, y in ((a, b), (b, a)):
-                if x in links:
-                    raise ArtibusError(f"{head}: {'.'.join(x)} is connected twice")
-                links[x] = y
-            continue
-        if c.find("ssc:LinearTransformation", NS) is not None or any(
-                c.find(f"ssc:{m}", NS) is not None for m in ("BooleanMappingTransformation", "IntegerMappingTransformation",
-                                                             "EnumerationMappingTransformation")):
-            raise ArtibusError(f"{head}: a transformation on a connection to an FMI-LS-BUS FMU is not applied")
-        if bus in (a[0], b[0]):
-            raise ArtibusError(f"{head}: the bus simulation FMU {bus}'s signals are not connected by the runner")
-        if b[0] in fmus:
-            net.inputs.append((b[0], b[1], ".".join(a)))
-        else:
-            net.outputs.append((a[0], a[1], ".".join(b)))
-    # each node terminal as its four connections to one terminal of the bus
-    bus_terms, placed = list(fmus[bus].terminals), {}
-    for c in comps:
-        name = c.get("name")
-        if name == bus:
-            continue
-        terms = fmus[name].terminals
-        if len(terms) != 1:
-            raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{name}\">: {len(terms)} bus terminals; "
-                               "the runner's master connects nodes of one terminal")
-        (term, members), = terms.items()
-        peers = set()
-        for m in MEMBERS:
-            peer = links.get((name, members[m]))
-            if peer is None:
-                raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{name}\">: its terminal {term}'s "
-                                   f"member {m} ({members[m]}) is connected to nothing; each terminal is its four "
-                                   "connections to a terminal of the bus simulation FMU")
-            if peer[0] != bus:
-                raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{name}\">: {members[m]} is connected "
-                                   f"to {'.'.join(peer)}, not to the bus simulation FMU {bus}")
-            peers.add(member[peer][0])
-        if len(peers) != 1:
-            raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{name}\">: its terminal {term} is "
-                               f"connected to several terminals of {bus} ({', '.join(sorted(peers))})")
-        placed[bus_terms.index(peers.pop())] = name
-    if sorted(placed) != list(range(len(placed))):
-        raise ArtibusError(f"{where}: the nodes are on {bus}'s terminals "
-                           f"{', '.join(bus_terms[k] for k in sorted(placed))}; the runner's master connects "
-                           f"them to its first terminals in order ({', '.join(bus_terms[:len(placed)])})")
+    kinds, member = _connectors(comps, fmus, where)
+    _plant_kinds(system, by_name, kinds)
+    links, inputs, outputs = _connections(system, by_name, fmus, kinds, member, bus, where)
     comp = {c.get("name"): c for c in comps}
-    for k in sorted(placed):
-        name = placed[k]
+    net = Network(period=None, bus=None, nodes={}, inputs=inputs, outputs=outputs)
+    for name, term, bus_term in _placement(comps, fmus, links, member, bus, where):
         net.nodes[name] = (comp[name].get("source"), _parameters(comp[name], where))
-        net.terminals[name] = (next(iter(fmus[name].terminals)), bus_terms[k])
+        net.terminals[name] = (term, bus_term)
     params = _parameters(comp[bus], where)
+    head = f"{where}:{comp[bus].sourceline}: <Component name=\"{bus}\">"
     extra = set(params) - BUS_PARAMETERS
     if extra:
-        raise ArtibusError(f"{where}: <Component name=\"{bus}\">: parameter {', '.join(sorted(extra))}: the runner "
-                           f"sets only {', '.join(sorted(BUS_PARAMETERS))} of the bus simulation FMU")
-    if params.get("nNodes", len(placed)) != len(placed):
-        raise ArtibusError(f"{where}: <Component name=\"{bus}\">: <Parameter name=\"nNodes\"> {params['nNodes']}, "
-                           f"but {len(placed)} nodes are connected to it")
+        raise ArtibusError(f"{head}: parameter {', '.join(sorted(extra))}: the runner sets only "
+                           f"{', '.join(sorted(BUS_PARAMETERS))} of the bus simulation FMU")
+    if params.get("nNodes", len(net.nodes)) != len(net.nodes):
+        raise ArtibusError(f"{head}: <Parameter name=\"nNodes\"> {params['nNodes']}, but {len(net.nodes)} nodes "
+                           "are connected to it")
     if "wireTime" not in params:
         w = fmus[bus].variables.get("wireTime")
         params["wireTime"] = w is not None and w.get("start") == "true"
     net.bus = (bus, comp[bus].get("source"), params)
-    # the runner's tick: the nodes' time-based Tx clocks, all of one period
-    periods = {}
-    for name in net.nodes:
-        tx = fmus[name].variables[fmus[name].terminals[net.terminals[name][0]]["Tx_Clock"]]
-        try:
-            if tx.get("intervalVariability") in ("constant", "fixed"):
-                periods[name] = parse_real(tx.get("intervalDecimal"))
-        except (TypeError, ValueError):
-            pass
-    if len(set(periods.values())) != 1 or len(periods) != len(net.nodes) or not min(periods.values()) > 0:
-        raise ArtibusError(f"{where}: the nodes' Tx_Clock periods {periods or 'none'}: the runner ticks the network "
-                           "with one period, every node's time-based (constant or fixed) Tx_Clock interval")
-    net.period = next(iter(periods.values()))
+    net.period = _period(net, fmus, where)
     return net
 
 
