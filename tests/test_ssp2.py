@@ -146,6 +146,18 @@ def test_each_terminal_is_its_four_connections(bench):
         assert len(peers) == 1, (n, peers)    # all four to one terminal of the bus
         used.append(peers.pop())
     assert len(set(used)) == len(nodes)
+    # the runner's network: the nodes in the order of the bus terminals they are on (its k-th node
+    # on the bus's k-th terminal, artibus.runner.lsbus.Network), the same Real connections
+    from artibus.bench.ssp2 import network_of_ssp
+    net = network_of_ssp(ssp.ssp_path(bench))
+    order = list(info[bus][1])
+    assert list(net.nodes) == [n for _, n in sorted((order.index(t), n) for n, t in zip(nodes, used))]
+    assert used and all(order.index(t) < len(nodes) for t in used)
+    members = {(n, v) for n in fmi3 for t in info[n][1].values() for v in t.values()}
+    real = [c for c in conns if (c[0] in nodes or c[2] in nodes) and (c[0], c[1]) not in members]
+    assert sorted(net.inputs) == sorted((b, kb, f"{a}.{ka}") for a, ka, b, kb in real if b in nodes)
+    assert sorted(net.outputs) == sorted((a, ka, f"{b}.{kb}") for a, ka, b, kb in real if b not in nodes)
+    assert len(net.inputs) >= 4 and len(net.outputs) >= 5
     # the Real signals between the plant and the nodes: ordinary connections of Real types
     for a, ka, b, kb in conns:
         if a in fmi3 and b in fmi3:
