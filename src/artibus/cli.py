@@ -106,6 +106,9 @@ def _info_ssp(path):
     for c in bench.connections:
         tr = f"  (x {c.factor:g} + {c.offset:g})" if (c.factor, c.offset) != (1.0, 0.0) else ""
         print(f"  {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}{tr}")
+    if bench.version == "2.0":           # its FMI-LS-BUS network (artibus.bench.ssp2)
+        from artibus.bench.ssp2 import network_lines
+        print("", *network_lines(ssp.ssp_path(path)), sep="\n")
     return 0
 
 
@@ -161,7 +164,8 @@ def cmd_pack(args):
     if args.fmi:
         raise ArtibusError("--fmi: a portable pack has the builds the bench's .ssd names")
     from artibus.bench.portable import pack_portable
-    benches = args.bench or [b for b in ssp.bench_names() if ssp.read(ssp.ssp_path(b)).can is None]
+    benches = args.bench or [b for b in ssp.bench_names()                  # (pack_portable says why not the others)
+                             if (r := ssp.read(ssp.ssp_path(b))).can is None and r.version == "1.0"]
     if args.output and len(benches) != 1:
         raise ArtibusError("-o names one portable pack: give one BENCH")
     if args.variant and len(benches) != 1:

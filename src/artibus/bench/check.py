@@ -320,6 +320,10 @@ def check_bench(bench, out=print):
     for what, other in specific:
         out(f"    {what}")
         out(f"      another master: {other}")
+    if b.version == "2.0":       # its FMI-LS-BUS network, read and checked as the runner reads it
+        from artibus.bench.ssp2 import network_lines
+        for line in network_lines(path):
+            out(f"  {line}")
     conv = [(p, k, v) for p, c in b.components.items() for k, v in c.converted.items()]
     if conv:
         out(f"  values converted to the FMU's units ({len(conv)}):")

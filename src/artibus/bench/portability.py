@@ -37,6 +37,8 @@ APPLIED = {
     "Units": set(), "Unit": set(), "BaseUnit": {"kg", "m", "s", "A", "K", "mol", "cd", "rad", "factor", "offset"},
     "Enumerations": set(), "Enumeration": {"value"}, "Item": {"value"},
     "Real": {"unit", "value"}, "Integer": {"value"}, "Boolean": {"value"}, "String": {"value"},
+    # SSP 2.0 (artibus.bench.ssp2): an FMI-LS-BUS network's connectors, run by artibus.runner.lsbus_bench
+    "Float64": {"unit", "value"}, "Binary": {"mime-type"}, "Clock": {"intervalVariability", "intervalDecimal", "name"},
     "LinearTransformation": {"factor", "offset"}, "BooleanMappingTransformation": set(),
     "IntegerMappingTransformation": set(), "EnumerationMappingTransformation": set(),
     "MapEntry": {"source", "target"},
@@ -46,7 +48,6 @@ APPLIED = {
 #: annotation types artibus reads (the others' content is not applied)
 ANNOTATIONS = {ANNOTATION: "per-component communication steps",
                CAN_ANNOTATION: "connections routed over CAN",
-               "org.artibus.lsbus": "an FMI-LS-BUS network of FMI 3.0 nodes (artibus.runner.lsbus_bench)",
                "org.artibus.variant": "a variant's stop time",
                "org.artibus.source": "where a value is from (documentation)"}
 #: attribute values the runner does not implement: (element, attribute) -> {value: why}, or a
@@ -181,6 +182,10 @@ def artibus_specific(ssp, bench=None):
             for r in etree.fromstring(z.read(f"{VARIANT_DIR}/{n}.ssv")).iterfind(f".//artibus:{REBIND}", NS):
                 out.append((f"variant {n} rebinds {r.get('from')} to {r.get('to')}",
                             "binds the parameter set the .ssd names"))
+    if bench.version == "2.0":
+        out.append(("an SSP 2.0 system structure (its FMI-LS-BUS network: ssc:Binary and ssc:Clock connectors, "
+                    "artibus.bench.ssp2)", "reads SSP 1.0 only (ecos, libcosim, fmpy.ssp): not this bench; an "
+                    "SSP 2.0 master with FMI 3.0 clocks and Event Mode runs its network"))
     if bench.can is not None or any(c.can for c in bench.connections):
         routed = sum(1 for c in bench.connections if c.can)
         out.append((f"{routed} connections routed over CAN (org.artibus.can, {bench.can and bench.can.get('source')})",

@@ -155,6 +155,10 @@ def pack_portable(bench, variants=None, out=None):
         if comp not in values:
             raise ArtibusError(f"--variant: parameter '{full}': no component '{comp}' in {where}")
         values[comp][var] = value
+    if b.version != "1.0":
+        raise ArtibusError(f"{where}: an SSP {b.version} system structure (an FMI-LS-BUS network, artibus.bench.ssp2): "
+                           "the other masters (ecos, libcosim, fmpy.ssp) read SSP 1.0 only; a portable pack holds "
+                           "SSP 1.0 benches")
     if any(c.can is not None for c in b.connections) or b.can is not None:
         raise ArtibusError(f"{where}: the bench routes connections over CAN (artibus.can, an annotation of "
                            f"ours): no other master runs that network; a portable pack holds CAN-free benches")

@@ -22,7 +22,8 @@ mapping, a system connector's value to the variables it is connected to), a
 later binding over an earlier one, a higher level over a lower one; a Real
 value with a unit is converted to the FMU variable's unit (artibus.bench.units).
 
-Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships);
+Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships; an SSP 2.0
+.ssd against the SSP 2.0 XSDs, its FMI-LS-BUS network left out: artibus.bench.ssp2);
 what it leaves out (default experiment, per-component step sizes in our
 annotation, connector units) is read here with lxml from the same file.
 """
@@ -36,6 +37,7 @@ from lxml import etree
 
 from artibus.base import ROOT, ArtibusError, fmu_dir, parse_real
 from artibus.bench.fmi import build_of, fmi_choice, pack_file
+from artibus.bench.ssp2 import clocked   # an FMI-LS-BUS component keeps its FMI 3.0 build
 from artibus.bench.ssd import (MAPPINGS, NS, _component_sources, _compose, _depth,  # noqa: F401
                                _number, _sources_inside_components, map_transformation,
                                model_description)
@@ -113,7 +115,7 @@ def _sources(bench, fmi=None):
         if ref is None or not ref.startswith("resources/"):
             continue
         name = ref[len("resources/"):]
-        if fmi is not None and name.endswith(".fmu") and etree.QName(el).localname == "Component":  # (LS-BUS: FMI 3)
+        if fmi is not None and name.endswith(".fmu") and etree.QName(el).localname == "Component" and not clocked(el):
             files[ref] = build_of(ref, fmi, f"{ssd_file}:{el.sourceline}: <{etree.QName(el).localname}>")
             continue
         candidates = [src / ref, fmu_dir() / name, ROOT / "ssp" / "parameters" / name,
@@ -307,12 +309,14 @@ class Bench:
     start_time: float = 0.0
     stop_time: float | None = None
     can: dict | None = None        # the CAN network: {"source" (DBC in the .ssp), "period", "line"}
+    version: str = "1.0"           # the .ssd's SSP version: "2.0" may hold an FMI-LS-BUS network (ssp2)
 
 
 def read(ssp):
     """A .ssp as components (with their bound parameters) and connections
     resolved through nested systems to component variables."""
-    from fmpy.ssp.ssd import Component as SsdComponent, System, read_ssd
+    from fmpy.ssp.ssd import Component as SsdComponent, System
+    from artibus.bench.ssp2 import read_ssd
     from artibus.bench.parameters import typed
 
     ssp = str(ssp)
@@ -325,16 +329,11 @@ def read(ssp):
                 raise ArtibusError(f"{ssp}: no SystemStructure.ssd in it (not an SSP archive)")
     except (zipfile.BadZipFile, OSError) as e:
         raise ArtibusError(f"{ssp}: not a readable SSP archive (a zip file): {e}") from None
-    try:
-        ssd = read_ssd(ssp, validate=True)
-    except Exception as e:
-        _sources_inside_components(ssp, where)   # the reason, where it is that
-        raise ArtibusError(f"{where}: not a valid SSP 1.0 system structure: {e}") from None
+    ssd, root = read_ssd(ssp, where)    # SSP 1.0, or 2.0 without its FMI-LS-BUS network (artibus.bench.ssp2)
     with zipfile.ZipFile(ssp) as z:
         names = set(z.namelist())
-        root = etree.fromstring(z.read("SystemStructure.ssd"))
 
-    bench = Bench(name=ssd.name, file=where, components={}, connections=[])
+    bench = Bench(name=ssd.name, file=where, components={}, connections=[], version=root.get("version"))
     de = root.find("ssd:DefaultExperiment", NS)
     if de is not None:
         bench.start_time = _number(de, "startTime", 0.0, where)

@@ -4,15 +4,19 @@ per network period by the runner, through the interface of artibus.can.network.N
 (start, tick, finish, settle, since_series, close) in the Python loop of Simulation._run;
 Simulation attaches it to every bench with the annotation below.
 
-The bench's System names the network in an ``org.artibus.lsbus`` annotation::
+The bench is an SSP 2.0 system structure (artibus.bench.ssp2): the LS-BUS FMUs are its
+components with ssc:Binary/ssc:Clock connectors, each node's terminal its four connections to a
+terminal of the bus simulation FMU (CanBus), the Real signals between the plant and the nodes
+ordinary connections, the nodes' and the bus's parameters inline parameter bindings::
 
-    <LsBus xmlns="urn:artibus" period="0.01" wireTime="false">
-      <Bus source="resources/fmi3/CanBus.fmu"/>
-      <Node name="ECU1" source="resources/fmi3/SteeringECU_LSBUS.fmu"><Parameter name="module" value="1"/></Node>
-      <Input node="ECU1" variable="vVehicle" from="Bus.vx[1]"/>
-      <Output node="Act1" variable="delta[2]" to="Bus.delta[2]"/>
-    </LsBus>
+    <ssd:Component name="ECU1" source="resources/fmi3/SteeringECU_LSBUS.fmu" ...>
+      <ssd:Connector name="SteeringCAN.Tx_Data" kind="output"><ssc:Binary mime-type="...can; version=&quot;1.0.0&quot;"/>...
+    <ssd:Connection startElement="ECU1" startConnector="SteeringCAN.Tx_Data" endElement="CanBus" endConnector="Node2.Rx_Data"/>
+    <ssd:Connection startElement="Bus" startConnector="vx[1]" endElement="ECU1" endConnector="vVehicle"/>
 
+artibus.bench.ssp reads the rest (the plant) as it reads an SSP 1.0 bench; the network here is
+read from those components and connections (artibus.bench.ssp2.read_network): the period is the
+nodes' Tx_Clock interval, wireTime the bus's binding (or its FMU's default).
 Nodes in the order of their instant (artibus.runner.lsbus), the k-th node on the bus's k-th
 terminal (nNodes = the number of nodes). The sources are packed in the .ssp (artibus pack
 packs every ``source``) and run from its unpacked copy. What each tick k at time t does, as the Real-wired
@@ -25,51 +29,34 @@ before, delivered before the receivers step):
    their start values) for its steps from t, as the Real-wired actuators' outputs reach
    the plant in the same macro step (Gauss-Seidel, the actuators before the plant).
 
-Not yet: the nodes as SSP 2.0 components (ssc:Binary, ssc:Clock connectors, each terminal
-as its four connections); the C stepping core (the run takes the Python loop).
+Not yet: the C stepping core (the run takes the Python loop).
 """
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from artibus.base import ArtibusError, parse_integer, parse_real
-from artibus.runner.lsbus import Network, write_can_log
+from lxml import etree
 
-ANNOTATION = "org.artibus.lsbus"
-NS = "{urn:artibus}"
+from artibus.base import ArtibusError
+from artibus.bench import ssp2
+from artibus.runner.lsbus import Network, write_can_log
 
 
 def read_spec(path, label=None):
-    """the LsBus element of the System's org.artibus.lsbus annotation in the .ssd at path
-    (label: how messages name it), or None"""
-    root = ET.parse(path).getroot()
-    for a in root.iter("{http://ssp-standard.org/SSP1/SystemStructureCommon}Annotation"):
-        if a.get("type") == ANNOTATION:
-            el = a.find(f"{NS}LsBus")
-            if el is None:
-                raise ArtibusError(f"{label or path}: annotation {ANNOTATION} without an <LsBus xmlns=\"urn:artibus\">")
-            return el
-    return None
+    """the parsed SSP 2.0 .ssd at path (label: how messages name it) when its System has
+    FMI-LS-BUS components (artibus.bench.ssp2.lsbus_components), else None"""
+    try:
+        root = etree.fromstring(Path(path).read_bytes())
+    except etree.XMLSyntaxError as e:
+        raise ArtibusError(f"{label or path}: not well-formed XML: {e}") from None
+    return root if ssp2.lsbus_components(root) else None
 
 
-def _fmu(ssd, root, source):
+def _fmu(ssd, root, component):
+    source = component.get("source")
     path = Path(root) / (source or "")
     if not source or not path.is_file():
-        raise ArtibusError(f"{ssd}: <LsBus> source=\"{source}\": no such file in the .ssp")
+        raise ArtibusError(f"{ssd}:{component.sourceline}: <Component name=\"{component.get('name')}\" "
+                           f"source=\"{source}\">: no such file in the .ssp")
     return path
-
-
-def _number(ssd, name, text):
-    """A <Parameter value=>: artibus.base's integer or decimal syntax (as everywhere else in the
-    runner), a clear error naming the file, parameter and value otherwise."""
-    try:
-        return parse_integer(text)
-    except ValueError:
-        pass
-    try:
-        return parse_real(text)
-    except ValueError:
-        raise ArtibusError(f"{ssd}: <LsBus> <Parameter name=\"{name}\" value=\"{text}\">: "
-                           "not a decimal number") from None
 
 
 class LsBusSteering:
@@ -79,27 +66,15 @@ class LsBusSteering:
         """ssd: the .ssd (its label in messages, or inside its .ssp); root: the unpacked .ssp"""
         el = read_spec(Path(root) / "SystemStructure.ssd", ssd)
         if el is None:
-            raise ArtibusError(f"{ssd}: no {ANNOTATION} annotation naming an LS-BUS network")
+            raise ArtibusError(f"{ssd}: no FMI-LS-BUS components (SSP 2.0, ssc:Binary/ssc:Clock connectors)")
         self.ssd = ssd
-        try:
-            self.period = float(el.get("period"))
-        except (TypeError, ValueError):
-            self.period = float("nan")
-        if not self.period > 0:
-            raise ArtibusError(f"{ssd}: <LsBus period=\"{el.get('period')}\">: expected a time > 0 in s")
-        self.wire_time = (el.get("wireTime", "false") == "true") if wire_time is None else bool(wire_time)
-        self.nodes = {}
-        for n in el.findall(f"{NS}Node"):
-            params = {p.get("name"): _number(ssd, p.get("name"), p.get("value")) for p in n.findall(f"{NS}Parameter")}
-            self.nodes[n.get("name")] = (_fmu(ssd, root, n.get("source")), params)
-        bus = el.find(f"{NS}Bus")
-        self.bus_path = _fmu(ssd, root, bus.get("source") if bus is not None else None)
-        self.inputs = [(i.get("node"), i.get("variable"), i.get("from")) for i in el.findall(f"{NS}Input")]
-        self.outputs = [(o.get("node"), o.get("variable"), o.get("to")) for o in el.findall(f"{NS}Output")]
-        for node, var, _ in self.inputs + self.outputs:
-            if node not in self.nodes:
-                raise ArtibusError(f"{ssd}: <LsBus> names node {node!r}, not one of its Nodes "
-                                   f"({', '.join(self.nodes)})")
+        net = ssp2.read_network(el, ssd, lambda c: _fmu(ssd, root, c))
+        self.period = net.period
+        bus, source, params = net.bus
+        self.wire_time = bool(params["wireTime"]) if wire_time is None else bool(wire_time)
+        self.nodes = {name: (Path(root) / src, p) for name, (src, p) in net.nodes.items()}
+        self.bus_path = Path(root) / source
+        self.inputs, self.outputs = net.inputs, net.outputs
         self.value = {to: 0.0 for _, _, to in self.outputs}   # the plant inputs, as of the last tick
         self.base = {}
         self.net = None
@@ -121,7 +96,8 @@ class LsBusSteering:
                 self.src.append((node, var, comp, name))
                 continue
             if comp not in units or name not in units[comp].out_names:
-                raise ArtibusError(f"{self.ssd}: <LsBus> Input from=\"{frm}\": not an output of the bench's components")
+                raise ArtibusError(f"{self.ssd}: the connection from {frm} to {node}.{var}: {frm} is not an output "
+                                   "of the bench's components")
             u = units[comp]
             self.src.append((node, var, u.raw.out, u.column(name)))
         for u in sim.units:
@@ -134,7 +110,7 @@ class LsBusSteering:
             raise ArtibusError(f"{self.ssd}: the LS-BUS period {self.period} s is not a multiple of the base step "
                                f"{sim.base_step} s")
         if sim.can is not None:
-            raise ArtibusError(f"{self.ssd}: a bench with both an org.artibus.can and an {ANNOTATION} network")
+            raise ArtibusError(f"{self.ssd}: a bench with both an org.artibus.can and an FMI-LS-BUS network")
         sim.can, sim.can_ratio = self, int(round(r))
 
     # -- the runner's CAN-network interface (artibus.can.network.Network)

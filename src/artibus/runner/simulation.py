@@ -110,9 +110,9 @@ class Simulation(_Setup):
         printed as warnings, once (artibus.bench.portability). fmi: None (the
         builds the bench's .ssd names), "2" or "3" (every FMU's build of that
         FMI version: a bench of ssp/benches by name, artibus.bench.ssp.ssp_path).
-        A bench with an org.artibus.lsbus annotation runs its FMI-LS-BUS network
+        An SSP 2.0 bench with FMI-LS-BUS components runs their network
         (artibus.runner.lsbus_bench) in place of a CAN network; lsbus_wire_time:
-        its bus's wireTime (None: the annotation's)."""
+        its bus's wireTime (None: the bench's binding)."""
         self.can = None
         self.single_rate = single_rate
         if algorithm not in ("gauss-seidel", "jacobi"):
@@ -129,11 +129,12 @@ class Simulation(_Setup):
         try:
             # unpacked once per content and kept (artibus.cache), or into a temporary directory
             self._tmp, self._tmp_owned = cache.unpacked(self.ssp)
-            # a bench with an FMI-LS-BUS network (its annotation in the .ssd): only then its modules
-            # (FMPy's FMI 3.0 classes) and a second reading of the .ssd; every other run pays nothing
+            # an SSP 2.0 bench, which may have an FMI-LS-BUS network (artibus.bench.ssp2): only then
+            # its modules (FMPy's FMI 3.0 classes) and a second reading of the .ssd; every SSP 1.0
+            # bench's run pays nothing
             ssd = Path(self._tmp) / "SystemStructure.ssd"
             steering = None
-            if b"org.artibus.lsbus" in ssd.read_bytes():
+            if self.bench.version == "2.0":
                 from artibus.runner.lsbus_bench import LsBusSteering, read_spec
                 if read_spec(ssd, where) is not None:
                     steering = LsBusSteering(where, self._tmp, lsbus_wire_time)

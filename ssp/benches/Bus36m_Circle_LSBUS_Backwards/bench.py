@@ -8,7 +8,11 @@ from artibus.report.benchkit import circle_road, outlines
 direct = script.load("Bus36m_Circle_Backwards")
 
 TEXT = direct.TEXT + (" The steering network runs as FMI-LS-BUS FMUs (SteeringSensors_LSBUS, SteeringECU_LSBUS, "
-                      "SteeringActuator_LSBUS) on the bus simulation FMU CanBus.")
+                      "SteeringActuator_LSBUS) on the bus simulation FMU CanBus. The bench is an SSP 2.0 system "
+                      "structure: the LS-BUS FMUs are components with ssc:Binary (the LS-BUS CAN MIME type) and "
+                      "ssc:Clock connectors, each CAN terminal its four connections to a terminal of CanBus; "
+                      "artibus's runner reads it (artibus.bench.ssp2), the SSP 1.0 masters ecos, libcosim and "
+                      "fmpy.ssp do not, and it has no portable pack.")
 
 
 def kpis(r):

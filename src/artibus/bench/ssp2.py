@@ -1,0 +1,465 @@
+"""SSP 2.0 benches (issue 24): a SystemStructure.ssd of version="2.0", validated against the
+SSP 2.0 XML schemas, whose FMI-LS-BUS network is read from its components and connections.
+
+SSP 2.0 keeps SSP 1.0's namespaces and adds, among others, the connector types ``ssc:Binary``
+(with ``mime-type``) and ``ssc:Clock``, and a connector's association to its clock
+(``ssd:Clock name=``; SSP 2.0 4.4.4 "Binary", "Clock", 5.3.2 "Connectors"). The schemas are the
+standard's normative files, vendored unchanged under schema/ssp2/ (SOURCE.md: the release and
+commit; LICENSE.txt: BSD 2-Clause), as FMPy ships SSP 1.0's; the wrapper below imports the SSD,
+SSV and SSM schemas at once so that inline parameter sets are validated as well.
+
+What reads what:
+
+- ``read_ssd(ssp, where)``: FMPy's SSD reader for SSP 1.0 (validated against FMPy's SSP 1.0
+  XSDs); for SSP 2.0 the file validated against the SSP 2.0 XSDs, then its *plant view* read by
+  FMPy's system reader: the .ssd without the FMI-LS-BUS components (those with an ssc:Binary or
+  ssc:Clock connector) and without every connection to them. artibus.bench.ssp reads that view
+  as it reads every SSP 1.0 bench; the network is the runner's (artibus.runner.lsbus_bench).
+- ``read_network(root, where, fmu)``: the network of the LS-BUS components: the bus simulation
+  FMU (its fmi-ls-manifest.xml says isBusSimulationFMU="true"), the nodes, their parameters
+  (inline parameter values), the Real connections between the plant and the nodes, and the
+  nodes' Tx clock period, each checked against the FMUs' modelDescription.xml and
+  terminalsAndIcons.xml (fmi-ls-bus 1.0, 4____network_abstraction.adoc "Bus Terminal": four
+  members Tx_Data, Tx_Clock, Rx_Data, Rx_Clock; Tx connected to Rx and vice versa, the variable
+  types equal; 2____common_concepts.adoc "Composition with dedicated Bus Simulation FMU").
+
+A bad .ssd is an ArtibusError naming the file, the line, the element and the value.
+"""
+import copy
+import io
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+from artibus.base import ArtibusError, parse_integer, parse_real
+from artibus.bench.ssd import NS
+
+SCHEMA_DIR = Path(__file__).parent / "schema" / "ssp2"
+#: the LS-BUS CAN MIME type of Rx_Data/Tx_Data (fmi-ls-bus 1.0, 4_4_1_can.adoc)
+CAN_MIME = 'application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0"'
+NETWORK_TERMINAL = "org.fmi-ls-bus.network-terminal"
+MEMBERS = ("Tx_Data", "Tx_Clock", "Rx_Data", "Rx_Clock")
+#: the member each member is connected to (4____network_abstraction.adoc, "Bus Terminal")
+PEER = {"Tx_Data": "Rx_Data", "Tx_Clock": "Rx_Clock", "Rx_Data": "Tx_Data", "Rx_Clock": "Tx_Clock"}
+REAL = {"Real", "Float64", "Float32"}
+#: SSP connector types -> the FMI 3.0 variable elements they stand for
+FMI3_TYPE = {"Real": "Float64", "Float64": "Float64", "Float32": "Float32", "Binary": "Binary", "Clock": "Clock",
+             "Boolean": "Boolean", "String": "String", "Integer": "Int32"}
+#: the CanBus parameters the runner passes (artibus.runner.lsbus_bench.LsBusSteering.start)
+BUS_PARAMETERS = {"nNodes", "wireTime"}
+_SCHEMA = []
+
+
+def schema():
+    """the SSP 2.0 SSD schema with SSV and SSM (inline parameter values and mappings), once"""
+    if not _SCHEMA:
+        imports = "".join(f'<xs:import namespace="{NS[p]}" schemaLocation="{(SCHEMA_DIR / f).as_uri()}"/>'
+                          for p, f in (("ssd", "SystemStructureDescription.xsd"),
+                                       ("ssv", "SystemStructureParameterValues.xsd"),
+                                       ("ssm", "SystemStructureParameterMapping.xsd")))
+        _SCHEMA.append(etree.XMLSchema(etree.fromstring(
+            f'<xs:schema xmlns:xs="http://www.w3.org/2001/XMLSchema">{imports}</xs:schema>')))
+    return _SCHEMA[0]
+
+
+def validate(root, where):
+    """the .ssd's root against the SSP 2.0 XSDs: an ArtibusError naming the line and what is wrong"""
+    s = schema()
+    if not s.validate(root):
+        e = s.error_log.last_error
+        raise ArtibusError(f"{where}:{e.line}: not a valid SSP 2.0 system structure: {e.message}")
+
+
+def _type(connector):
+    """the connector's type element (ssc:Real, ssc:Binary, ssc:Clock, ...) or None"""
+    return next((c for c in connector if isinstance(c.tag, str) and etree.QName(c).namespace == NS["ssc"]), None)
+
+
+def clocked(component):
+    """an FMI-LS-BUS component: one with an ssc:Binary or ssc:Clock connector"""
+    return any(t is not None and etree.QName(t).localname in ("Binary", "Clock")
+               for t in map(_type, component.iterfind("ssd:Connectors/ssd:Connector", NS)))
+
+
+def lsbus_components(root):
+    """the System's FMI-LS-BUS components (SSP 2.0 only), in the file's order"""
+    if root.get("version") != "2.0":
+        return []
+    return [c for c in root.iterfind("ssd:System/ssd:Elements/ssd:Component", NS) if clocked(c)]
+
+
+def plant_view(root):
+    """a copy of the .ssd without its FMI-LS-BUS components and the connections to them"""
+    view = copy.deepcopy(root)                 # (lxml's copy keeps the source lines)
+    system = view.find("ssd:System", NS)
+    gone = lsbus_components(view)
+    names = {c.get("name") for c in gone}
+    for c in gone:
+        c.getparent().remove(c)
+    for c in list(system.iterfind("ssd:Connections/ssd:Connection", NS)):
+        if c.get("startElement") in names or c.get("endElement") in names:
+            c.getparent().remove(c)
+    return view
+
+
+def read_ssd(ssp, where):
+    """(FMPy's SystemStructureDescription, the lxml root it is read from) of the .ssp's .ssd:
+    SSP 1.0 as FMPy reads it; SSP 2.0 validated here, then its plant view"""
+    from fmpy.ssp.ssd import SystemStructureDescription, add_tree_info, handle_system
+    from fmpy.ssp.ssd import read_ssd as fmpy_read_ssd
+    from artibus.bench.ssd import _sources_inside_components
+    try:
+        with zipfile.ZipFile(ssp) as z:
+            root = etree.fromstring(z.read("SystemStructure.ssd"))
+        if root.get("version") != "2.0":
+            return fmpy_read_ssd(ssp, validate=True), root
+    except Exception as e:
+        _sources_inside_components(ssp, where)   # the reason, where it is that
+        raise ArtibusError(f"{where}: not a valid SSP 1.0 system structure: {e}") from None
+    validate(root, where)
+    _sources_inside_components(ssp, where)
+    view = plant_view(root)
+    ssd = SystemStructureDescription()
+    ssd.version, ssd.name = view.get("version"), view.get("name")
+    try:
+        ssd.system = handle_system(view.find("ssd:System", NS), filename=ssp)
+    except Exception as e:
+        raise ArtibusError(f"{where}: its FMI 2.0 part not readable as SSP 1.0: {e}") from None
+    add_tree_info(ssd.system)
+    ssd.system.parent = None
+    return ssd, view
+
+
+# ---- the network ----------------------------------------------------------------------------
+
+@dataclass
+class Fmu3:
+    """what read_network needs of an LS-BUS FMU"""
+    variables: dict                 # name -> its modelDescription.xml element
+    terminals: dict                 # network terminal name -> {member: variable name}
+    is_bus: bool                    # fmi-ls-manifest.xml: isBusSimulationFMU="true"
+
+
+def read_fmu(file, where):
+    """file: a path or a file object of the FMU"""
+    try:
+        with zipfile.ZipFile(file) as z:
+            md = etree.fromstring(z.read("modelDescription.xml"))
+            names = set(z.namelist())
+            tai = (etree.fromstring(z.read("terminalsAndIcons/terminalsAndIcons.xml"))
+                   if "terminalsAndIcons/terminalsAndIcons.xml" in names else None)
+            m = "extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml"
+            manifest = etree.fromstring(z.read(m)) if m in names else None
+    except (zipfile.BadZipFile, KeyError, OSError, etree.XMLSyntaxError) as e:
+        raise ArtibusError(f"{where}: not a readable FMU: {e}") from None
+    variables = {v.get("name"): v for v in md.iterfind("ModelVariables/*")}
+    terminals = {}
+    for t in [] if tai is None else tai.iter("Terminal"):
+        if t.get("terminalKind") == NETWORK_TERMINAL:
+            terminals[t.get("name")] = {m.get("memberName"): m.get("variableName")
+                                        for m in t.findall("TerminalMemberVariable")}
+    return Fmu3(variables, terminals, manifest is not None and manifest.get("isBusSimulationFMU") == "true")
+
+
+@dataclass
+class Network:
+    """An FMI-LS-BUS network of an SSP 2.0 bench."""
+    period: float                   # s: the nodes' time-based Tx_Clock interval (the runner's tick)
+    bus: tuple                      # (component name, source, {parameter: value})
+    nodes: dict                     # name -> (source, {parameter: value}), in the bus's terminal order
+    inputs: list = field(default_factory=list)    # (node, variable, "Component.output")
+    outputs: list = field(default_factory=list)   # (node, variable, "Component.input")
+    terminals: dict = field(default_factory=dict)  # node -> (its terminal, the bus's terminal)
+
+
+def _label(c):
+    return (f'<Connection startElement="{c.get("startElement")}" startConnector="{c.get("startConnector")}" '
+            f'endElement="{c.get("endElement")}" endConnector="{c.get("endConnector")}">')
+
+
+def _value(el, where):
+    """an inline ssv:Parameter's value, typed as its element says"""
+    v = next((c for c in el if isinstance(c.tag, str)), None)
+    kind, text = (etree.QName(v).localname, v.get("value")) if v is not None else (None, None)
+    try:
+        if kind in ("Real", "Float64", "Float32"):
+            return parse_real(text)
+        if kind in ("Integer", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"):
+            return parse_integer(text)
+        if kind == "Boolean" and text in ("true", "false", "1", "0"):
+            return text in ("true", "1")
+    except (TypeError, ValueError):
+        pass
+    raise ArtibusError(f"{where}:{el.sourceline}: <Parameter name=\"{el.get('name')}\"> <{kind} value=\"{text}\">: "
+                       "an LS-BUS FMU's parameter must be a Real, an integer or a Boolean")
+
+
+def _parameters(comp, where):
+    out = {}
+    for b in comp.iterfind("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+        if b.get("source") is not None or b.find("ssd:ParameterMapping", NS) is not None:
+            raise ArtibusError(f"{where}:{b.sourceline}: <ParameterBinding source=\"{b.get('source')}\"> of the "
+                               f"FMI-LS-BUS component {comp.get('name')}: only inline parameter values (without "
+                               "a mapping) are applied to LS-BUS FMUs")
+        for p in b.iterfind("ssd:ParameterValues/ssv:ParameterSet/ssv:Parameters/ssv:Parameter", NS):
+            out[p.get("name")] = _value(p, where)
+    return out
+
+
+def _check_connector(comp, conn, var, where):
+    """the connector's type and kind against the FMU variable it names (SSP 2.0 5.3.2: a type
+    other than the variable's is an error)"""
+    name, t = conn.get("name"), _type(conn)
+    head = f"{where}:{conn.sourceline}: <Connector name=\"{name}\"> of {comp.get('name')}"
+    if var is None:
+        raise ArtibusError(f"{head}: the FMU has no variable {name!r}")
+    if t is None:
+        raise ArtibusError(f"{head}: no type; the connectors of an FMI-LS-BUS FMU give theirs (ssc:Binary with "
+                           "its mime-type, ssc:Clock, ssc:Float64, ...)")
+    kind = etree.QName(t).localname
+    if FMI3_TYPE.get(kind, kind) != var.tag:
+        raise ArtibusError(f"{head}: an ssc:{kind}, but the FMU's {name} is a {var.tag}")
+    if conn.get("kind") != var.get("causality"):
+        raise ArtibusError(f"{head}: kind=\"{conn.get('kind')}\", but the FMU's {name} has causality "
+                           f"\"{var.get('causality')}\"")
+    if kind == "Binary" and t.get("mime-type") != var.get("mimeType"):
+        raise ArtibusError(f"{head}: <Binary mime-type=\"{t.get('mime-type')}\">, but the FMU's {name} has "
+                           f"mimeType=\"{var.get('mimeType')}\"")
+    if kind == "Clock":
+        for a in ("intervalVariability", "intervalDecimal"):
+            if t.get(a) is not None and t.get(a) != var.get(a) and not (
+                    a == "intervalDecimal" and var.get(a) and parse_real(t.get(a)) == parse_real(var.get(a))):
+                raise ArtibusError(f"{head}: <Clock {a}=\"{t.get(a)}\">, but the FMU's {name} has {a}="
+                                   f"\"{var.get(a)}\"")
+    return kind, t
+
+
+def _kind_name(kind):
+    return f"an ssc:{kind}" if kind else "a connector without a type"
+
+
+def _connectors(comps, fmus, where):
+    """({(component, connector): (its type's name, the type element)} of the LS-BUS components,
+    each checked against its FMU variable; {(component, connector): (terminal, member)} of the
+    terminal members, each terminal complete: its four members (4, "Bus Terminal") as connectors
+    of their types, the data of the LS-BUS CAN MIME type)"""
+    kinds, member = {}, {}
+    for c in comps:
+        name, f = c.get("name"), fmus[c.get("name")]
+        for k in c.iterfind("ssd:Connectors/ssd:Connector", NS):
+            kinds[(name, k.get("name"))] = _check_connector(c, k, f.variables.get(k.get("name")), where)
+        for term, members in f.terminals.items():
+            if f.is_bus and not any((name, members.get(m)) in kinds for m in MEMBERS):
+                continue                     # a terminal of the bus no node is connected to
+            for m in MEMBERS:
+                key = (name, members.get(m))
+                if key not in kinds:
+                    raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{name}\">: no <Connector "
+                                       f"name=\"{members.get(m)}\">, the member {m} of its bus terminal {term} "
+                                       "(terminalsAndIcons.xml; fmi-ls-bus 1.0, \"Bus Terminal\")")
+                kind, t = kinds[key]
+                want = "Binary" if m.endswith("_Data") else "Clock"
+                head = f"{where}:{t.getparent().sourceline}: <Connector name=\"{members[m]}\"> of {name}"
+                if kind != want:
+                    raise ArtibusError(f"{head}: an ssc:{kind}, but the terminal member {m} is an ssc:{want}")
+                if want == "Binary" and t.get("mime-type") != CAN_MIME:
+                    raise ArtibusError(f"{head}: <Binary mime-type=\"{t.get('mime-type')}\">: the runner's master "
+                                       f"runs FMI-LS-BUS CAN ({CAN_MIME})")
+                member[key] = (term, m)
+    return kinds, member
+
+
+def _plant_kinds(system, by_name, kinds):
+    """kinds completed with the other components' connectors that connections name"""
+    for c in system.iterfind("ssd:Connections/ssd:Connection", NS):
+        for e, k in (("startElement", "startConnector"), ("endElement", "endConnector")):
+            el = by_name.get(c.get(e))
+            if el is None or (c.get(e), c.get(k)) in kinds or etree.QName(el).localname != "Component":
+                continue
+            conn = el.find(f"ssd:Connectors/ssd:Connector[@name='{c.get(k)}']", NS)
+            if conn is not None:
+                t = _type(conn)
+                kinds[(c.get(e), c.get(k))] = (etree.QName(t).localname if t is not None else None, t)
+
+
+def _connections(system, by_name, fmus, kinds, member, bus, where):
+    """({terminal member: the member it is connected to}, the Real inputs of the nodes, their
+    outputs) of the connections with an LS-BUS component at an end, each checked: the types equal
+    (a Binary to a Binary of its MIME type, a Clock to a Clock, a number to a number), a terminal
+    member from Tx to Rx (4, "Bus Terminal"), once; a Real one from an output to an input, with
+    no transformation"""
+    links, inputs, outputs = {}, [], []
+    for c in system.iterfind("ssd:Connections/ssd:Connection", NS):
+        a, b = (c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector"))
+        if a[0] not in fmus and b[0] not in fmus:
+            continue
+        head = f"{where}:{c.sourceline}: {_label(c)}"
+        for end in (a, b):
+            if end[0] not in by_name:
+                raise ArtibusError(f"{head}: no element {end[0]!r} in the System")
+            if end not in kinds:
+                raise ArtibusError(f"{head}: {end[0]} has no connector {end[1]!r}")
+        (ka, ta), (kb, tb) = kinds[a], kinds[b]
+        if not ((ka == kb) if {ka, kb} & {"Binary", "Clock"} else (ka in REAL and kb in REAL)):
+            raise ArtibusError(f"{head}: connects {_kind_name(ka)} ({'.'.join(a)}) to {_kind_name(kb)} "
+                               f"({'.'.join(b)})")
+        if ka == "Binary" and ta.get("mime-type") != tb.get("mime-type"):
+            raise ArtibusError(f"{head}: connects mime-type=\"{ta.get('mime-type')}\" to "
+                               f"mime-type=\"{tb.get('mime-type')}\"")
+        if a in member or b in member:
+            if not (a in member and b in member and member[a][1].startswith("Tx")
+                    and PEER[member[a][1]] == member[b][1]):
+                what = " to ".join(f"{'.'.join(x)} ({'member ' + member[x][1] if x in member else 'no terminal member'})"
+                                   for x in (a, b))
+                raise ArtibusError(f"{head}: connects {what}; a terminal's Tx member is connected to a terminal's "
+                                   "Rx member, from Tx to Rx (fmi-ls-bus 1.0, \"Bus Terminal\": Tx_Data -> Rx_Data, "
+                                   "Tx_Clock -> Rx_Clock)")
+            for x, y in ((a, b), (b, a)):
+                if x in links:
+                    raise ArtibusError(f"{head}: {'.'.join(x)} is connected twice")
+                links[x] = y
+            continue
+        if any(isinstance(t.tag, str) and etree.QName(t).localname.endswith("Transformation") for t in c):
+            raise ArtibusError(f"{head}: a transformation on a connection to an FMI-LS-BUS FMU is not applied")
+        if bus in (a[0], b[0]):
+            raise ArtibusError(f"{head}: the bus simulation FMU {bus}'s signals are not connected by the runner")
+        for end, t, want in ((a, ta, "output"), (b, tb, "input")):
+            if end[0] in fmus and t.getparent().get("kind") != want:
+                raise ArtibusError(f"{head}: {'.'.join(end)} has kind=\"{t.getparent().get('kind')}\", not {want}")
+        if b[0] in fmus:
+            inputs.append((b[0], b[1], ".".join(a)))
+        else:
+            outputs.append((a[0], a[1], ".".join(b)))
+    return links, inputs, outputs
+
+
+def _placement(comps, fmus, links, member, bus, where):
+    """[(node, its terminal, the bus terminal)] in the bus's terminal order: each node's one
+    terminal as its four connections to one terminal of the bus, the nodes on the bus's first
+    terminals (artibus.runner.lsbus.Network: the k-th node on the k-th terminal)"""
+    bus_terms, placed = list(fmus[bus].terminals), {}
+    for c in comps:
+        name = c.get("name")
+        if name == bus:
+            continue
+        head = f"{where}:{c.sourceline}: <Component name=\"{name}\">"
+        terms = fmus[name].terminals
+        if len(terms) != 1:
+            raise ArtibusError(f"{head}: {len(terms)} bus terminals; the runner's master connects nodes of one")
+        ((term, members),) = terms.items()
+        peers = set()
+        for m in MEMBERS:
+            peer = links.get((name, members[m]))
+            if peer is None:
+                raise ArtibusError(f"{head}: its terminal {term}'s member {m} ({members[m]}) is connected to "
+                                   "nothing; each terminal is its four connections to a terminal of the bus "
+                                   "simulation FMU")
+            if peer[0] != bus:
+                raise ArtibusError(f"{head}: {members[m]} is connected to {'.'.join(peer)}, not to the bus "
+                                   f"simulation FMU {bus}")
+            peers.add(member[peer][0])
+        if len(peers) != 1:
+            raise ArtibusError(f"{head}: its terminal {term} is connected to several terminals of {bus} "
+                               f"({', '.join(sorted(peers))})")
+        placed[bus_terms.index(peers.pop())] = (name, term)
+    if sorted(placed) != list(range(len(placed))):
+        raise ArtibusError(f"{where}: the nodes are on {bus}'s terminals {', '.join(bus_terms[k] for k in sorted(placed))}; "
+                           f"the runner's master connects them to its first terminals in order "
+                           f"({', '.join(bus_terms[:len(placed)])})")
+    return [(*placed[k], bus_terms[k]) for k in sorted(placed)]
+
+
+def _period(net, fmus, where):
+    """the runner's tick: the nodes' time-based Tx clocks' interval, one for all"""
+    periods = {}
+    for name, (term, _) in net.terminals.items():
+        tx = fmus[name].variables[fmus[name].terminals[term]["Tx_Clock"]]
+        try:
+            if tx.get("intervalVariability") in ("constant", "fixed"):
+                periods[name] = parse_real(tx.get("intervalDecimal"))
+        except (TypeError, ValueError):
+            pass
+    if len(set(periods.values())) != 1 or len(periods) != len(net.nodes) or not min(periods.values()) > 0:
+        raise ArtibusError(f"{where}: the nodes' Tx_Clock periods {periods or 'none'}: the runner ticks the network "
+                           "with one period, every node's time-based (constant or fixed) Tx_Clock interval")
+    return next(iter(periods.values()))
+
+
+def read_network(root, where, fmu):
+    """The Network of the .ssd's FMI-LS-BUS components (lsbus_components), or None without any.
+    fmu(component element) -> the FMU (a path or a file object)."""
+    comps = lsbus_components(root)
+    if not comps:
+        return None
+    system = root.find("ssd:System", NS)
+    for s in system.iterfind("ssd:Elements/ssd:System", NS):
+        if any(clocked(c) for c in s.iter(f"{{{NS['ssd']}}}Component")):
+            raise ArtibusError(f"{where}:{s.sourceline}: <System name=\"{s.get('name')}\">: FMI-LS-BUS components "
+                               "in a sub-system; the runner connects them in the top-level System only")
+    by_name = {c.get("name"): c for c in system.iterfind("ssd:Elements/*", NS)}
+    fmus = {c.get("name"): read_fmu(fmu(c), f"{where}:{c.sourceline}: <Component name=\"{c.get('name')}\" "
+                                            f"source=\"{c.get('source')}\">") for c in comps}
+    buses = [c.get("name") for c in comps if fmus[c.get("name")].is_bus]
+    if len(buses) != 1:
+        raise ArtibusError(f"{where}: {len(buses)} bus simulation FMUs (isBusSimulationFMU=\"true\" in "
+                           f"fmi-ls-manifest.xml) among the FMI-LS-BUS components "
+                           f"{', '.join(c.get('name') for c in comps)}; the runner connects the nodes through one")
+    (bus,) = buses
+    kinds, member = _connectors(comps, fmus, where)
+    _plant_kinds(system, by_name, kinds)
+    links, inputs, outputs = _connections(system, by_name, fmus, kinds, member, bus, where)
+    comp = {c.get("name"): c for c in comps}
+    net = Network(period=None, bus=None, nodes={}, inputs=inputs, outputs=outputs)
+    for name, term, bus_term in _placement(comps, fmus, links, member, bus, where):
+        net.nodes[name] = (comp[name].get("source"), _parameters(comp[name], where))
+        net.terminals[name] = (term, bus_term)
+    params = _parameters(comp[bus], where)
+    head = f"{where}:{comp[bus].sourceline}: <Component name=\"{bus}\">"
+    extra = set(params) - BUS_PARAMETERS
+    if extra:
+        raise ArtibusError(f"{head}: parameter {', '.join(sorted(extra))}: the runner sets only "
+                           f"{', '.join(sorted(BUS_PARAMETERS))} of the bus simulation FMU")
+    if params.get("nNodes", len(net.nodes)) != len(net.nodes):
+        raise ArtibusError(f"{head}: <Parameter name=\"nNodes\"> {params['nNodes']}, but {len(net.nodes)} nodes "
+                           "are connected to it")
+    if "wireTime" not in params:
+        w = fmus[bus].variables.get("wireTime")
+        params["wireTime"] = w is not None and w.get("start") == "true"
+    net.bus = (bus, comp[bus].get("source"), params)
+    net.period = _period(net, fmus, where)
+    return net
+
+
+def network_of_ssp(ssp):
+    """read_network of a packed .ssp (its FMUs read from the archive), or None"""
+    where = f"{ssp}/SystemStructure.ssd"
+    with zipfile.ZipFile(ssp) as z:
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+        names = set(z.namelist())
+
+        def fmu(c):
+            if c.get("source") not in names:
+                raise ArtibusError(f"{where}:{c.sourceline}: <Component name=\"{c.get('name')}\" "
+                                   f"source=\"{c.get('source')}\">: not in the .ssp")
+            return io.BytesIO(z.read(c.get("source")))
+        return read_network(root, where, fmu)
+
+
+def network_lines(ssp):
+    """what ``artibus info``/``artibus check`` print of a packed bench's FMI-LS-BUS network ([] without)"""
+    net = network_of_ssp(ssp)
+    if net is None:
+        return []
+    bus, source, params = net.bus
+    out = [f"FMI-LS-BUS network (SSP 2.0): {len(net.nodes)} nodes on {bus} ({source}, wireTime "
+           f"{'on' if params['wireTime'] else 'off'}), ticked every {net.period:g} s (the nodes' Tx_Clock); "
+           "each terminal as its four connections:"]
+    for name, (src, p) in net.nodes.items():
+        term, bus_term = net.terminals[name]
+        values = ", ".join(f"{k} = {v}" for k, v in p.items())
+        out.append(f"  {name}: {src}, {term} <-> {bus}.{bus_term}" + (f"; {values}" if values else ""))
+    out += [f"  {frm} -> {node}.{var}" for node, var, frm in net.inputs]
+    out += [f"  {node}.{var} -> {to}" for node, var, to in net.outputs]
+    return out
