@@ -222,3 +222,50 @@ def test_sweep_fmi3_gives_the_fmi2_kpis_as_other_cases(tmp_path):
         assert ra["key"] != rb["key"]
         for c in kpis:
             assert close(ra[c], rb[c]), (c, ra[c], rb[c])
+
+
+# ---- the other bench commands: bode and replay with --fmi 3 ------------------------------
+
+@pytest.fixture
+def packs_run(monkeypatch):
+    """the .ssp files the Simulations of a test ran (so a test sees the FMI 3.0 pack was taken)"""
+    from artibus.runner.simulation import Simulation
+    seen, init = [], Simulation.__init__
+
+    def spy(self, *a, **k):
+        init(self, *a, **k)
+        seen.append(Path(self.ssp))
+
+    monkeypatch.setattr(Simulation, "__init__", spy)
+    return seen
+
+
+def test_bode_with_fmi3_writes_the_fmi2_table(tmp_path, packs_run):
+    """`artibus bode --fmi 3`: the same sine runs on the FMI 3.0 builds, the same table byte for byte"""
+    tables = {}
+    for fmi in ("2", "3"):
+        packs_run.clear()
+        out = tmp_path / f"b{fmi}.csv"
+        assert cli.main(["bode", "MultiAxle_StepSteer", "--input", "Steering.delta1", "--measure", "Vehicle.w_r",
+                         "--set", "Steering.delta1=0", "--fmin", "0.2", "--fmax", "1", "--n", "2",
+                         "-o", str(out), "--fmi", fmi]) == 0
+        tables[fmi] = out.read_text()
+        assert packs_run and all((p.parent.name == "fmi3") == (fmi == "3") for p in packs_run), packs_run
+    assert len(tables["3"].splitlines()) == 3
+    assert tables["3"] == tables["2"]
+
+
+def test_replay_with_fmi3_equals_fmi2(packs_run):
+    """`artibus replay --fmi 3` (artibus.can.replay.replay(fmi="3")): the shipped log into the bench's
+    FMI 3.0 builds, every recorded column and every error figure as with FMI 2.0"""
+    from artibus.base import ROOT
+    from artibus.can import replay
+    log = ROOT / "ssp" / "logs" / "Urbino18_test.csv"
+    r2 = replay.replay(log, "Urbino18_Replay", fmi="2")
+    assert packs_run and all(p.parent.name != "fmi3" for p in packs_run)
+    packs_run.clear()
+    r3 = replay.replay(log, "Urbino18_Replay", fmi="3")
+    assert packs_run and all(p == fmu_dir() / "fmi3" / "Urbino18_Replay.ssp" for p in packs_run), packs_run
+    assert r3.result.names == r2.result.names and len(r3.result.time) > 100
+    np.testing.assert_array_equal(r3.result.array(), r2.result.array())
+    assert r3.errors == r2.errors

@@ -206,7 +206,7 @@ def cmd_replay(args):
     out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"))
     rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
                         overrides=parse_set(args.set), steering_map_name=args.steering_map,
-                        variants=args.variant)
+                        variants=args.variant, fmi=args.fmi)
     r = rep.result
     for w in rep.warnings:
         print(f"artibus: warning: {w}", file=sys.stderr)
@@ -293,7 +293,7 @@ def cmd_bode(args):
     overrides = {**ssp.variant_overrides(args.bench, args.variant), **parse_set(args.set)}
     bode.measure(args.bench, args.input, args.measure, args.fmin, args.fmax, args.n, args.amplitude,
                  periods=args.periods, settle=args.settle, overrides=overrides, step=args.step,
-                 out=out, plot_path=args.plot, log=print)
+                 out=out, plot_path=args.plot, log=print, fmi=args.fmi)
     return 0
 
 
@@ -466,12 +466,12 @@ def build_parser():
     s.add_argument("--stop-time", type=arg_seconds, help="default: the end of the driving signals")
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default <log>_replay.csv)")
     s.add_argument("--report", metavar="DIR", help="plots of model against measured and errors.csv")
+    add_fmi_option(s, "replay")
     s.set_defaults(func=cmd_replay)
     s = sub.add_parser("bode", help="frequency response through the co-simulation (sine tests)")
     s.add_argument("bench", help="a bench name or the path of an .ssp")
     s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")
-    s.add_argument("--measure", action="append", metavar="COMP.VAR",
-                   help="an output to measure (repeatable)")
+    s.add_argument("--measure", action="append", metavar="COMP.VAR", help="an output to measure (repeatable)")
     s.add_argument("--fmin", type=arg_real, default=0.05, help="lowest frequency, Hz")
     s.add_argument("--fmax", type=arg_real, default=5.0, help="highest frequency, Hz")
     s.add_argument("--n", type=arg_integer, default=12, help="frequencies, log-spaced")
@@ -484,6 +484,7 @@ def build_parser():
     s.add_argument("-o", "--output", "--output-file", metavar="FILE",
                    help="results CSV (gain, phase in deg); written only when given")
     s.add_argument("--plot", metavar="FILE.png", help="PNG with gain and phase")
+    add_fmi_option(s, "bode")
     s.set_defaults(func=cmd_bode)
     s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), printed; "
                                          "-o FILE.ssv writes them")

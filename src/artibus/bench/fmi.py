@@ -109,7 +109,7 @@ def pack_file(bench, fmi, refs):
 
 
 def add_fmi_option(parser, verb):
-    """The command line's --fmi of ``verb`` (run, sweep, pack: a bench's FMUs; simulate: one FMU)."""
+    """The command line's --fmi of ``verb`` (run, sweep, pack, replay, bode: a bench's FMUs; simulate: one FMU)."""
     if verb == "simulate":
         parser.add_argument("--fmi", choices=FMI_VERSIONS, default="2",
                             help="run the FMI 3.0 build of a built FMU (fmus/fmi3/<Name>.fmu; default 2)")

@@ -268,15 +268,16 @@ def _route_profile(b):
 
 
 def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None, steering_map_name=None,
-           variants=None, record=None, offsets=None):
+           variants=None, record=None, offsets=None, fmi=None):
     """Run `bench` driven by the log. Returns a Replay (result, errors).
+    fmi: the build of the bench's FMUs (--fmi, artibus.bench.fmi.fmi_choice).
     variants: the bench's variants (as ``artibus run --variant``); record:
     more outputs to record; offsets: {input: constant} added to a driven
     input, in the input's unit (sensitivity to a sensor offset)."""
     from artibus.bench import ssp
     from artibus.runner import Simulation
     log_path = Path(log_path)
-    bench_ssp = ssp.ssp_path(bench)
+    bench_ssp = ssp.ssp_path(bench, fmi)      # (fmi "3": the pack of its FMI 3.0 builds)
     b = ssp.read(bench_ssp)
     name = b.name
     profile = PROFILES.get(name, Profile(drive={}))

@@ -26,9 +26,10 @@ def _fit(t, y, w):
 
 
 def frequency_response(bench, input, outputs, frequencies, amplitude, periods=4, settle=None,
-                       overrides=None, step=None):
+                       overrides=None, step=None, fmi=None):
     """{output: [Point]} for each frequency (Hz). ``settle`` (s) is how long
-    the transient is given before the fit (default: 3 periods, at least 5 s)."""
+    the transient is given before the fit (default: 3 periods, at least 5 s).
+    ``fmi``: the build of the bench's FMUs (--fmi, artibus.bench.fmi.fmi_choice)."""
     if not amplitude > 0:
         raise ArtibusError(f"--amplitude {amplitude}: must be > 0")
     result = {o: [] for o in outputs}
@@ -39,7 +40,7 @@ def frequency_response(bench, input, outputs, frequencies, amplitude, periods=4,
         t_settle = settle if settle is not None else max(5.0, 3.0 / f)
         stop = t_settle + periods / f
         r = runner.run(bench, stop_time=stop, step=step, overrides=overrides, record=list(outputs),
-                       stimuli={input: lambda t, w=w: amplitude * math.sin(w * t)})
+                       stimuli={input: lambda t, w=w: amplitude * math.sin(w * t)}, fmi=fmi)
         t = r.time
         h = t[1] - t[0]
         sel = t >= stop - periods / f - 1e-9
@@ -145,7 +146,7 @@ def csv_rows(frequencies, responses, outputs, input, units):
 
 
 def measure(bench, input, outputs, fmin, fmax, n, amplitude, periods=4, settle=None, overrides=None,
-            step=None, out=None, plot_path=None, log=print):
+            step=None, out=None, plot_path=None, log=print, fmi=None):
     """`artibus bode`: the frequency response of ``outputs`` to ``input`` at ``n``
     frequencies from ``fmin`` to ``fmax`` (log-spaced), the table written to
     ``out`` (CSV, only when given) and printed, the plot to ``plot_path``.
@@ -153,7 +154,7 @@ def measure(bench, input, outputs, fmin, fmax, n, amplitude, periods=4, settle=N
     from artibus.files import write_text
     freqs = np.geomspace(fmin, fmax, n) if n > 1 else [fmin]
     resp = frequency_response(bench, input, outputs, freqs, amplitude, periods=periods, settle=settle,
-                              overrides=overrides, step=step)
+                              overrides=overrides, step=step, fmi=fmi)
     units = output_units(bench, list(outputs) + [input])
     rows = csv_rows(freqs, resp, outputs, input, units)
     if out is not None:
