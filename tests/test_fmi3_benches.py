@@ -269,3 +269,11 @@ def test_replay_with_fmi3_equals_fmi2(packs_run):
     assert r3.result.names == r2.result.names and len(r3.result.time) > 100
     np.testing.assert_array_equal(r3.result.array(), r2.result.array())
     assert r3.errors == r2.errors
+
+
+def test_a_report_with_fmi3_runs_its_studies_on_fmi3(tmp_path, packs_run):
+    """`artibus run MultiAxle_StepSteer --report DIR --fmi 3`: the bench's study (its other speeds and
+    steering laws, the sine tests) runs on the FMI 3.0 builds too, as the run itself"""
+    assert cli.main(["run", "MultiAxle_StepSteer", "--report", str(tmp_path / "rep"), "--fmi", "3"]) == 0
+    assert len(packs_run) > 2 and all(p.parent.name == "fmi3" for p in packs_run), packs_run
+    assert (tmp_path / "rep" / "index.html").is_file()

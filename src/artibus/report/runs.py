@@ -58,6 +58,7 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
             except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
                 runner.save_partial(e, out)
                 raise
+            result.fmi = fmi     # the build its report's studies (a bench.py's study) run theirs with
             try:
                 print_warnings((u.path, u.fmu.log) for u in sim.units)
                 if result.terminated is not None:   # an FMU's own end (fmi2Terminated): a normal end, said once

@@ -272,12 +272,12 @@ def sensitivity_figure(path):
     return True
 
 
-def run_variant(variant, stop_time=None):
-    """A run of the named variant with the bench's own parameters."""
+def run_variant(variant, stop_time=None, fmi=None):
+    """A run of the named variant with the bench's own parameters (fmi: the FMUs' build, as --fmi)."""
     from artibus import runner
     from artibus.bench import ssp
     names = [] if variant == DEFAULT else [variant]
-    return runner.run(BENCH, stop_time=stop_time, overrides=ssp.variant_overrides(BENCH, names))
+    return runner.run(BENCH, stop_time=stop_time, overrides=ssp.variant_overrides(BENCH, names), fmi=fmi)
 
 
 def study(r, out):
@@ -285,7 +285,8 @@ def study(r, out):
     of its variant, the other variants run here with the bench's own
     parameters over the same time; a figure of all four (seed 000, Figs. 9-10)."""
     own = variant_of(r)
-    runs = {v: (r if v == own else run_variant(v, stop_time=float(r.time[-1]))) for v in VARIANTS}
+    runs = {v: (r if v == own else run_variant(v, stop_time=float(r.time[-1]), fmi=getattr(r, "fmi", None)))
+            for v in VARIANTS}
     K = [] if own is not None else [dataclasses.replace(k, name=f"this run: {k.name}") for k in variant_kpis(r, None)]
     for v, rr in runs.items():
         K += [dataclasses.replace(k, name=f"{v}: {k.name}")

@@ -38,7 +38,8 @@ def _variant(u, zs):
 def study(r, out):
     from artibus import runner
     from artibus.study import bode
-    runs = {(u, zs): runner.run("MultiAxle_StepSteer", overrides=_variant(u, zs)) for u in SPEEDS for zs in (True, False)}
+    runs = {(u, zs): runner.run("MultiAxle_StepSteer", overrides=_variant(u, zs), fmi=getattr(r, "fmi", None))
+            for u in SPEEDS for zs in (True, False)}     # (fmi: the build this run's FMUs were, --fmi)
     kpis = []
     for u in SPEEDS:
         for zs in (True, False):
@@ -70,7 +71,7 @@ def study(r, out):
         # 5 s of transient are many times the linear model's slowest time constant at 20 m/s (the step
         # responses settle within about 2 s), so no longer settling at the low frequencies; 3 periods fitted
         f = bode.frequency_response("MultiAxle_StepSteer", "Steering.delta1", outputs, freqs, 0.01, periods=3,
-                                    settle=5.0, overrides=o)
+                                    settle=5.0, overrides=o, fmi=getattr(r, "fmi", None))
         for k, v in f.items():
             resp[k]["ZS (zero side-slip)" if zs else "FWS (front axle only)"] = v
     bode.plot(out / "bode.png", resp, "Frequency response at 20 m/s per front steering angle delta1 "
