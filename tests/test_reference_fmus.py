@@ -122,9 +122,9 @@ NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
       'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"')
 
 
-def _component(name, connectors):
+def _component(name, connectors, folder=""):
     conns = "".join(f'<ssd:Connector name="{n}" kind="{k}"><ssc:{t}/></ssd:Connector>' for n, k, t in connectors)
-    return (f'<ssd:Component name="{name}" source="resources/{name}.fmu" type="application/x-fmu-sharedlibrary">'
+    return (f'<ssd:Component name="{name}" source="resources/{folder}{name}.fmu" type="application/x-fmu-sharedlibrary">'
             f'<ssd:Connectors>{conns}</ssd:Connectors></ssd:Component>')
 
 
@@ -267,10 +267,8 @@ def test_fmi3_terminate_simulation_ends_the_run(tmp_path, monkeypatch, capsys):
 def test_a_bench_of_fmi3_reference_fmus_equals_fmpy(core, folder, tmp_path):
     """FMI 3.0 FMUs of others in a bench (their .ssd source resources/<Name>.fmu or
     resources/fmi3/<Name>.fmu), in either loop: Dahlquist's x as FMPy computes it alone"""
-    elements = "".join(
-        f'<ssd:Component name="{m}" source="resources/{folder}{m}.fmu" type="application/x-fmu-sharedlibrary">'
-        f'<ssd:Connectors><ssd:Connector name="{c}" kind="output"><ssc:{t}/></ssd:Connector></ssd:Connectors>'
-        '</ssd:Component>' for m, c, t in (("Stair", "counter", "Integer"), ("Dahlquist", "x", "Real")))
+    elements = (_component("Stair", [("counter", "output", "Integer")], folder)
+                + _component("Dahlquist", [("x", "output", "Real")], folder))
     ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="S">'
            f'<ssd:System name="S"><ssd:Elements>{elements}</ssd:Elements></ssd:System>'
            f'<ssd:DefaultExperiment startTime="0" stopTime="10"/></ssd:SystemStructureDescription>')

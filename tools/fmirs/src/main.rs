@@ -106,9 +106,40 @@ fn validate(a: &Args, dir: &Path, version: FMIMajorVersion) -> Result<(), String
     if problems.is_empty() { Ok(()) } else { Err(problems.join("\n")) }
 }
 
+/// Model Exchange (--interface-type me, or an FMU without Co-Simulation) or Co-Simulation
+fn model_exchange(a: &Args, has_co_simulation: bool) -> Result<bool, String> {
+    match a.interface_type.as_deref() {
+        Some("me") => Ok(true),
+        Some("cs") => Ok(false),
+        Some(t) => Err(format!("--interface-type {t}: expected cs or me")),
+        None => Ok(!has_co_simulation),
+    }
+}
+
+/// fmi-rs's simulation of FMI version `$v` (fmi2 or fmi3) with the outputs recorded, the
+/// result written to --output-file: the same for both versions but for their types
+macro_rules! record {
+    ($v:ident, $a:expr, $md:expr, $settings:expr, $outputs:expr, $interval:expr) => {{
+        use fmi_rs::sim::$v::{Trajectories, csv::write_csv, recorder::Recorder};
+        let recorder = Arc::new(Recorder::new(Trajectories::new($md.clone(), $outputs)));
+        let result = if model_exchange($a, $md.coSimulation.is_some())? {
+            let euler = ForwardEulerFactory { fixed_step_size: $a.fixed_step_size.unwrap_or($interval) };
+            fmi_rs::sim::$v::me::simulate(&$settings, &euler, None, recorder.clone())
+        } else {
+            fmi_rs::sim::$v::cs::simulate(&$settings, None, recorder.clone())
+        };
+        result.map_err(|e| e.to_string())?;
+        let trajectories = Arc::try_unwrap(recorder).map_err(|_| "the recorder is still shared")?.trajectories.into_inner();
+        if let Some(f) = &$a.output_file {
+            write_csv(&trajectories, f).map_err(|e| format!("{}: {e}", f.display()))?;
+        }
+        Ok(())
+    }};
+}
+
 fn simulate3(a: &Args, dir: &Path) -> Result<(), String> {
     use fmi_rs::model_description::fmi3::{Causality, ModelDescription};
-    use fmi_rs::sim::fmi3::{SimulationSettings, Trajectories, csv::write_csv, recorder::Recorder};
+    use fmi_rs::sim::fmi3::SimulationSettings;
     let md = Arc::new(ModelDescription::from_path(&dir.join("modelDescription.xml")).map_err(|e| e.to_string())?);
     let outputs = md.modelVariables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, _)| i).collect();
     let fixed = md.coSimulation.as_ref().and_then(|c| c.fixedInternalStepSize.as_ref()).and_then(|s| s.parse().ok());
@@ -121,30 +152,12 @@ fn simulate3(a: &Args, dir: &Path) -> Result<(), String> {
         early_return_allowed: a.early_return_allowed, event_mode_used: a.event_mode_used, log_file: None,
         initial_fmu_state_file: None, final_fmu_state_file: None,
     };
-    let recorder = Arc::new(Recorder::new(Trajectories::new(md.clone(), outputs)));
-    let me = match a.interface_type.as_deref() {
-        Some("me") => true,
-        Some("cs") => false,
-        Some(t) => return Err(format!("--interface-type {t}: expected cs or me")),
-        None => md.coSimulation.is_none(),
-    };
-    let result = if me {
-        let euler = ForwardEulerFactory { fixed_step_size: a.fixed_step_size.unwrap_or(output_interval) };
-        fmi_rs::sim::fmi3::me::simulate(&settings, &euler, None, recorder.clone())
-    } else {
-        fmi_rs::sim::fmi3::cs::simulate(&settings, None, recorder.clone())
-    };
-    result.map_err(|e| e.to_string())?;
-    let trajectories = Arc::try_unwrap(recorder).map_err(|_| "the recorder is still shared")?.trajectories.into_inner();
-    if let Some(f) = &a.output_file {
-        write_csv(&trajectories, f).map_err(|e| format!("{}: {e}", f.display()))?;
-    }
-    Ok(())
+    record!(fmi3, a, md, settings, outputs, output_interval)
 }
 
 fn simulate2(a: &Args, dir: &Path) -> Result<(), String> {
     use fmi_rs::model_description::fmi2::{Causality, ModelDescription};
-    use fmi_rs::sim::fmi2::{SimulationSettings, Trajectories, csv::write_csv, recorder::Recorder};
+    use fmi_rs::sim::fmi2::SimulationSettings;
     let md = Arc::new(ModelDescription::from_path(&dir.join("modelDescription.xml")).map_err(|e| e.to_string())?);
     let outputs = md.modelVariables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, _)| i).collect();
     let (start_time, stop_time, tolerance, output_interval) = steps(a, md.defaultExperiment.as_ref(), None);
@@ -155,25 +168,7 @@ fn simulate2(a: &Args, dir: &Path) -> Result<(), String> {
         early_return_allowed: a.early_return_allowed, event_mode_used: a.event_mode_used, log_file: None,
         initial_fmu_state_file: None, final_fmu_state_file: None,
     };
-    let recorder = Arc::new(Recorder::new(Trajectories::new(md.clone(), outputs)));
-    let me = match a.interface_type.as_deref() {
-        Some("me") => true,
-        Some("cs") => false,
-        Some(t) => return Err(format!("--interface-type {t}: expected cs or me")),
-        None => md.coSimulation.is_none(),
-    };
-    let result = if me {
-        let euler = ForwardEulerFactory { fixed_step_size: a.fixed_step_size.unwrap_or(output_interval) };
-        fmi_rs::sim::fmi2::me::simulate(&settings, &euler, None, recorder.clone())
-    } else {
-        fmi_rs::sim::fmi2::cs::simulate(&settings, None, recorder.clone())
-    };
-    result.map_err(|e| e.to_string())?;
-    let trajectories = Arc::try_unwrap(recorder).map_err(|_| "the recorder is still shared")?.trajectories.into_inner();
-    if let Some(f) = &a.output_file {
-        write_csv(&trajectories, f).map_err(|e| format!("{}: {e}", f.display()))?;
-    }
-    Ok(())
+    record!(fmi2, a, md, settings, outputs, output_interval)
 }
 
 fn run() -> Result<(), String> {
