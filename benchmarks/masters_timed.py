@@ -44,7 +44,8 @@ import tempfile
 import time
 import traceback
 
-PARAMETER_SET = "bench"     # artibus.bench.portable.PARAMETER_SET (not imported: another master's process)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from masters_run import PARAMETER_SET, ecos_getters  # noqa: E402  (the tests' way of driving ecos, one copy)
 
 
 def artibus_master(spec):
@@ -85,17 +86,7 @@ def _ecos(spec, recorder):
                 table = np.loadtxt(f, delimiter=",", ndmin=2)
             col = {h.rsplit("[", 1)[0]: k for k, h in enumerate(header)}
             return table[:, [col["time"]] + [col[i] for i in ids]]
-        getters = []
-        for i in ids:
-            for get in (sim.get_real, sim.get_integer, sim.get_bool):
-                try:
-                    get(i)
-                except Exception:
-                    continue
-                getters.append((get, i))
-                break
-            else:
-                raise RuntimeError(f"ecos: no variable {i}: {EcosLib.get_last_error()}")
+        getters = ecos_getters(sim, ids)
         rows = [[0.0] + [float(g(i)) for g, i in getters]]
         for k in range(n):
             sim.step(1)

@@ -30,6 +30,24 @@ import traceback
 PARAMETER_SET = "bench"     # artibus.bench.portable.PARAMETER_SET (not imported: the master's process)
 
 
+def ecos_getters(sim, ids):
+    """[(get, id)] for ecos's "COMP::VAR" ids: the getter (real, integer, bool) that reads each
+    (ecos has no call that says a variable's type); RuntimeError naming one it has not"""
+    from ecospy.lib import EcosLib
+    getters = []
+    for i in ids:
+        for get in (sim.get_real, sim.get_integer, sim.get_bool):
+            try:
+                get(i)
+            except Exception:
+                continue
+            getters.append((get, i))
+            break
+        else:
+            raise RuntimeError(f"ecos: no variable {i}: {EcosLib.get_last_error()}")
+    return getters
+
+
 def run_ecos(pack, step, stop, names):
     from ecospy import EcosSimulation
     from ecospy.lib import EcosLib
@@ -37,18 +55,7 @@ def run_ecos(pack, step, stop, names):
     try:
         if not sim.init(parameter_set=PARAMETER_SET):
             raise RuntimeError(f"ecos init: {EcosLib.get_last_error()}")
-        ids = [n.replace(".", "::", 1) for n in names]
-        getters = []
-        for i in ids:
-            for get in (sim.get_real, sim.get_integer, sim.get_bool):
-                try:
-                    get(i)
-                except Exception:
-                    continue
-                getters.append((get, i))
-                break
-            else:
-                raise RuntimeError(f"ecos: no variable {i}: {EcosLib.get_last_error()}")
+        getters = ecos_getters(sim, [n.replace(".", "::", 1) for n in names])
         rows = [[0.0] + [float(g(i)) for g, i in getters]]
         for k in range(int(round(stop / step))):
             sim.step(1)
