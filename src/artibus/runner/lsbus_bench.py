@@ -25,8 +25,10 @@ before, delivered before the receivers step):
    their start values) for its steps from t, as the Real-wired actuators' outputs reach
    the plant in the same macro step (Gauss-Seidel, the actuators before the plant).
 
-Not yet: the nodes as SSP 2.0 components (ssc:Binary, ssc:Clock connectors, each terminal
-as its four connections); the C stepping core (the run takes the Python loop).
+The C stepping core ticks the network where the Python loop calls tick, the same calls in
+the same order (artibus.runner.lsbus_core, src/runner_core/lsbus.c), unless the core is
+switched off (ARTIBUS_CORE=0). Not yet: the nodes as SSP 2.0 components (ssc:Binary,
+ssc:Clock connectors, each terminal as its four connections).
 """
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -109,7 +111,9 @@ class LsBusSteering:
 
     def stimuli(self):
         """{"Comp.input": f(t)} for Simulation: the network's outputs onto the plant's inputs"""
-        return {to: (lambda t, to=to: self.value[to] - self.base.get(to, 0.0)) for _, _, to in self.outputs}
+        self.stimulus_functions = {to: (lambda t, to=to: self.value[to] - self.base.get(to, 0.0))
+                                   for _, _, to in self.outputs}
+        return dict(self.stimulus_functions)
 
     def bind(self, sim):
         """attach to a Simulation made with stimuli(): the plant's output buffers to read"""
@@ -142,8 +146,23 @@ class LsBusSteering:
         """the initialisation's rounds: the nodes initialise in their own Initialization Mode"""
 
     def core_support(self):
-        """why the C stepping core does not run this bench (artibus.runner.core._core_stepper)"""
-        return "an FMI-LS-BUS network (its master, artibus.runner.lsbus, runs in Python)"
+        """why the C stepping core does not run this bench (artibus.runner.core._core_stepper),
+        None when it does: it ticks the network as tick does (artibus.runner.lsbus_core,
+        src/runner_core/lsbus.c), the nodes' Float64 inputs and outputs (checked as the
+        run begins)"""
+        return None
+
+    def core_values(self, fill=True):
+        """(a c_double array of the outputs' values, {to: its index}): what the stimuli read in
+        the C core (artibus.runner.lsbus_core), filled from self.value (fill)"""
+        if getattr(self, "_core_values", None) is None:
+            from ctypes import c_double
+            slots = {to: i for i, to in enumerate(self.value)}
+            self._core_values = ((c_double * max(1, len(slots)))(), slots)
+        values, slots = self._core_values
+        for to, i in slots.items() if fill else ():
+            values[i] = self.value[to]
+        return self._core_values
 
     def start(self, t0):
         self.close()
