@@ -12,7 +12,6 @@ Python loop. The core does exactly what lsbus.Network.advance does, in the same 
 (tests/test_lsbus_core.py: bit for bit).
 """
 import math
-import struct
 from ctypes import (Structure, addressof, c_char, c_double, c_int, c_long, c_size_t, c_ubyte, c_uint, c_ulonglong,
                     c_void_p, cast, sizeof)
 
@@ -192,10 +191,12 @@ class _LsBusCore:
         values, slots = st.core_values(fill=False)
         for to, i in slots.items():
             st.value[to] = values[i]
-        for i in range(min(c.frames, c.frame_cap)):   # as the bus delivered them: Network.frames
-            dl, at = int(self.frame_dl[i]), int(self.frame_at[i])
-            op = struct.pack("<IIIBBH", 0x10, 16 + dl, int(self.frame_id[i]), int(self.frame_ide[i]), 0, dl)
-            net.frames.append((float(self.frame_t[i]), net.bus.name, None, None, op + self.pool[at:at + dl].tobytes()))
+        n = min(c.frames, c.frame_cap)         # the frames on the wire, as Network.wire_frames lists them
+        pool = self.pool[:c.pool_used].tobytes()
+        at, dl = self.frame_at[:n].tolist(), self.frame_dl[:n].tolist()
+        net.core_frames = (net.core_frames or []) + list(zip(
+            self.frame_t[:n].tolist(), self.frame_id[:n].tolist(), self.frame_ide[:n].tolist(),
+            [pool[a:a + d] for a, d in zip(at, dl)]))
 
     def failure(self, t):
         """The core's tick failed at the tick from t: the error the Python master raises."""
