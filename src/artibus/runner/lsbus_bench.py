@@ -140,6 +140,9 @@ class LsBusSteering:
         if sim.can is not None:
             raise ArtibusError(f"{self.ssd}: a bench with both an org.artibus.can and an {ANNOTATION} network")
         sim.can, sim.can_ratio = self, int(round(r))
+        # the network's FMUs instantiated now, as the bench's other FMUs are in the Simulation's
+        # set-up, for a run from the bench's start time (start takes it; another start time: anew)
+        self._ready = self._network(sim.bench.start_time)
 
     # -- the runner's CAN-network interface (artibus.can.network.Network)
     def settle(self):
@@ -164,10 +167,19 @@ class LsBusSteering:
             values[i] = self.value[to]
         return self._core_values
 
+    def _network(self, t0):
+        return Network(self.nodes, bus=(self.bus_path, {"nNodes": len(self.nodes), "wireTime": self.wire_time}),
+                       start_time=t0)
+
     def start(self, t0):
+        ready, self._ready = getattr(self, "_ready", None), None
         self.close()
-        self.net = Network(self.nodes, bus=(self.bus_path, {"nNodes": len(self.nodes), "wireTime": self.wire_time}),
-                           start_time=t0)
+        if ready is not None and ready.t0 == float(t0):
+            self.net = ready
+        else:
+            if ready is not None:
+                ready.close()
+            self.net = self._network(t0)
 
     def tick(self, k, t):
         self.ticks += 1
@@ -199,7 +211,8 @@ class LsBusSteering:
         return {}
 
     def close(self):
-        if self.net is not None:
-            self.net.close()
-            self.net = None
+        for net in (self.net, getattr(self, "_ready", None)):
+            if net is not None:
+                net.close()
+        self.net = self._ready = None
 

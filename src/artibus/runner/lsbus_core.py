@@ -86,6 +86,26 @@ def core_stimuli(steering, sim):
     return out
 
 
+class _WireFrames:
+    """The frames on the wire the core recorded, [(t, id, ide, data)] as Network.wire_frames
+    lists them: made into tuples when first read (a run that neither logs nor summarises
+    them does not pay for 56000 tuples)."""
+
+    def __init__(self, t, ids, ides, dls, ats, pool):
+        self._arrays, self._list = (t, ids, ides, dls, ats, pool), None
+
+    def __len__(self):
+        return len(self._arrays[0])
+
+    def __iter__(self):
+        if self._list is None:
+            t, ids, ides, dls, ats, pool = self._arrays
+            pool = pool.tobytes()
+            self._list = list(zip(t.tolist(), ids.tolist(), ides.tolist(),
+                                  [pool[a:a + d] for a, d in zip(ats.tolist(), dls.tolist())]))
+        return iter(self._list)
+
+
 class _LsBusCore:
     """The steering's network as core.h's ac_lsbus, over the steering's Network (made by
     LsBusSteering.start, which the run calls before the core's steps)."""
@@ -191,12 +211,9 @@ class _LsBusCore:
         values, slots = st.core_values(fill=False)
         for to, i in slots.items():
             st.value[to] = values[i]
-        n = min(c.frames, c.frame_cap)         # the frames on the wire, as Network.wire_frames lists them
-        pool = self.pool[:c.pool_used].tobytes()
-        at, dl = self.frame_at[:n].tolist(), self.frame_dl[:n].tolist()
-        net.core_frames = (net.core_frames or []) + list(zip(
-            self.frame_t[:n].tolist(), self.frame_id[:n].tolist(), self.frame_ide[:n].tolist(),
-            [pool[a:a + d] for a, d in zip(at, dl)]))
+        n = min(c.frames, c.frame_cap)         # the frames on the wire, for Network.wire_frames
+        net.core_frames = _WireFrames(self.frame_t[:n], self.frame_id[:n], self.frame_ide[:n], self.frame_dl[:n],
+                                      self.frame_at[:n], self.pool[:c.pool_used])
 
     def failure(self, t):
         """The core's tick failed at the tick from t: the error the Python master raises."""
