@@ -56,7 +56,7 @@ def run(core, wire_time=False, variant=None, stop_time=None):
 
 
 @pytest.mark.parametrize("wire_time, variant", [(False, None), (False, "laneChange"), (True, None)])
-def test_the_core_is_the_python_master_bit_for_bit(wire_time, variant):
+def test_the_core_runs_the_bench_bit_for_bit_as_the_python_master(wire_time, variant):
     ref, ref_events, ref_frames, _ = run(False, wire_time, variant)
     got, events, frames, _ = run(True, wire_time, variant)
     # the comparison means something: the bus moves, frames flow
@@ -175,3 +175,13 @@ def test_a_truncated_binary_from_a_node_is_answered_with_a_format_error_not_a_cr
     assert ids < ref_ids and ids                  # the sensors' frames missing, the others on the wire
     warnings = [m for status, m in log if status == 1]
     assert warnings and any("malformed" in m for m in warnings), log[:3]
+
+
+def test_a_stimulus_of_the_user_s_own_leaves_the_bench_to_the_python_loop():
+    """the core propagates the network's outputs as stimuli, no other Python function of time"""
+    with Simulation(BENCH, stimuli={"Bus.Fx[2]": lambda t: 0.0}) as sim:
+        sim.run(stop_time=0.02)
+        assert sim.stepping == "Python loop: stimuli (Python functions of time)"
+    with Simulation(BENCH) as sim:
+        sim.run(stop_time=0.02)
+        assert sim.stepping == "C core"

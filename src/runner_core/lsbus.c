@@ -270,7 +270,7 @@ static int bus_due_now(const ac_lsbus *n, int *now) {
 
 /* the Tx clocks of now ticked (removed from the announced ticks), fmi3UpdateDiscreteStates,
  * their Tx_Data routed to the nodes */
-static int bus_tick_now(ac_lsbus *n, const int *now, int m, int set_and_update) {
+static int bus_tick_now(ac_lsbus *n, const int *now, int m) {
     ac_ls_fmu *b = &n->fmus[bus_index(n)];
     fmi3ValueReference vrs[MAX_TERMS];
     for (int j = 0; j < m; j++) {
@@ -278,8 +278,7 @@ static int bus_tick_now(ac_lsbus *n, const int *now, int m, int set_and_update) 
         vrs[j] = b->terms[now[j]].tx_clock;
     }
     TRY(set_clocks(n, bus_index(n), vrs, (size_t)m));
-    if (set_and_update)
-        TRY(update(n, bus_index(n)));
+    TRY(update(n, bus_index(n)));
     if (!m)
         return 0;
     for (int j = 0; j < m; j++)
@@ -304,7 +303,7 @@ static int bus_settle(ac_lsbus *n) {
         const int m = bus_due_now(n, now);
         if (!m || !n->fmus[bus].need)
             return 0;
-        TRY(bus_tick_now(n, now, m, 1));
+        TRY(bus_tick_now(n, now, m));
     }
 }
 
@@ -321,7 +320,7 @@ static int bus_due(ac_lsbus *n) {
         TRY(bus_read_intervals(n));
         m = bus_due_now(n, now);
     }
-    TRY(bus_tick_now(n, now, m, 1));
+    TRY(bus_tick_now(n, now, m));
     return bus_settle(n);
 }
 

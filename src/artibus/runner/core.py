@@ -14,7 +14,11 @@ too (_CanCore: artibus.can.Network.tick's frames, codec, E2E, counts, bits and
 since series in C, and the initialisation's settle: _CanCore.settle;
 tests/test_can_core.py), unless it has faults, a
 tamper function, a real interface or signals the core does not encode
-(Network.core_support). Today's Python loop runs instead when the core does
+(Network.core_support). A bench whose network is FMI-LS-BUS FMUs
+(artibus.runner.lsbus_bench) has it ticked by the core as well (_LsBusCore:
+src/runner_core/lsbus.c does lsbus.Network.advance on FMPy's instances, the
+network's outputs reach the plant as its stimuli do in _propagate;
+tests/test_lsbus_core.py). Today's Python loop runs instead when the core does
 not apply (the reason is in Simulation.stepping): such a CAN network, a bench
 with stimuli (Python functions of time), Integer/Boolean/String/Enumeration
 variables, the library not built, or the core switched off (run(core=False)

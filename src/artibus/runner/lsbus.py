@@ -1,7 +1,8 @@
 """A small FMI-LS-BUS 1.0 co-simulation master for FMI 3.0 Co-Simulation with Event Mode
 (issue 24): CAN network nodes, connected directly (two nodes) or through a bus simulation FMU
-such as CanBus, on FMPy's FMU3Slave. Python only: the C stepping core (runner/core.py) has no
-clocks yet.
+such as CanBus, on FMPy's FMU3Slave. The C stepping core does what Network.advance does, in
+the same order, on the same instances (src/runner_core/lsbus.c, artibus.runner.lsbus_core);
+this is its reference and the runner's fallback (ARTIBUS_CORE=0).
 
 What it does, with the sections it follows:
 

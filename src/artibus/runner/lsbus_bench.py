@@ -151,8 +151,18 @@ class LsBusSteering:
     def core_support(self):
         """why the C stepping core does not run this bench (artibus.runner.core._core_stepper),
         None when it does: it ticks the network as tick does (artibus.runner.lsbus_core,
-        src/runner_core/lsbus.c), the nodes' Float64 inputs and outputs (checked as the
-        run begins)"""
+        src/runner_core/lsbus.c): the nodes' inputs and outputs Float64, at most 64 terminals
+        an FMU (checked on the network bind made; without it, as the run begins)"""
+        net = self.net or getattr(self, "_ready", None)
+        if net is None:
+            return None
+        for node, var, *_ in self.inputs + self.outputs:
+            t = net.by_name[node].var(var).type
+            if t != "Float64":
+                return f"an FMI-LS-BUS node's {t} variable ({node}.{var}; the core sets and reads Float64)"
+        for f in net.nodes + [net.bus]:
+            if len(f.terminals) > 64:
+                return f"an FMI-LS-BUS FMU of {len(f.terminals)} terminals ({f.name}; the core takes 64)"
         return None
 
     def core_values(self, fill=True):
