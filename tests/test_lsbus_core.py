@@ -44,21 +44,22 @@ def fmus():
     needs("CanBus", "SteeringECU_LSBUS", "SteeringActuator_LSBUS", "SteeringSensors_LSBUS")
 
 
-def run(core, wire_time=False, variant=None, stop_time=None):
+def run(core, wire_time=False, variant=None, stop_time=None, bench=BENCH):
     """(Result, {FMU: Event Mode entries}, frames on the wire, the bus's log)"""
-    overrides = ssp.variant_overrides(BENCH, [variant]) if variant else {}
-    stop = stop_time or (ssp.variant_stop_time(BENCH, [variant]) if variant else None)
-    with Simulation(BENCH, lsbus_wire_time=wire_time, overrides=overrides) as sim:
+    overrides = ssp.variant_overrides(bench, [variant]) if variant else {}
+    stop = stop_time or (ssp.variant_stop_time(bench, [variant]) if variant else None)
+    with Simulation(bench, lsbus_wire_time=wire_time, overrides=overrides) as sim:
         result = sim.run(stop_time=stop, core=core)
         assert sim.stepping == "C core" if core else sim.stepping.startswith("Python loop")
         net = sim.can.net
         return (result, {f.name: f.n_events for f in net.nodes + [net.bus]}, net.wire_frames(), list(net.bus.log))
 
 
-@pytest.mark.parametrize("wire_time, variant", [(False, None), (False, "laneChange"), (True, None)])
-def test_the_core_runs_the_bench_bit_for_bit_as_the_python_master(wire_time, variant):
-    ref, ref_events, ref_frames, _ = run(False, wire_time, variant)
-    got, events, frames, _ = run(True, wire_time, variant)
+@pytest.mark.parametrize("bench, wire_time, variant", [(BENCH, False, None), (BENCH, False, "laneChange"),
+                                                       (BENCH, True, None), (f"{BENCH}_Backwards", False, None)])
+def test_the_core_runs_the_bench_bit_for_bit_as_the_python_master(bench, wire_time, variant):
+    ref, ref_events, ref_frames, _ = run(False, wire_time, variant, bench=bench)
+    got, events, frames, _ = run(True, wire_time, variant, bench=bench)
     # the comparison means something: the bus moves, frames flow
     assert np.ptp(ref["Bus.yAxle[6]"]) > 1.0 and len(ref_frames) > 1000
     assert got.names == ref.names
