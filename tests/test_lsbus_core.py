@@ -17,7 +17,7 @@ What is expected comes from elsewhere:
 import math
 import xml.etree.ElementTree as ET
 import zipfile
-from ctypes import CFUNCTYPE, POINTER, addressof, c_int, c_size_t, c_uint, c_void_p, cast
+from ctypes import CFUNCTYPE, POINTER, addressof, c_double, c_int, c_size_t, c_uint, c_void_p, cast
 
 import numpy as np
 import pytest
@@ -186,3 +186,30 @@ def test_a_stimulus_of_the_user_s_own_leaves_the_bench_to_the_python_loop():
     with Simulation(BENCH) as sim:
         sim.run(stop_time=0.02)
         assert sim.stepping == "C core"
+
+
+_DO_STEP = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_int, c_void_p, c_void_p, c_void_p, c_void_p)
+
+
+def test_an_fmu_s_failed_call_is_an_error_naming_the_function_and_the_time(monkeypatch):
+    """ECU2's fmi3DoStep failing from t = 0.1 s (returning fmi3Error, FMI 3.0.2 2.2.3): the run
+    stops there with the Python master's error (the time, the function, the status)"""
+    begin = lsbus_core._LsBusCore.begin
+
+    def failing(self, n):
+        address = begin(self, n)
+        f = self.fmus[2]                          # ECU2
+        real = _DO_STEP(f.DoStep)
+
+        def step(instance, t, h, no_set, *out):
+            return 3 if t >= 0.1 - 1e-9 else real(instance, t, h, no_set, *out)
+
+        hook = _DO_STEP(step)
+        self._keep.append(hook)
+        f.DoStep = cast(hook, c_void_p).value
+        return address
+
+    monkeypatch.setattr(lsbus_core._LsBusCore, "begin", failing)
+    with Simulation(BENCH) as sim:
+        with pytest.raises(LsBusError, match=r"^t = 0\.100000 s: fmi3DoStep failed with status 3 \(error\)\.$"):
+            sim.run(stop_time=0.5, core=True)
