@@ -26,11 +26,12 @@ SIGNALS = ("Bus.FjointY[1]", "Bus.FjointY[2]", "Bus.xAxle[4]", "Bus.yAxle[4]", "
            "Driver.delta", "Driver.s")
 
 
-def run_lsbus(bench, wire_time, variant=None):
-    """the bench's Result, each FMU's Event Mode entries, the CAN frames on the wire"""
+def run_lsbus(bench, wire_time, variant=None, core=False):
+    """the bench's Result, each FMU's Event Mode entries, the CAN frames on the wire; by the
+    Python master (core False, the reference: tests/test_lsbus_core.py has the C core's)"""
     with Simulation(bench, lsbus_wire_time=wire_time, overrides=overrides(bench, variant)) as sim:
-        result = sim.run(stop_time=stop(bench, variant))
-        assert sim.stepping.startswith("Python loop")
+        result = sim.run(stop_time=stop(bench, variant), core=core)
+        assert sim.stepping.startswith("C core" if core else "Python loop")
         net = sim.can.net
         return result, {f.name: f.n_events for f in net.nodes + [net.bus]}, len(net.wire_frames())
 

@@ -56,6 +56,10 @@ static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t) */
         const ac_source *q = &u->sources[s];
         *q->dst = q->factor * *q->src + q->offset;
     }
+    for (int s = 0; s < u->n_stimuli; s++) {
+        const ac_stimulus *q = &u->stimuli[s];
+        *q->dst = (q->has_base ? q->base : *q->dst) + (*q->value - q->minus);
+    }
 }
 
 static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the FMU holds them already */
@@ -558,7 +562,7 @@ static int settle_rounds(ac_sim *sim, ac_settle *z) {
             if (!z->gauss_seidel)            /* self._propagate(None, start) */
                 for (int q = 0; q < sim->n_units; q++)
                     propagate(&sim->units[q]);
-            else if (u->n_sources)
+            else if (u->n_sources || u->n_stimuli)
                 propagate(u);
         }
         if (z->can) {                        /* _CanCore.settle */
@@ -570,7 +574,7 @@ static int settle_rounds(ac_sim *sim, ac_settle *z) {
         for (int o = 0; o < z->n_order; o++) {
             const int j = z->order[o];
             ac_unit *u = &sim->units[j];
-            if (u->n_sources)
+            if (u->n_sources || u->n_stimuli)
                 propagate(u);
             if (inputs_changed(u) && (failed = call_unit(u, 1, 0, 0.0, &st)))
                 return fail(sim, j, failed, st, -1);
@@ -645,6 +649,8 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
     }
     if (sim->can)
         sim->can->stamps = 0;
+    if (sim->lsbus)
+        sim->lsbus->stamps = 0;
     const int result = run_steps(sim, k0, k1);
     const double second = seconds_per_count(m0, c0);
     for (int j = 0; j < sim->n_units; j++) {
@@ -654,6 +660,10 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
     if (sim->can) {
         sim->can->wall += (double)sim->can->stamps * second;
         sim->can->stamps = 0;
+    }
+    if (sim->lsbus) {
+        sim->lsbus->wall += (double)sim->lsbus->stamps * second;
+        sim->lsbus->stamps = 0;
     }
     sim->wall += now() - m0;
     return result;
@@ -671,6 +681,13 @@ static int run_steps(ac_sim *sim, long k0, long k1) {
             sim->can->stamps += stamp() - w;
             if (bad >= 0)
                 return fail(sim, bad, AC_CAN, fmi2OK, k);
+        }
+        if (sim->lsbus && (sim->lsbus->ratio == 1 || k % sim->lsbus->ratio == 0)) {   /* LsBusSteering.tick(k // ratio, t) */
+            const unsigned long long w = stamp();
+            const int bad = artibus_lsbus_tick(sim->lsbus, t);
+            sim->lsbus->stamps += stamp() - w;
+            if (bad)
+                return fail(sim, -1, AC_LSBUS, fmi2OK, k);
         }
         const int end = sim->op_start[p + 1];
         for (int i = sim->op_start[p]; i < end; i++) {

@@ -24,8 +24,9 @@
 
 #include "fmi2FunctionTypes.h"
 #include "fmi3FunctionTypes.h"
+#include "lsbus.h"
 
-#define ARTIBUS_CORE_ABI 11         /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 12         /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -33,6 +34,16 @@ typedef struct {
     const double *src;              /* the output's place in the source unit's output buffer */
     double factor, offset;
 } ac_source;
+
+/* an FMI-LS-BUS network's output onto a unit's input (Simulation._propagate's stimulus
+ * of artibus.runner.lsbus_bench: f(t) = *value - minus, added to base or, has_base 0,
+ * to the input's connection): *dst = (has_base ? base : *dst) + (*value - minus) */
+typedef struct {
+    double *dst;
+    const double *value;            /* the network's output as of its last tick (lsbus.h) */
+    double base, minus;
+    int has_base;
+} ac_stimulus;
 
 typedef struct {
     void *component;                /* fmi2Component or fmi3Instance */
@@ -57,6 +68,8 @@ typedef struct {
     unsigned long long ticks;       /* the same in the processor's time-stamp counter, within one call */
     int terminate;                  /* FMI 3.0: its last fmi3DoStep's terminateSimulation */
     double last_successful_time;    /* FMI 3.0: its last fmi3DoStep's lastSuccessfulTime */
+    int n_stimuli;                  /* applied after its sources (Simulation._propagate's order) */
+    const ac_stimulus *stimuli;
 } ac_unit;
 
 /* what the plan does with a unit */
@@ -67,7 +80,8 @@ enum { AC_PROPAGATE = 0, AC_WRITE = 1, AC_STEP = 2 };
  * then the message's index, Python's encoder says why (artibus.can) */
 /* AC_DO_STEP: fmi2DoStep/fmi3DoStep returned fmi2Discard or worse, or fmi3DoStep
  * asked to terminate the simulation (ac_unit.terminate) */
-enum { AC_OK = 0, AC_DO_STEP = 1, AC_GET_REAL = 2, AC_SET_REAL = 3, AC_CAN = 4 };
+/* AC_LSBUS: the FMI-LS-BUS network's tick failed (ac_lsbus's fail_* and message say why) */
+enum { AC_OK = 0, AC_DO_STEP = 1, AC_GET_REAL = 2, AC_SET_REAL = 3, AC_CAN = 4, AC_LSBUS = 7 };
 
 /* --- the CAN network's tick (artibus.can.Network.tick without faults, log,
  * tamper or a real interface): the frames due at a tick in identifier order,
@@ -165,6 +179,7 @@ typedef struct {
     int fail_unit, fail_function, fail_status;
     long fail_k;                    /* the base step that failed */
     double wall;                    /* seconds inside artibus_core_run, added (the FMUs' and the network's too) */
+    ac_lsbus *lsbus;                /* NULL: no FMI-LS-BUS network; else ticked every lsbus->ratio base steps */
 } ac_sim;
 
 int artibus_core_abi(void);

@@ -14,7 +14,11 @@ too (_CanCore: artibus.can.Network.tick's frames, codec, E2E, counts, bits and
 since series in C, and the initialisation's settle: _CanCore.settle;
 tests/test_can_core.py), unless it has faults, a
 tamper function, a real interface or signals the core does not encode
-(Network.core_support). Today's Python loop runs instead when the core does
+(Network.core_support). A bench whose network is FMI-LS-BUS FMUs
+(artibus.runner.lsbus_bench) has it ticked by the core as well (_LsBusCore:
+src/runner_core/lsbus.c does lsbus.Network.advance on FMPy's instances, the
+network's outputs reach the plant as its stimuli do in _propagate;
+tests/test_lsbus_core.py). Today's Python loop runs instead when the core does
 not apply (the reason is in Simulation.stepping): such a CAN network, a bench
 with stimuli (Python functions of time), Integer/Boolean/String/Enumeration
 variables, the library not built, or the core switched off (run(core=False)
@@ -34,11 +38,12 @@ from artibus.runner import tables
 from artibus.runner.can_core import _CanCore
 from artibus.runner.unit import _last_message
 
-CORE_ABI = 11                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 12                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_DO_STEP = 1                    # core.h: fmi2DoStep failed (or returned fmi2Discard)
 _AC_CAN = 4                        # core.h: a frame could not be encoded
+_AC_LSBUS = 7                      # core.h: the FMI-LS-BUS network's tick failed
 _AC_GET_REAL, _AC_SET_REAL, _AC_UNSETTLED, _AC_EXIT_INIT = 2, 3, 5, 6
 
 
@@ -53,7 +58,8 @@ class _AcUnit(Structure):
                 ("out_vrs", c_void_p), ("out", c_void_p), ("in_vrs", c_void_p), ("inp", c_void_p),
                 ("written", c_void_p), ("has_written", c_int), ("n_sources", c_int),
                 ("sources", c_void_p), ("wall", c_double), ("ticks", c_ulonglong),
-                ("terminate", c_int), ("last_successful_time", c_double)]
+                ("terminate", c_int), ("last_successful_time", c_double), ("n_stimuli", c_int),
+                ("stimuli", c_void_p)]
 
 
 class _AcSim(Structure):
@@ -61,7 +67,7 @@ class _AcSim(Structure):
                 ("op_kind", c_void_p), ("op_unit", c_void_p), ("start", c_double), ("h", c_double),
                 ("can", c_void_p), ("n_cols", c_int), ("n_runs", c_int), ("runs", c_void_p), ("table", c_void_p),
                 ("fail_unit", c_int), ("fail_function", c_int), ("fail_status", c_int), ("fail_k", c_long),
-                ("wall", c_double)]
+                ("wall", c_double), ("lsbus", c_void_p)]
 
 
 class _AcSettle(Structure):
@@ -135,7 +141,7 @@ def _core_stepper(sim, plan, plan_gs=None, core=None):
     if why is None:
         if sim.can is not None and sim.can.core_support() is not None:
             why = f"connections routed over CAN with {sim.can.core_support()} (the network ticks in Python)"
-        elif any(u.stimuli for u in sim.units):
+        elif any(u.stimuli for u in sim.units) and _lsbus_stimuli(sim) is None:
             why = "stimuli (Python functions of time)"
         elif any(u.tout or u.tin for u in sim.units):
             why = "Integer, Boolean, String or Enumeration variables connected or recorded (the core does Real)"
@@ -150,6 +156,15 @@ def _core_stepper(sim, plan, plan_gs=None, core=None):
     return _CoreStepper(sim, lib, plan)
 
 
+def _lsbus_stimuli(sim):
+    """{unit index: [core.h's ac_stimulus]} when every stimulus is an FMI-LS-BUS network's
+    output onto the plant (artibus.runner.lsbus_core), else None"""
+    if getattr(sim.can, "core_values", None) is None:
+        return None
+    from artibus.runner.lsbus_core import core_stimuli
+    return core_stimuli(sim.can, sim)
+
+
 class _CoreStepper:
     """The plan and the units as core.h's plain structs, over _RawCalls' buffers."""
 
@@ -161,6 +176,13 @@ class _CoreStepper:
         self._keep = []                                  # ctypes objects the structs point into
         self.units = (_AcUnit * len(units))()
         self.written = []
+        lsbus = getattr(sim.can, "core_values", None) is not None
+        stimuli = _lsbus_stimuli(sim) if lsbus else {}
+        for j, s in enumerate(self.units):           # the FMI-LS-BUS network's outputs onto the plant
+            if j in stimuli:
+                arr = (type(stimuli[j][0]) * len(stimuli[j]))(*stimuli[j])
+                self._keep.append(arr)
+                s.n_stimuli, s.stimuli = len(stimuli[j]), addressof(arr)
         for s, u in zip(self.units, units):
             raw = u.raw
             sources = (_AcSource * max(1, len(u.sources)))()
@@ -191,8 +213,13 @@ class _CoreStepper:
         # of consecutive outputs; with a CAN network, a column per message after them
         # for its sinceGood, filled by Simulation._with_can_columns after the run (no
         # copy of the table to add them; the core leaves them)
-        self.can = _CanCore(sim, lib) if sim.can is not None else None
-        self.extra = len(sim.can.messages) if sim.can is not None else 0
+        if lsbus:                                        # an FMI-LS-BUS network: ticked by the core too
+            from artibus.runner.lsbus_core import _LsBusCore
+            self.can = _LsBusCore(sim, lib)
+        else:
+            self.can = _CanCore(sim, lib) if sim.can is not None else None
+        self.lsbus = lsbus
+        self.extra = len(sim.can.messages) if sim.can is not None and not lsbus else 0
         runs = []                                        # [address, first column, length]
         for col, (u, n) in enumerate(sim.record, start=1):
             a = addressof(u.raw.out) + double * u.out_names.index(n)
@@ -222,7 +249,7 @@ class _CoreStepper:
         self._keep += [order, before, exits]
         self.settling = _AcSettle(order=addressof(order), n_order=len(sim.order),
                                   gauss_seidel=sim.algorithm == "gauss-seidel", before=addressof(before),
-                                  can=addressof(self.can.c) if self.can is not None else None,
+                                  can=addressof(self.can.c) if self.can is not None and not lsbus else None,
                                   exit_init=addressof(exits) if exits is not None else None)
         self._settle_refs = (self._struct_ref, byref(self.settling))
         self._inputs = [(a, raw, written) for a, _, raw, written in self._each if raw.n_in]
@@ -236,7 +263,7 @@ class _CoreStepper:
         max_iter rounds (Simulation's MAX_INIT_ITERATIONS). The time inside the FMUs'
         calls there is added to sim.settle_wall (seconds)."""
         sim, s, z = self.sim, self.struct, self.settling
-        if self.can is not None:           # (_CanCore.settle: the counters in)
+        if self.can is not None and not self.lsbus:    # (_CanCore.settle: the counters in)
             for a, m in zip(self.can.messages, self.can.net.messages):
                 a.counter = m.counter
         z.max_iter, z.fmu_wall = max_iter, 0.0
@@ -246,7 +273,7 @@ class _CoreStepper:
             sim.settle_wall = getattr(sim, "settle_wall", 0.0) + z.fmu_wall
             for a, raw, written in self._inputs:
                 raw.written = bytes(written) if a.has_written else None
-        if self.can is not None:           # the messages settled: all once the network settled once
+        if self.can is not None and not self.lsbus:    # the messages settled: all once the network settled once
             ms = self.can.net.messages
             for m in ms if z.can_settles > 0 else ms[:s.fail_unit] if failed == _AC_CAN else ():
                 m.last_counter = None
@@ -319,7 +346,9 @@ class _CoreStepper:
         assert len(table) == n + 1, "allocate(n) first"
         windowed = self.plan.table is None
         s.start, s.h, s.wall = start, h, 0.0
-        if self.can is not None:
+        if self.lsbus:
+            s.lsbus = self.can.begin(n)
+        elif self.can is not None:
             s.can = self.can.begin(n)
         for a, _, raw, written in self._each:    # (the structs are new: a stepper per run)
             if raw.written is not None:
@@ -360,6 +389,8 @@ class _CoreStepper:
                     raw.written = bytes(written)
             if self.can is not None:
                 self.can.end(start, h)
+        if failed == _AC_LSBUS:        # the network's tick failed: the Python master's error
+            raise self.can.failure(start + s.fail_k * h)
         if failed == _AC_CAN:          # a frame the encoder refused: artibus.can says why, as in the Python loop
             self.can.refused(s.fail_unit, start + s.fail_k * h)
         if failed == _AC_DO_STEP:      # fmi2Discard with fmi2Terminated: the FMU's own end, as the Python loop

@@ -1,7 +1,8 @@
 """A small FMI-LS-BUS 1.0 co-simulation master for FMI 3.0 Co-Simulation with Event Mode
 (issue 24): CAN network nodes, connected directly (two nodes) or through a bus simulation FMU
-such as CanBus, on FMPy's FMU3Slave. Python only: the C stepping core (runner/core.py) has no
-clocks yet.
+such as CanBus, on FMPy's FMU3Slave. The C stepping core does what Network.advance does, in
+the same order, on the same instances (src/runner_core/lsbus.c, artibus.runner.lsbus_core);
+this is its reference and the runner's fallback (ARTIBUS_CORE=0).
 
 What it does, with the sections it follows:
 
@@ -57,9 +58,12 @@ import zipfile
 from collections import defaultdict
 from pathlib import Path
 
-from fmpy import extract, read_model_description
+import fmpy
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
+
+from artibus import cache
 
 CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2 headers, fmi3FunctionTypes.h)
 EPS = 1e-9           # s: two times this close are one instant
@@ -212,18 +216,21 @@ class Fmu:
     fmi3UpdateDiscreteStates), 'updated' (after it; 'need' says whether it asked for another
     iteration) or 'step' (Step Mode)."""
 
-    def __init__(self, name, path, parameters=None, start_time=0.0, workdir=None):
+    def __init__(self, name, path, parameters=None, start_time=0.0, workdir=None):   # (workdir: unused, see below)
         self.name, self.path = name, Path(path)
         if not self.path.is_file():
             raise LsBusError(f"{self.path}: no such FMU (FMU {name})")
-        self.md = read_model_description(str(self.path))
+        # unpacked once per content and kept between runs, shared by the instances of one FMU,
+        # its model description read once (artibus.cache, as the runner's FMI 2.0 units)
+        self.dir, self._own_dir = cache.unpacked(self.path)
+        self.md = cache.stored(self.dir, f"modelDescription-fmpy-{fmpy.__version__}",
+                               lambda: read_model_description(str(self.path)))
         if self.md.fmiVersion != "3.0" or not self.md.coSimulation or not self.md.coSimulation.hasEventMode:
             raise LsBusError(f"{self.path}: FMU {name} is no FMI 3.0 Co-Simulation FMU with hasEventMode")
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.terminals = read_terminals(self.path, self.md, name)
-        self.dir = extract(str(self.path), unzipdir=workdir)
         self.log = []
-        self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self.dir,
+        self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=str(self.dir),
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.fmu.instantiate(eventModeUsed=True, loggingOn=False,
                              logMessage=lambda env, st, cat, msg: self.log.append((st, msg.decode(errors="replace"))))
@@ -241,7 +248,8 @@ class Fmu:
         except Exception:                         # an instance left in the error state
             pass
         self.fmu.freeInstance()
-        shutil.rmtree(self.dir, ignore_errors=True)
+        if self._own_dir:                         # (the cache off: a directory of its own)
+            shutil.rmtree(self.dir, ignore_errors=True)
 
     def var(self, name):
         if name not in self.vars:
@@ -367,13 +375,15 @@ class Network:
             self.links[(a, ta)].append((b, tb))
             self.links[(b, tb)].append((a, ta))
         self.frames = []
+        self.core_frames = None                   # the frames on the wire when the C core ran it (lsbus_core)
         self.time, self.results = [], {}
         self.n_instants = 0
 
     def wire_frames(self):
         """[(t, id, ide, data)] of each CAN frame once, at the time it reached its receivers
-        (with a bus FMU its deliveries, without one the sender's Tx_Data)"""
-        seen, out = set(), []
+        (with a bus FMU its deliveries, without one the sender's Tx_Data); those the stepping
+        core recorded (artibus.runner.lsbus_core) first"""
+        seen, out = set(), list(self.core_frames or ())
         for t, src, dst, _, data in self.frames:
             if self.bus and src != self.bus.name:
                 continue

@@ -29,7 +29,9 @@ before, delivered before the receivers step):
    their start values) for its steps from t, as the Real-wired actuators' outputs reach
    the plant in the same macro step (Gauss-Seidel, the actuators before the plant).
 
-Not yet: the C stepping core (the run takes the Python loop).
+The C stepping core ticks the network where the Python loop calls tick, the same calls in
+the same order (artibus.runner.lsbus_core, src/runner_core/lsbus.c), unless the core is
+switched off (ARTIBUS_CORE=0).
 """
 from pathlib import Path
 
@@ -80,11 +82,13 @@ class LsBusSteering:
         self.net = None
         self.log = None        # a .blf or .asc file for the frames on the wire (Simulation's can_log)
         self.ticks = 0
-        self.wall = 0.0        # (the CAN network's time in the C core's ticks: none here)
+        self.wall = 0.0        # s of the network in the C core's ticks (artibus.runner.lsbus_core)
 
     def stimuli(self):
         """{"Comp.input": f(t)} for Simulation: the network's outputs onto the plant's inputs"""
-        return {to: (lambda t, to=to: self.value[to] - self.base.get(to, 0.0)) for _, _, to in self.outputs}
+        self.stimulus_functions = {to: (lambda t, to=to: self.value[to] - self.base.get(to, 0.0))
+                                   for _, _, to in self.outputs}
+        return dict(self.stimulus_functions)
 
     def bind(self, sim):
         """attach to a Simulation made with stimuli(): the plant's output buffers to read"""
@@ -112,19 +116,56 @@ class LsBusSteering:
         if sim.can is not None:
             raise ArtibusError(f"{self.ssd}: a bench with both an org.artibus.can and an FMI-LS-BUS network")
         sim.can, sim.can_ratio = self, int(round(r))
+        # the network's FMUs instantiated now, as the bench's other FMUs are in the Simulation's
+        # set-up, for a run from the bench's start time (start takes it; another start time: anew)
+        self._ready = self._network(sim.bench.start_time)
 
     # -- the runner's CAN-network interface (artibus.can.network.Network)
     def settle(self):
         """the initialisation's rounds: the nodes initialise in their own Initialization Mode"""
 
     def core_support(self):
-        """why the C stepping core does not run this bench (artibus.runner.core._core_stepper)"""
-        return "an FMI-LS-BUS network (its master, artibus.runner.lsbus, runs in Python)"
+        """why the C stepping core does not run this bench (artibus.runner.core._core_stepper),
+        None when it does: it ticks the network as tick does (artibus.runner.lsbus_core,
+        src/runner_core/lsbus.c): the nodes' inputs and outputs Float64, at most 64 terminals
+        an FMU (checked on the network bind made; without it, as the run begins)"""
+        net = self.net or getattr(self, "_ready", None)
+        if net is None:
+            return None
+        for node, var, *_ in self.inputs + self.outputs:
+            t = net.by_name[node].var(var).type
+            if t != "Float64":
+                return f"an FMI-LS-BUS node's {t} variable ({node}.{var}; the core sets and reads Float64)"
+        for f in net.nodes + [net.bus]:
+            if len(f.terminals) > 64:
+                return f"an FMI-LS-BUS FMU of {len(f.terminals)} terminals ({f.name}; the core takes 64)"
+        return None
+
+    def core_values(self, fill=True):
+        """(a c_double array of the outputs' values, {to: its index}): what the stimuli read in
+        the C core (artibus.runner.lsbus_core), filled from self.value (fill)"""
+        if getattr(self, "_core_values", None) is None:
+            from ctypes import c_double
+            slots = {to: i for i, to in enumerate(self.value)}
+            self._core_values = ((c_double * max(1, len(slots)))(), slots)
+        values, slots = self._core_values
+        for to, i in slots.items() if fill else ():
+            values[i] = self.value[to]
+        return self._core_values
+
+    def _network(self, t0):
+        return Network(self.nodes, bus=(self.bus_path, {"nNodes": len(self.nodes), "wireTime": self.wire_time}),
+                       start_time=t0)
 
     def start(self, t0):
+        ready, self._ready = getattr(self, "_ready", None), None
         self.close()
-        self.net = Network(self.nodes, bus=(self.bus_path, {"nNodes": len(self.nodes), "wireTime": self.wire_time}),
-                           start_time=t0)
+        if ready is not None and ready.t0 == float(t0):
+            self.net = ready
+        else:
+            if ready is not None:
+                ready.close()
+            self.net = self._network(t0)
 
     def tick(self, k, t):
         self.ticks += 1
@@ -156,7 +197,8 @@ class LsBusSteering:
         return {}
 
     def close(self):
-        if self.net is not None:
-            self.net.close()
-            self.net = None
+        for net in (self.net, getattr(self, "_ready", None)):
+            if net is not None:
+                net.close()
+        self.net = self._ready = None
 

@@ -27,7 +27,7 @@
 static void say(CanBus *b, int level, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 static void say(CanBus *b, int level, const char *fmt, ...) {
-    if (!b->log) return;
+    if (!b->log || (level == 0 && b->logEvents && !*b->logEvents)) return;   /* (a frame's vsnprintf: ~1 us) */
     char text[512];
     va_list ap;
     va_start(ap, fmt);
@@ -52,63 +52,59 @@ void canbus_init(CanBus *b, const CanBusParams *p, double t0, CanBusLog log, voi
 
 /* ---- the frame's bits ----------------------------------------------------------- */
 
+/* The frame's bits SOF..CRC, taken one at a time as they are sent: the CRC-15 register
+   over SOF..data (ISO 11898-1 10.4.2.6: generator x^15+x^14+x^10+x^8+x^7+x^4+x^3+1) and
+   the bit stuffing over SOF..CRC (10.5: after five equal bits the transmitter inserts a
+   complement bit, which counts as the first bit of the next run) */
 typedef struct {
-    uint8_t bit[160];         /* SOF..CRC of the longest frame: 54 + 64 + 15 */
-    int n;
+    uint32_t crc;
+    int n, stuff, run, last;
 } Bits;
 
-static void put_bits(Bits *s, uint32_t value, int width) {
-    for (int i = width - 1; i >= 0; i--) s->bit[s->n++] = (uint8_t)((value >> i) & 1u);
-}
-
-/* CRC-15 of ISO 11898-1 (10.4.2.6): generator x^15+x^14+x^10+x^8+x^7+x^4+x^3+1 */
-static uint32_t crc15(const Bits *s) {
-    uint32_t crc = 0;
-    for (int i = 0; i < s->n; i++) {
-        uint32_t next = s->bit[i] ^ ((crc >> 14) & 1u);
-        crc = (crc << 1) & 0x7FFFu;
-        if (next) crc ^= 0x4599u;
+static void put_bits(Bits *s, uint32_t value, int width, bool crc) {
+    for (int i = width - 1; i >= 0; i--) {
+        const int bit = (int)((value >> i) & 1u);
+        if (crc) {
+            const uint32_t next = (uint32_t)bit ^ ((s->crc >> 14) & 1u);
+            s->crc = (s->crc << 1) & 0x7FFFu;
+            if (next) s->crc ^= 0x4599u;
+        }
+        if (bit == s->last) {
+            s->run++;
+        } else {
+            s->last = bit;
+            s->run = 1;
+        }
+        if (s->run == 5) {
+            s->stuff++;
+            s->last = !s->last;
+            s->run = 1;
+        }
+        s->n++;
     }
-    return crc;
 }
 
 int canbus_frame_bits(const CanFrame *f) {
-    Bits s = {.n = 0};
+    Bits s = {.crc = 0, .n = 0, .stuff = 0, .run = 0, .last = -1};
     const uint32_t dlc = f->dl > 8 ? 8 : f->dl;
-    put_bits(&s, 0, 1);                               /* SOF, dominant */
+    put_bits(&s, 0, 1, true);                               /* SOF, dominant */
     if (f->ide == LSBUS_TRUE) {
-        put_bits(&s, (f->id >> 18) & 0x7FFu, 11);     /* base identifier */
-        put_bits(&s, 1, 1);                           /* SRR, recessive */
-        put_bits(&s, 1, 1);                           /* IDE, recessive */
-        put_bits(&s, f->id & 0x3FFFFu, 18);           /* identifier extension */
-        put_bits(&s, f->rtr, 1);
-        put_bits(&s, 0, 2);                           /* r1, r0 */
+        put_bits(&s, (f->id >> 18) & 0x7FFu, 11, true);     /* base identifier */
+        put_bits(&s, 1, 1, true);                           /* SRR, recessive */
+        put_bits(&s, 1, 1, true);                           /* IDE, recessive */
+        put_bits(&s, f->id & 0x3FFFFu, 18, true);           /* identifier extension */
+        put_bits(&s, f->rtr, 1, true);
+        put_bits(&s, 0, 2, true);                           /* r1, r0 */
     } else {
-        put_bits(&s, f->id & 0x7FFu, 11);
-        put_bits(&s, f->rtr, 1);
-        put_bits(&s, 0, 2);                           /* IDE, r0 */
+        put_bits(&s, f->id & 0x7FFu, 11, true);
+        put_bits(&s, f->rtr, 1, true);
+        put_bits(&s, 0, 2, true);                           /* IDE, r0 */
     }
-    put_bits(&s, dlc, 4);
+    put_bits(&s, dlc, 4, true);
     if (f->rtr != LSBUS_TRUE)
-        for (uint32_t i = 0; i < dlc; i++) put_bits(&s, f->data[i], 8);
-    put_bits(&s, crc15(&s), 15);
-    /* bit stuffing (10.5): after five equal bits the transmitter inserts a
-       complement bit, which counts as the first bit of the next run */
-    int stuff = 0, run = 0, last = -1;
-    for (int i = 0; i < s.n; i++) {
-        if (s.bit[i] == last) {
-            run++;
-        } else {
-            last = s.bit[i];
-            run = 1;
-        }
-        if (run == 5) {
-            stuff++;
-            last = !last;
-            run = 1;
-        }
-    }
-    return s.n + stuff + 1 + 2 + 7 + 3;   /* CRC delimiter, ACK slot + delimiter, EOF, intermission */
+        for (uint32_t i = 0; i < dlc; i++) put_bits(&s, f->data[i], 8, true);
+    put_bits(&s, s.crc, 15, false);                         /* the CRC sequence, stuffed too */
+    return s.n + s.stuff + 1 + 2 + 7 + 3;   /* CRC delimiter, ACK slot + delimiter, EOF, intermission */
 }
 
 /* ---- the nodes' operations -------------------------------------------------------- */

@@ -72,6 +72,7 @@ typedef struct {
     int nFrames, nBusErrors, nArbitrationLost;
     CanBusLog log;
     void *logCtx;
+    const bool *logEvents;    /* NULL, or false: the events (level 0) are not even formatted */
 } CanBus;
 
 void canbus_init(CanBus *b, const CanBusParams *p, double t0, CanBusLog log, void *ctx);

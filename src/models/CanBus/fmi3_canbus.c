@@ -60,6 +60,7 @@ static void start_values(Instance *c) {
     c->p.faultBusOffNode = START_faultBusOffNode;
     c->time = 0;
     canbus_init(&c->bus, &c->p, 0, bus_log, c);
+    c->bus.logEvents = &c->logEvents;
 }
 
 /* the announcements of the Tx clocks (canbus_due); true if one is due now */
@@ -186,6 +187,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     ENTER("fmi3ExitInitializationMode", S(INIT_MODE));
     canbus_init(&c->bus, &c->p, c->time, bus_log, c);
+    c->bus.logEvents = &c->logEvents;
     c->state = c->eventModeUsed ? EVENT_MODE : STEP_MODE;   /* FMI 3.0.2, 4.2.1 */
     c->updated = c->needUpdate = false;
     return fmi3OK;
