@@ -153,9 +153,14 @@ class LsBusSteering:
             values[i] = self.value[to]
         return self._core_values
 
+    def set_faults(self, faults):
+        """--can-fault: the faults CanBus injects (artibus.runner.lsbus_faults), before bind"""
+        from artibus.runner.lsbus_faults import bus_fault_parameters
+        self.fault_parameters = bus_fault_parameters(faults, self.nodes, self.ssd)
+
     def _network(self, t0):
-        return Network(self.nodes, bus=(self.bus_path, {"nNodes": len(self.nodes), "wireTime": self.wire_time}),
-                       start_time=t0)
+        bus = {"nNodes": len(self.nodes), "wireTime": self.wire_time, **getattr(self, "fault_parameters", {})}
+        return Network(self.nodes, bus=(self.bus_path, bus), start_time=t0)
 
     def start(self, t0):
         ready, self._ready = getattr(self, "_ready", None), None

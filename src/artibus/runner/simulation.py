@@ -141,6 +141,8 @@ class Simulation(_Setup):
             if steering is not None:      # the network's outputs onto the plant's inputs; its frames' log
                 stimuli = {**steering.stimuli(), **(stimuli or {})}
                 steering.log, can_log = can_log, None
+                steering.set_faults(can_faults)       # (injected by its bus simulation FMU)
+                can_faults = None
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
                         set(cut or ()))
             if steering is not None:
