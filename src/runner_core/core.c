@@ -41,6 +41,10 @@ static double seconds_per_count(double m0, unsigned long long c0) {
     return dc ? dm / (double)dc : 0.0;
 }
 
+unsigned long long artibus_stamp(void) {      /* lsbus.c's timing of the network's FMU calls */
+    return stamp();
+}
+
 static void record(ac_sim *sim, long row, double t) {   /* _Recorder.take */
     double *r = sim->table + (size_t)row * (size_t)sim->n_cols;
     r[0] = t;
@@ -650,7 +654,7 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
     if (sim->can)
         sim->can->stamps = 0;
     if (sim->lsbus)
-        sim->lsbus->stamps = 0;
+        sim->lsbus->stamps = sim->lsbus->fmu_stamps = 0;
     const int result = run_steps(sim, k0, k1);
     const double second = seconds_per_count(m0, c0);
     for (int j = 0; j < sim->n_units; j++) {
@@ -663,7 +667,8 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
     }
     if (sim->lsbus) {
         sim->lsbus->wall += (double)sim->lsbus->stamps * second;
-        sim->lsbus->stamps = 0;
+        sim->lsbus->fmu_wall += (double)sim->lsbus->fmu_stamps * second;
+        sim->lsbus->stamps = sim->lsbus->fmu_stamps = 0;
     }
     sim->wall += now() - m0;
     return result;

@@ -26,7 +26,7 @@
 #include "fmi3FunctionTypes.h"
 #include "lsbus.h"
 
-#define ARTIBUS_CORE_ABI 12         /* artibus_core_abi(): Python checks it */
+#define ARTIBUS_CORE_ABI 13         /* artibus_core_abi(): Python checks it */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {

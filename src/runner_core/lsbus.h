@@ -104,7 +104,12 @@ typedef struct {
     char message[512];
     unsigned long long stamps;      /* its time within one artibus_core_run (time-stamp counter) */
     double wall;                    /* seconds, added at the end of each artibus_core_run */
+    unsigned long long fmu_stamps;  /* of which inside the FMUs' calls (CALL), within one run */
+    double fmu_wall;                /* seconds, as wall */
 } ac_lsbus;
+
+/* the stepping core's time-stamp counter (core.c: a few ns a read) */
+unsigned long long artibus_stamp(void);
 
 /* One tick at t (artibus.runner.lsbus_bench.LsBusSteering.tick): the inputs read,
  * Network.advance(t + period), the outputs read. Returns 0, or 1 with fail_* and

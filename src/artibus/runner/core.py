@@ -38,7 +38,7 @@ from artibus.runner import tables
 from artibus.runner.can_core import _CanCore
 from artibus.runner.unit import _last_message
 
-CORE_ABI = 12                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
+CORE_ABI = 13                      # ARTIBUS_CORE_ABI in src/runner_core/core.h
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
 _AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 _AC_DO_STEP = 1                    # core.h: fmi2DoStep failed (or returned fmi2Discard)

@@ -83,6 +83,7 @@ class LsBusSteering:
         self.log = None        # a .blf or .asc file for the frames on the wire (Simulation's can_log)
         self.ticks = 0
         self.wall = 0.0        # s of the network in the C core's ticks (artibus.runner.lsbus_core)
+        self.fmu_wall = 0.0    # of which inside its FMUs' calls
 
     def stimuli(self):
         """{"Comp.input": f(t)} for Simulation: the network's outputs onto the plant's inputs"""

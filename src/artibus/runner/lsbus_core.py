@@ -58,7 +58,7 @@ class _AcLsBus(Structure):
                 ("frame_id", c_void_p), ("frame_ide", c_void_p), ("frame_dl", c_void_p), ("frame_at", c_void_p),
                 ("pool", c_void_p), ("pool_cap", c_long), ("pool_used", c_long), ("fail_fmu", c_int),
                 ("fail_status", c_int), ("fail_function", c_char * 48), ("message", c_char * 512),
-                ("stamps", c_ulonglong), ("wall", c_double)]
+                ("stamps", c_ulonglong), ("wall", c_double), ("fmu_stamps", c_ulonglong), ("fmu_wall", c_double)]
 
 
 class _AcStimulus(Structure):
@@ -208,6 +208,7 @@ class _LsBusCore:
         net.bus_ticks = {self._bus_terms[j]: self._barr[j].tick for _, j in ticks}
         st.ticks += c.ticks
         st.wall += c.wall
+        st.fmu_wall += c.fmu_wall
         values, slots = st.core_values(fill=False)
         for to, i in slots.items():
             st.value[to] = values[i]
