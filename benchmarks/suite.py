@@ -144,6 +144,8 @@ def fmu_cost(path):
 # --- 2. benches ----------------------------------------------------------------------
 
 def bench_run(name, in_bench, variant=None):
+    from artibus.runner import lsbus_core
+    lsbus_core.TIME_FMU_CALLS = True      # an FMI-LS-BUS network's FMU calls timed (runner_core/lsbus.c)
     """One run of a bench: (wall, own share, its parts, init wall, stepping, run() time, span, base step, CAN)."""
     overrides = ssp.variant_overrides(name, [variant]) if variant else None
     with runner.Simulation(name, overrides=overrides) as sim:

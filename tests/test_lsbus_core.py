@@ -213,3 +213,20 @@ def test_an_fmu_s_failed_call_is_an_error_naming_the_function_and_the_time(monke
     with Simulation(BENCH) as sim:
         with pytest.raises(LsBusError, match=r"^t = 0\.100000 s: fmi3DoStep failed with status 3 \(error\)\.$"):
             sim.run(stop_time=0.5, core=True)
+
+
+def test_the_networks_fmu_calls_are_timed_only_when_asked(monkeypatch):
+    """benchmarks/suite.py's split of the network's time: inside its FMUs' calls (timed in C
+    around each call when lsbus_core.TIME_FMU_CALLS) and the master's own; off by default
+    (two time stamps a call), then nothing is counted"""
+    from artibus.runner import lsbus_core
+    walls = {}
+    for timed in (False, True):
+        monkeypatch.setattr(lsbus_core, "TIME_FMU_CALLS", timed)
+        with Simulation("Bus36m_Circle_LSBUS") as sim:
+            sim.run(stop_time=2.0)
+            assert sim.stepping.startswith("C core")
+            walls[timed] = (sim.can.wall, sim.can.fmu_wall)
+    assert walls[False][1] == 0.0 and walls[False][0] > 0
+    wall, fmu = walls[True]
+    assert 0 < fmu < wall

@@ -55,9 +55,10 @@ static int refuse(ac_lsbus *n, int fmu, const char *message) {
 
 #define CALL(n, i, name, call)                              \
     do {                                                    \
-        const unsigned long long s0_ = artibus_stamp();     \
+        const unsigned long long s0_ = (n)->timed ? artibus_stamp() : 0; \
         const fmi3Status st_ = (call);                      \
-        (n)->fmu_stamps += artibus_stamp() - s0_;           \
+        if ((n)->timed)                                     \
+            (n)->fmu_stamps += artibus_stamp() - s0_;       \
         if (st_ > fmi3Warning)                              \
             return fail_call((n), (i), (name), st_);        \
     } while (0)

@@ -104,6 +104,7 @@ typedef struct {
     char message[512];
     unsigned long long stamps;      /* its time within one artibus_core_run (time-stamp counter) */
     double wall;                    /* seconds, added at the end of each artibus_core_run */
+    int timed;                      /* 1: time the FMUs' calls (benchmarks/suite.py; two stamps a call) */
     unsigned long long fmu_stamps;  /* of which inside the FMUs' calls (CALL), within one run */
     double fmu_wall;                /* seconds, as wall */
 } ac_lsbus;

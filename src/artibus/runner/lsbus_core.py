@@ -26,6 +26,9 @@ _FUNCTIONS = ("EnterEventMode", "EnterStepMode", "UpdateDiscreteStates", "SetClo
 MAX_TERMS = 64                 # lsbus.c: terminals of one FMU
 BUFFER = 1 << 16               # bytes routed to one terminal within one instant, at most
 FRAMES_PER_TICK = 64           # the record of the frames on the wire: per tick and node, at most
+#: time the network's FMU calls (LsBusSteering.fmu_wall): benchmarks/suite.py sets it; two
+#: time stamps a call cost ~7 % of Bus36m_Circle_LSBUS's run, so not in an ordinary run
+TIME_FMU_CALLS = False
 
 
 class _AcLsTerminal(Structure):
@@ -58,7 +61,8 @@ class _AcLsBus(Structure):
                 ("frame_id", c_void_p), ("frame_ide", c_void_p), ("frame_dl", c_void_p), ("frame_at", c_void_p),
                 ("pool", c_void_p), ("pool_cap", c_long), ("pool_used", c_long), ("fail_fmu", c_int),
                 ("fail_status", c_int), ("fail_function", c_char * 48), ("message", c_char * 512),
-                ("stamps", c_ulonglong), ("wall", c_double), ("fmu_stamps", c_ulonglong), ("fmu_wall", c_double)]
+                ("stamps", c_ulonglong), ("wall", c_double), ("timed", c_int), ("fmu_stamps", c_ulonglong),
+                ("fmu_wall", c_double)]
 
 
 class _AcStimulus(Structure):
@@ -171,6 +175,7 @@ class _LsBusCore:
         self.c = c = _AcLsBus(n_nodes=len(net.nodes), fmus=addressof(self.fmus), ratio=self.ratio, period=st.period,
                               t0=net.t0, t=net.t, n_inputs=len(st.src), n_outputs=len(st.outputs),
                               inputs=addressof(ins), outputs=addressof(outs), bus_flagged=int(net.bus_flagged),
+                              timed=int(TIME_FMU_CALLS),
                               frame_cap=cap, frame_t=self.frame_t.ctypes.data, frame_id=self.frame_id.ctypes.data,
                               frame_ide=self.frame_ide.ctypes.data, frame_dl=self.frame_dl.ctypes.data,
                               frame_at=self.frame_at.ctypes.data, pool=self.pool.ctypes.data, pool_cap=len(self.pool))
