@@ -211,7 +211,7 @@ def test_an_fmu_s_failed_call_is_an_error_naming_the_function_and_the_time(monke
 
     monkeypatch.setattr(lsbus_core._LsBusCore, "begin", failing)
     with Simulation(BENCH) as sim:
-        with pytest.raises(LsBusError, match=r"^t = 0\.100000 s: fmi3DoStep failed with status 3 \(error\)\.$"):
+        with pytest.raises(LsBusError, match=r"^t = 0\.100000 s: FMU ECU2: fmi3DoStep failed with status 3 \(error\)\.$"):
             sim.run(stop_time=0.5, core=True)
 
 

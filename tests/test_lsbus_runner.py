@@ -466,3 +466,39 @@ def test_the_tx_ticks_are_the_periods_multiples():
                 assert term.next_tick(0.0, t) == (k + 1) * TS
             if k:
                 assert term.next_tick(0.0, tk - 5e-9) == tk     # 5 ns before it: another instant
+
+
+def test_a_network_that_cannot_be_opened_frees_what_it_opened(monkeypatch):
+    """the third node's parameter refused: the two instances opened before it are freed
+    (fmi3FreeInstance called on each), the error names the FMU and the variable"""
+    from artibus.runner import lsbus
+    freed = []
+    real = lsbus.Fmu.close
+
+    def close(self):
+        if self.fmu is not None:
+            freed.append(self.name)
+        real(self)
+
+    monkeypatch.setattr(lsbus.Fmu, "close", close)
+    nodes = {"sensors": (fmu3("SteeringSensors_LSBUS"), {}), "ecu": (fmu3("SteeringECU_LSBUS"), {"module": 1}),
+             "act": (fmu3("SteeringActuator_LSBUS"), {"modul": 1})}
+    with pytest.raises(LsBusError, match=r"SteeringActuator_LSBUS.fmu: FMU act has no variable 'modul'"):
+        Network(nodes, bus=(fmu3("CanBus"), {"nNodes": 3}))
+    assert sorted(freed) == ["act", "ecu", "sensors"]
+
+
+def test_an_fmu_instantiated_only_once_per_process_is_not_two_nodes(tmp_path):
+    """canBeInstantiatedOnlyOncePerProcess="true" (FMI 3.0 2.2.5): the instances of one FMU
+    would share its library, so a second node of it is refused, naming both"""
+    import zipfile
+    src, copy = fmu3("SteeringECU_LSBUS"), tmp_path / "OnceECU.fmu"
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(copy, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item)
+            if item.filename == "modelDescription.xml":
+                data = data.replace(b"<CoSimulation", b'<CoSimulation canBeInstantiatedOnlyOncePerProcess="true"', 1)
+            zout.writestr(item, data)
+    nodes = {"ecu1": (copy, {"module": 1}), "ecu2": (copy, {"module": 2})}
+    with pytest.raises(LsBusError, match=r"FMU ecu2 and ecu1 are one FMU, which says canBeInstantiatedOnlyOnce"):
+        Network(nodes)

@@ -285,3 +285,35 @@ def test_an_ssp_2_0_bench_without_a_network_runs_as_its_ssp_1_0_twin(tmp_path):
         assert a.can is None and b.can is None
     assert ra.names == rb.names and len(ra.time) > 50
     np.testing.assert_array_equal(ra.array(), rb.array())
+
+
+def test_a_node_parameter_the_fmu_has_not_is_refused_naming_the_line(tmp_path):
+    """a typo in an LS-BUS node's parameter binding: an error naming the .ssd's line, the
+    parameter and the FMU (no traceback from the instance the master makes later)"""
+    path = edited(tmp_path, lambda s: s.replace('name="module"', 'name="modul"', 1))
+    msg = setup_error(path)
+    assert f"{path}/SystemStructure.ssd:" in msg and 'name="modul"' in msg and "no such variable" in msg
+    assert "SteeringECU_LSBUS.fmu" in msg
+
+
+@pytest.mark.parametrize("mime,ok", [
+    ('application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0"', True),
+    ('application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0-beta.1"', True),   # the examples'
+    ('application/org.fmi-standard.fmi-ls-bus.can; version="1.2.3"', True),
+    ('application/org.fmi-standard.fmi-ls-bus.can; version="2.0.0"', False),
+    ('application/org.fmi-standard.fmi-ls-bus.can; version="1.0"', False),           # not semver
+    ('application/org.fmi-standard.fmi-ls-bus.can', False),                           # no version
+    ('application/org.fmi-standard.fmi-ls-bus.ethernet; version="1.0.0"', False),
+    (None, False),
+])
+def test_one_reading_of_the_can_mime_type_for_benches_and_fmus(mime, ok):
+    """fmi-ls-bus 1.0 "MIME Types": major version 1, semantic versioning, pre-releases too; the
+    bench's connectors (artibus.bench.ssp2) and the FMUs' terminals (runner.lsbus.check_mime)"""
+    from artibus.bench.ssp2 import is_can_mime
+    from artibus.runner.lsbus import LsBusError, check_mime
+    assert is_can_mime(mime) is ok
+    if ok:
+        check_mime("x.fmu", "Tx_Data", mime)
+    else:
+        with pytest.raises(LsBusError, match="x.fmu: Tx_Data has mimeType"):
+            check_mime("x.fmu", "Tx_Data", mime)

@@ -289,8 +289,11 @@ static int bus_tick_now(ac_lsbus *n, const int *now, int m) {
     size_t sizes[MAX_TERMS];
     fmi3Binary data[MAX_TERMS];
     CALL(n, bus_index(n), "fmi3GetBinary", b->getBinary(b->instance, vrs, (size_t)m, sizes, data, (size_t)m));
-    for (int j = 0; j < m; j++)
+    for (int j = 0; j < m; j++) {
+        if (sizes[j] && !data[j])     /* the FMU's own error: refused, never read */
+            return refuse(n, bus_index(n), "fmi3GetBinary gave a NULL value of size > 0");
         TRY(route_from_bus(n, now[j], data[j], sizes[j]));
+    }
     return 0;
 }
 
@@ -300,7 +303,7 @@ static int bus_settle(ac_lsbus *n) {
     const int bus = bus_index(n);
     if (n->fmus[bus].mode == AC_LS_EVENT)
         TRY(update(n, bus));
-    for (;;) {
+    for (int k = 0; k < MAX_ITERATIONS; k++) {
         int now[MAX_TERMS];
         TRY(bus_read_intervals(n));
         const int m = bus_due_now(n, now);
@@ -308,6 +311,8 @@ static int bus_settle(ac_lsbus *n) {
             return 0;
         TRY(bus_tick_now(n, now, m));
     }
+    return refuse(n, bus, "the bus simulation FMU asked for further event iterations with clocks "
+                          "due at the same instant 100 times (MAX_ITERATIONS)");
 }
 
 /* Network._bus_due: the bus's operations due at this instant (frames that end now) */
@@ -394,6 +399,8 @@ static int node_event(ac_lsbus *n, int i, int ticking, int inputs) {
     size_t size = 0;
     fmi3Binary data = NULL;
     CALL(n, i, "fmi3GetBinary", f->getBinary(f->instance, &q->tx_data, 1, &size, &data, 1));
+    if (size && !data)               /* the FMU's own error: refused, never read */
+        return refuse(n, i, "fmi3GetBinary gave a NULL value of size > 0");
     if (!size || q->peer < 0)        /* zero-size Tx_Data: no Rx clock (4____network_abstraction.adoc) */
         return 0;
     return append(n, bus_index(n), &n->fmus[bus_index(n)].terms[q->peer], data, size);

@@ -27,6 +27,7 @@ A bad .ssd is an ArtibusError naming the file, the line, the element and the val
 """
 import copy
 import io
+import re
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,6 +40,21 @@ from artibus.bench.ssd import NS
 SCHEMA_DIR = Path(__file__).parent / "schema" / "ssp2"
 #: the LS-BUS CAN MIME type of Rx_Data/Tx_Data (fmi-ls-bus 1.0, 4_4_1_can.adoc)
 CAN_MIME = 'application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0"'
+CAN_MIME_TYPE = "application/org.fmi-standard.fmi-ls-bus.can"      # the type, without its parameters
+SEMVER = re.compile(r"(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)(-[0-9A-Za-z.-]+)?(\+[0-9A-Za-z.-]+)?")
+
+
+def is_can_mime(mime):
+    """whether mime is the FMI-LS-BUS CAN MIME type of major version 1 (fmi-ls-bus v1.0.0
+    4____network_abstraction.adoc, "MIME Types": the version follows semantic versioning, so
+    1.x keeps 1.0.0's operations; a pre-release such as the fmi-ls-bus-examples' 1.0.0-beta.1
+    too): a bench's connectors here, an FMU's terminals in artibus.runner.lsbus.check_mime"""
+    parts = [s.strip() for s in (mime or "").split(";")]
+    params = dict(p.split("=", 1) for p in parts[1:] if "=" in p)
+    m = SEMVER.fullmatch(params.get("version", "").strip().strip('"'))
+    return parts[0].lower() == CAN_MIME_TYPE and m is not None and m.group(1) == "1"
+
+
 NETWORK_TERMINAL = "org.fmi-ls-bus.network-terminal"
 MEMBERS = ("Tx_Data", "Tx_Clock", "Rx_Data", "Rx_Clock")
 #: the member each member is connected to (4____network_abstraction.adoc, "Bus Terminal")
@@ -47,7 +63,8 @@ REAL = {"Real", "Float64", "Float32"}
 #: SSP connector types -> the FMI 3.0 variable elements they stand for
 FMI3_TYPE = {"Real": "Float64", "Float64": "Float64", "Float32": "Float32", "Binary": "Binary", "Clock": "Clock",
              "Boolean": "Boolean", "String": "String", "Integer": "Int32"}
-#: the CanBus parameters the runner passes (artibus.runner.lsbus_bench.LsBusSteering.start)
+#: the CanBus parameters a bench may bind (artibus.runner.lsbus_bench.LsBusSteering._network; the
+#: fault parameters come from --can-fault, artibus.runner.lsbus_faults)
 BUS_PARAMETERS = {"nNodes", "wireTime"}
 _SCHEMA = []
 
@@ -117,7 +134,7 @@ def read_ssd(ssp, where):
             return fmpy_read_ssd(ssp, validate=True), root
     except Exception as e:
         _sources_inside_components(ssp, where)   # the reason, where it is that
-        raise ArtibusError(f"{where}: not a valid SSP 1.0 system structure: {e}") from None
+        raise ArtibusError(f"{where}: not a readable SSP system structure: {e}") from None
     validate(root, where)
     _sources_inside_components(ssp, where)
     view = plant_view(root)
@@ -196,7 +213,9 @@ def _value(el, where):
                        "an LS-BUS FMU's parameter must be a Real, an integer or a Boolean")
 
 
-def _parameters(comp, where):
+def _parameters(comp, where, fmu=None):
+    """the component's inline parameter values; with fmu (read_fmu's), each checked to be a
+    parameter or an input of the FMU"""
     out = {}
     for b in comp.iterfind("ssd:ParameterBindings/ssd:ParameterBinding", NS):
         if b.get("source") is not None or b.find("ssd:ParameterMapping", NS) is not None:
@@ -204,6 +223,12 @@ def _parameters(comp, where):
                                f"FMI-LS-BUS component {comp.get('name')}: only inline parameter values (without "
                                "a mapping) are applied to LS-BUS FMUs")
         for p in b.iterfind("ssd:ParameterValues/ssv:ParameterSet/ssv:Parameters/ssv:Parameter", NS):
+            v = fmu.variables.get(p.get("name")) if fmu is not None else None
+            if fmu is not None and (v is None or v.get("causality") not in ("parameter", "input")):
+                what = "no such variable" if v is None else f"a variable of causality {v.get('causality')}"
+                raise ArtibusError(f"{where}:{p.sourceline}: <Parameter name=\"{p.get('name')}\"> of the FMI-LS-BUS "
+                                   f"component {comp.get('name')}: {what} in {comp.get('source')} (a parameter "
+                                   "or an input is set)")
             out[p.get("name")] = _value(p, where)
     return out
 
@@ -230,7 +255,7 @@ def _check_connector(comp, conn, var, where):
     if kind == "Clock":
         for a in ("intervalVariability", "intervalDecimal"):
             if t.get(a) is not None and t.get(a) != var.get(a) and not (
-                    a == "intervalDecimal" and var.get(a) and parse_real(t.get(a)) == parse_real(var.get(a))):
+                    a == "intervalDecimal" and var.get(a) and _same_number(t.get(a), var.get(a))):
                 raise ArtibusError(f"{head}: <Clock {a}=\"{t.get(a)}\">, but the FMU's {name} has {a}="
                                    f"\"{var.get(a)}\"")
     return kind, t
@@ -264,9 +289,9 @@ def _connectors(comps, fmus, where):
                 head = f"{where}:{t.getparent().sourceline}: <Connector name=\"{members[m]}\"> of {name}"
                 if kind != want:
                     raise ArtibusError(f"{head}: an ssc:{kind}, but the terminal member {m} is an ssc:{want}")
-                if want == "Binary" and t.get("mime-type") != CAN_MIME:
+                if want == "Binary" and not is_can_mime(t.get("mime-type")):
                     raise ArtibusError(f"{head}: <Binary mime-type=\"{t.get('mime-type')}\">: the runner's master "
-                                       f"runs FMI-LS-BUS CAN ({CAN_MIME})")
+                                       f"runs FMI-LS-BUS CAN ({CAN_MIME}, or another 1.x version)")
                 member[key] = (term, m)
     return kinds, member
 
@@ -278,7 +303,8 @@ def _plant_kinds(system, by_name, kinds):
             el = by_name.get(c.get(e))
             if el is None or (c.get(e), c.get(k)) in kinds or etree.QName(el).localname != "Component":
                 continue
-            conn = el.find(f"ssd:Connectors/ssd:Connector[@name='{c.get(k)}']", NS)
+            conn = next((x for x in el.iterfind("ssd:Connectors/ssd:Connector", NS) if x.get("name") == c.get(k)),
+                        None)                  # (compared, not put into an XPath: any name is safe)
             if conn is not None:
                 t = _type(conn)
                 kinds[(c.get(e), c.get(k))] = (etree.QName(t).localname if t is not None else None, t)
@@ -371,6 +397,14 @@ def _placement(comps, fmus, links, member, bus, where):
     return [(*placed[k], bus_terms[k]) for k in sorted(placed)]
 
 
+def _same_number(a, b):
+    """two decimal texts of the same number; False where either is none"""
+    try:
+        return parse_real(a) == parse_real(b)
+    except ValueError:
+        return False
+
+
 def _period(net, fmus, where):
     """the runner's tick: the nodes' time-based Tx clocks' interval, one for all"""
     periods = {}
@@ -413,9 +447,9 @@ def read_network(root, where, fmu):
     comp = {c.get("name"): c for c in comps}
     net = Network(period=None, bus=None, nodes={}, inputs=inputs, outputs=outputs)
     for name, term, bus_term in _placement(comps, fmus, links, member, bus, where):
-        net.nodes[name] = (comp[name].get("source"), _parameters(comp[name], where))
+        net.nodes[name] = (comp[name].get("source"), _parameters(comp[name], where, fmus[name]))
         net.terminals[name] = (term, bus_term)
-    params = _parameters(comp[bus], where)
+    params = _parameters(comp[bus], where, fmus[bus])
     head = f"{where}:{comp[bus].sourceline}: <Component name=\"{bus}\">"
     extra = set(params) - BUS_PARAMETERS
     if extra:

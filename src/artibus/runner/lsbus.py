@@ -49,10 +49,7 @@ to .blf/.asc with python-can, as the Real-wired benches' --can-log does.
 """
 import ctypes
 import math
-import re
 import shutil
-import struct
-import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from collections import defaultdict
@@ -64,6 +61,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
 from artibus import cache
+from artibus.base import ArtibusError
 
 CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2 headers, fmi3FunctionTypes.h)
 EPS = 1e-9           # s: two times this close are one instant
@@ -72,45 +70,14 @@ NETWORK_TERMINAL = "org.fmi-ls-bus.network-terminal"
 MEMBERS = ("Rx_Data", "Tx_Data", "Rx_Clock", "Tx_Clock")
 
 
-class LsBusError(Exception):
-    """A bad network, bad input or a refused call; the message names the FMU and the variable."""
+class LsBusError(ArtibusError):
+    """A bad network, bad input or a refused call; the message names the FMU and the variable
+    (an ArtibusError: the command line says it in one line, no traceback)."""
 
 
-# ---- the CAN operations on the wire, for the log -------------------------------------------
+# the CAN operations on the wire, for the log (here as before)
+from artibus.runner.lsbus_log import can_transmits, write_can_log  # noqa: E402,F401
 
-def can_transmits(buf):
-    """[(id, ide, data)] of the CAN Transmit operations of a buffer (fmi-ls-bus v1.0.0
-    4_4_1_can.adoc, Transmit: OP Code 0x10 u32, Length u32, ID u32, Ide u8, Rtr u8, DL u16,
-    Data); the other operations skipped by their Length; a malformed rest ends the scan (the
-    receiver answers it with a Format Error, 4____network_abstraction.adoc)"""
-    out, pos = [], 0
-    while pos + 8 <= len(buf):
-        code, length = struct.unpack_from("<II", buf, pos)
-        if length < 8 or pos + length > len(buf):
-            break
-        if code == 0x10 and length >= 16:
-            can_id, ide, _, dl = struct.unpack_from("<IBBH", buf, pos + 8)
-            if length == 16 + dl:
-                out.append((can_id, ide, bytes(buf[pos + 16:pos + length])))
-        pos += length
-    return out
-
-
-def write_can_log(frames, path):
-    """The frames on the wire, [(t, id, ide, data)] (Network.wire_frames), into a .blf or
-    .asc log by python-can's writers, as the Real-wired bench's --can-log writes them."""
-    import can
-    path = Path(path)
-    if path.suffix.lower() not in (".blf", ".asc"):
-        raise LsBusError(f"{path}: the CAN log is written as .blf or .asc (by its suffix)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    writer = can.BLFWriter(str(path)) if path.suffix.lower() == ".blf" else can.ASCWriter(str(path))
-    try:
-        for t, can_id, ide, data in frames:
-            writer.on_message_received(can.Message(timestamp=t, arbitration_id=can_id, is_extended_id=bool(ide),
-                                                   dlc=len(data), data=data, channel=0))
-    finally:
-        writer.stop()
 
 
 # ---- what the FMU declares -----------------------------------------------------------------
@@ -157,8 +124,7 @@ class Terminal:
         return k >= 0 and abs(t0 + self.shift + k * self.period - t) <= EPS
 
 
-CAN_MIME = "application/org.fmi-standard.fmi-ls-bus.can"
-SEMVER = re.compile(r"(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)(-[0-9A-Za-z.-]+)?(\+[0-9A-Za-z.-]+)?")
+from artibus.bench.ssp2 import CAN_MIME_TYPE as CAN_MIME, is_can_mime   # noqa: E402 (one definition)
 
 
 def check_mime(path, name, mime):
@@ -169,11 +135,7 @@ def check_mime(path, name, mime):
     pre-release of it is taken too: the fmi-ls-bus-examples declare version="1.0.0-beta.1",
     and their headers (fmi-ls-bus 468127f) lay out every CAN operation as v1.0.0's do.
     Anything else (another bus, version 2, no version) is an LsBusError naming it."""
-    parts = [s.strip() for s in (mime or "").split(";")]
-    params = dict(p.split("=", 1) for p in parts[1:] if "=" in p)
-    version = params.get("version", "").strip().strip('"')
-    m = SEMVER.fullmatch(version)
-    if parts[0].lower() != CAN_MIME or not m or m.group(1) != "1":
+    if not is_can_mime(mime):
         raise LsBusError(f"{path}: {name} has mimeType {mime!r}; this master connects FMI-LS-BUS CAN "
                          f'terminals: {CAN_MIME}; version="1.x.y" (1.0.0 or a pre-release of it)')
 
@@ -216,13 +178,24 @@ class Fmu:
     fmi3UpdateDiscreteStates), 'updated' (after it; 'need' says whether it asked for another
     iteration) or 'step' (Step Mode)."""
 
-    def __init__(self, name, path, parameters=None, start_time=0.0, workdir=None):   # (workdir: unused, see below)
+    def __init__(self, name, path, parameters=None, start_time=0.0):
         self.name, self.path = name, Path(path)
         if not self.path.is_file():
             raise LsBusError(f"{self.path}: no such FMU (FMU {name})")
         # unpacked once per content and kept between runs, shared by the instances of one FMU,
         # its model description read once (artibus.cache, as the runner's FMI 2.0 units)
         self.dir, self._own_dir = cache.unpacked(self.path)
+        self.fmu = None
+        try:
+            self._open(parameters, start_time)
+        except BaseException as e:     # nothing left behind: the instance freed, its own copy removed
+            self.close()
+            if isinstance(e, (LsBusError, KeyboardInterrupt)):
+                raise
+            raise LsBusError(f"{self.path}: FMU {name}: {e}") from None
+
+    def _open(self, parameters, start_time):
+        name = self.name
         self.md = cache.stored(self.dir, f"modelDescription-fmpy-{fmpy.__version__}",
                                lambda: read_model_description(str(self.path)))
         if self.md.fmiVersion != "3.0" or not self.md.coSimulation or not self.md.coSimulation.hasEventMode:
@@ -243,13 +216,16 @@ class Fmu:
         self.n_events = 0
 
     def close(self):
-        try:
-            self.fmu.terminate()
-        except Exception:                         # an instance left in the error state
-            pass
-        self.fmu.freeInstance()
+        if self.fmu is not None and getattr(self.fmu, "component", None):
+            try:
+                self.fmu.terminate()
+            except Exception:                     # an instance left in the error state
+                pass
+            self.fmu.freeInstance()
+        self.fmu = None
         if self._own_dir:                         # (the cache off: a directory of its own)
             shutil.rmtree(self.dir, ignore_errors=True)
+            self._own_dir = False
 
     def var(self, name):
         if name not in self.vars:
@@ -348,10 +324,22 @@ class Network:
         if not bus and len(nodes) != 2:
             raise LsBusError(f"without a bus simulation FMU two nodes connect directly, not {len(nodes)}")
         self.t0 = self.t = float(start_time)
-        self.work = tempfile.mkdtemp(prefix="artibus-lsbus-")
-        self.nodes = [Fmu(name, path, params, start_time, f"{self.work}/{name}")
-                      for name, (path, params) in nodes.items()]
-        self.bus = Fmu("bus", bus[0], bus[1], start_time, f"{self.work}/bus") if bus else None
+        self.nodes, self.bus = [], None
+        try:               # a node that cannot be opened: the ones opened before it freed
+            for name, (path, params) in nodes.items():
+                once = [f for f in self.nodes if f.path == Path(path)
+                        and f.md.coSimulation.canBeInstantiatedOnlyOncePerProcess]
+                if once:           # (its instances would share the one library loaded: FMI 3.0 2.2.5)
+                    raise LsBusError(f"{path}: FMU {name} and {once[0].name} are one FMU, which says "
+                                     "canBeInstantiatedOnlyOncePerProcess=\"true\": one node of it per run")
+                self.nodes.append(Fmu(name, path, params, start_time))
+            self.bus = Fmu("bus", bus[0], bus[1], start_time) if bus else None
+            self._connect()
+        except BaseException:
+            self.close()
+            raise
+
+    def _connect(self):
         self.by_name = {f.name: f for f in self.nodes}
         self.links = defaultdict(list)            # (fmu, terminal) -> [(fmu, terminal)]
         for f in self.nodes:
@@ -397,7 +385,6 @@ class Network:
     def close(self):
         for f in self.nodes + ([self.bus] if self.bus else []):
             f.close()
-        shutil.rmtree(self.work, ignore_errors=True)
 
     def __enter__(self):
         return self
@@ -415,7 +402,7 @@ class Network:
         now in the further iterations it asks for; their Tx_Data routed to the nodes."""
         if self.bus.mode == "event":
             self.bus.update()
-        while True:
+        for _ in range(MAX_ITERATIONS):
             self._bus_read_intervals()
             now = [t for t, tt in self.bus_ticks.items() if tt <= self.t + EPS]
             if not now or not self.bus.need:
@@ -427,6 +414,8 @@ class Network:
             data = self.bus.fmu.getBinary([term.tx_data for term in now])
             for term, d in zip(now, data):
                 self._route(self.bus, term, bytes(d), pending)
+        raise LsBusError(f"FMU {self.bus.name} asked for further event iterations with clocks due at "
+                         f"t = {self.t:g} s {MAX_ITERATIONS} times")
 
     def _bus_due(self, pending):
         """the bus's operations due at this instant (frames that end now)"""

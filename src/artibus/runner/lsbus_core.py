@@ -222,7 +222,8 @@ class _LsBusCore:
                                       self.frame_at[:n], self.pool[:c.pool_used])
 
     def failure(self, t):
-        """The core's tick failed at the tick from t: the error the Python master raises."""
+        """The core's tick failed (at the tick from t): the error the Python master raises, with
+        the FMU that failed, which the core knows, and what that FMU said last."""
         from fmpy.fmi1 import FMICallException
         from artibus.runner.lsbus import LsBusError
         c, net = self.c, self.steering.net
@@ -230,8 +231,9 @@ class _LsBusCore:
         name = everyone[c.fail_fmu].name if 0 <= c.fail_fmu < len(everyone) else None
         if c.fail_function:
             e = FMICallException(function=c.fail_function.decode(), status=c.fail_status)
-            said = [(f.name, m) for f in everyone for s, m in f.log if s >= 3]
+            failed = [everyone[c.fail_fmu]] if name else everyone
+            said = [(f.name, m) for f in failed for s, m in f.log if s >= 3]
             why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
-            return LsBusError(f"t = {c.t:.6f} s: {e}{why}")
+            return LsBusError(f"t = {c.t:.6f} s: {f'FMU {name}: ' if name else ''}{e}{why}")
         text = c.message.decode(errors="replace")
         return LsBusError(f"FMU {name}: {text}" if name else text)
