@@ -62,8 +62,9 @@ if [ ! -x "$fmirs/bin/fmirs" ] && command -v cargo >/dev/null 2>&1; then
   echo "setup: building fmirs (fmi-rs 0.3.4 from crates.io) into $fmirs (about 3 minutes, once per machine)"
   (
     flock 9
-    [ -x "$fmirs/bin/fmirs" ] || cargo install -q --path tools/fmirs --locked --root "$fmirs" \
-      || echo "setup: fmirs could not be built; its tests will be skipped"
+    [ -x "$fmirs/bin/fmirs" ] || CARGO_TARGET_DIR="$fmirs.build" cargo install -q --path tools/fmirs --locked \
+      --root "$fmirs" || echo "setup: fmirs could not be built; its tests will be skipped"
+    rm -rf "$fmirs.build"     # (the build's 300 MB, outside the clone)
   ) 9>"$fmirs.lock"
 fi
 if [ -x "$fmirs/bin/fmirs" ] && [ "$(readlink .tools/bin/fmirs 2>/dev/null)" != "$fmirs/bin/fmirs" ]; then

@@ -229,6 +229,7 @@ def test_feedthrough_fmi3_passes_every_width_at_its_bounds(end, tmp_path):
     ("UInt64_input", 2**64, "outside the range of an FMI 3.0 UInt64"),
     ("Int64_input", -2**63 - 1, "outside the range of an FMI 3.0 Int64"),
     ("UInt16_input", 1.5, "not an integer"),
+    ("Float32_continuous_input", "1e39", "outside the range of an FMI 3.0 Float32"),
     ("Binary_input", "00", "Binary"),
 ])
 def test_feedthrough_fmi3_refuses_a_value_outside_its_type(name, value, words, tmp_path, capsys):

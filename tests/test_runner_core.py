@@ -51,8 +51,8 @@ def assert_bit_for_bit(a, b):
 
 # --- the benches ---------------------------------------------------------------------
 
-#: the benches the core steps: not those with an FMI-LS-BUS network, whose master runs in Python
-#: (artibus.runner.lsbus_bench; tests/test_lsbus_bench.py)
+#: the benches compared here, core against Python loop: not those with an FMI-LS-BUS network,
+#: whose core run tests/test_lsbus_core.py compares with the Python master
 CORE_BENCHES = [b for b in ssp.bench_names() if read_spec(ssp.BENCH_DIR / b / "SystemStructure.ssd") is None]
 
 @pytest.mark.parametrize("bench", CORE_BENCHES)

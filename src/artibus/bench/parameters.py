@@ -127,7 +127,10 @@ def coerce(v, value, finite=True):
     if t == "Integer":
         return _integer(value, text)
     if t == "Float32":                     # FMI 3.0 (an FMU of others): a Real, as float32 holds it
-        return coerce(_Real, value, finite)
+        x = coerce(_Real, value, finite)
+        if math.isfinite(x) and abs(x) > FLOAT32_MAX:
+            raise ValueError(f"outside the range of an FMI 3.0 Float32 (+-{FLOAT32_MAX:.9g})")
+        return x
     if t in INTEGER_RANGE:                 # FMI 3.0's other integer widths, in their range
         return _integer(value, text, INTEGER_RANGE[t], f"the range of an FMI 3.0 {t}")
     if t == "Boolean":
@@ -156,6 +159,9 @@ def coerce(v, value, finite=True):
             raise ValueError(f"a String is text, not {type(value).__name__} {value!r}")
         return value
     raise ValueError(f"type {t} is not supported")
+
+
+FLOAT32_MAX = 3.4028234663852886e38         # the largest finite float32 (IEEE 754 binary32)
 
 
 class _Real:                               # coerce's view of a Float32 (FMI 3.0)

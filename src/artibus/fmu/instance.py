@@ -8,7 +8,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from artibus import cache
 from artibus.base import ArtibusError
-from artibus.bench.fmi import FMI2_TYPE, INTEGER_RANGE, fmi2_view  # noqa: F401
+from artibus.bench.fmi import FMI2_TYPE, fmi2_view  # noqa: F401
 
 
 def _callbacks(log):
@@ -228,12 +228,7 @@ class Fmu:
                                    f"for {self.md.modelName}: {e}") from None
             vr = [v.valueReference]
             if self.fmi == 3:
-                t = self.fmi3_type[name]
-                lo, hi = INTEGER_RANGE.get(t, (None, None))
-                if lo is not None and not lo <= x <= hi:
-                    raise ArtibusError(f"{self.instance_name}.{name} = {value!r}: outside the range of an "
-                                       f"FMI 3.0 {t} ({lo}..{hi}) for {self.md.modelName}")
-                getattr(self.slave, f"set{t}")(vr, [x])
+                getattr(self.slave, f"set{self.fmi3_type[name]}")(vr, [x])   # (coerce: in the type's range)
             elif v.type == "Real":
                 self.slave.setReal(vr, [x])
             elif v.type in ("Integer", "Enumeration"):

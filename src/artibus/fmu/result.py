@@ -22,7 +22,8 @@ class SimulationError(ArtibusError):
 class Termination:
     """An FMU ended the run, as FMI 2.0 lets it (fmi2DoStep returned fmi2Discard
     and fmi2GetBooleanStatus(fmi2Terminated) says true, FMI 2.0.4 section 4.2.3)
-    or FMI 3.0 (fmi3DoStep's terminateSimulation): a normal end at ``time`` (its fmi2LastSuccessfulTime), not a failure."""
+    or FMI 3.0 (fmi3DoStep's terminateSimulation): a normal end at ``time`` (its
+    fmi2LastSuccessfulTime, FMI 3.0's lastSuccessfulTime), not a failure."""
     component: str      # the component (a bench) or the model (an FMU alone) that ended it
     time: float         # s
     how: str = "fmi2Terminated"   # FMI 3.0: fmi3DoStep's "terminateSimulation" (FMI 3.0 4.2.1)

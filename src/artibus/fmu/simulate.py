@@ -103,6 +103,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
                 try:
                     t_end = fmu.do_step(t, step)
                     if t_end is not None:              # FMI 3.0 terminateSimulation: a normal end
+                        t_end = t_end if t_end == t_end else start_time + (i + 1) * step   # (NaN: the step's end)
                         if t_end > t:
                             record(t_end)
                         result.terminated = Termination(fmu.md.modelName, t_end, "terminateSimulation")

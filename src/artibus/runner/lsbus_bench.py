@@ -1,7 +1,8 @@
 """A bench whose steering network runs as FMI-LS-BUS 1.0 FMUs (issue 24): the plant stays
 the runner's FMI 2.0 components, the network is an artibus.runner.lsbus.Network ticked once
 per network period by the runner, through the interface of artibus.can.network.Network
-(start, tick, finish, settle, since_series, close) in the Python loop of Simulation._run;
+(start, tick, finish, settle, since_series, close): in the Python loop of Simulation._run, or in
+the C stepping core (below);
 Simulation attaches it to every SSP 2.0 bench with FMI-LS-BUS components, as below.
 
 The bench is an SSP 2.0 system structure (artibus.bench.ssp2): the LS-BUS FMUs are its

@@ -84,6 +84,9 @@ def bus_fault_parameters(faults, nodes, where):
         start, name = t0, PARAMETER[f.kind]
         if name in params:
             raise ArtibusError(f"{head}: CanBus injects one {f.kind} fault")
+        if f.kind == "corrupt" and not any(path.stem.endswith("_LSBUS") for path, _ in nodes.values()):
+            raise ArtibusError(f"{head}: the message names are {NODES_DBC.name}'s, whose codec artibus's LS-BUS "
+                               "nodes (*_LSBUS.fmu) carry; this network has none of them")
         params[name] = (_message_id(f.target, head) if f.kind == "corrupt" else
                         _node_index(f.target, nodes, head))
     if params:
