@@ -51,6 +51,12 @@
    as commands: `artibus --version`, `artibus run` against ecos's own program and
    Python processes driving ecospy and libcosimpy.
 
+6. FMI 3.0 against FMI 2.0 (issue 23): us per fmi3DoStep against fmi2DoStep for
+   every FMU built in both versions (benchmarks/fmi3_dostep.py; target within
+   5 %), and each bench's real-time factor with its FMI 2.0 and its FMI 3.0 builds
+   (benchmarks/fmi3_benches.py). The FMI-LS-BUS bench's ratio to Bus36m_Circle_CAN
+   and its Event Modes per simulated second (issue 24) are in section 2.
+
 usage: .venv/bin/python benchmarks/suite.py [--quick]
   --quick: one run per bench, short FMU blocks, the comparison on the
   two-BusKinematics bench only, the short sweep cases only and no external scheduler.
@@ -85,6 +91,8 @@ def _load(name):
 bench_runner = _load("runner")     # _timed_initialization, the two-BusKinematics bench
 bench_sweep = _load("sweep")       # run, report (the sweep throughput)
 bench_masters = _load("masters")   # figures, table, commands (against ecos and libcosim)
+bench_dostep = _load("fmi3_dostep")  # _timer, per_step_us (us per fmi3DoStep against fmi2DoStep)
+bench_fmi3 = _load("fmi3_benches")   # timed (a bench with its FMI 2.0 or 3.0 builds)
 
 QUICK = "--quick" in sys.argv[1:]
 REPEAT = 1 if QUICK else 7
@@ -251,6 +259,42 @@ def sweep_rates(tmp):
     return bench_sweep.run(tmp, SWEEP_LENGTHS, SWEEP_REPEAT, configs)
 
 
+def fmi3_section():
+    """issue 23's figures: us per fmi3DoStep against fmi2DoStep for every FMU built in both
+    versions (benchmarks/fmi3_dostep.py: the fastest block of 1000 steps in C, best of the
+    repeats, the two versions in turn), and the benches' real-time factors with each build"""
+    steps, repeat = (5000, 3) if QUICK else (20000, 7)
+    line(f"\n6. FMI 3.0 against FMI 2.0 (issue 23): us per DoStep, best of {repeat} x {steps} steps "
+         "(benchmarks/fmi3_dostep.py), and real-time factors, best of 3 (benchmarks/fmi3_benches.py)")
+    line(f"   {'FMU':24s} {'fmi2DoStep us':>14s} {'fmi3DoStep us':>14s} {'3/2':>6s} {'3 - 2 ns':>9s}")
+    timer = bench_dostep._timer()
+    ratios = {}
+    for path in sorted((fmu_dir() / "fmi3").glob("*.fmu")):
+        two = fmu_dir() / path.name
+        if path.stem in TEST_FMUS or not two.exists():
+            continue                     # (CanBus and the LS-BUS nodes are FMI 3.0 only)
+        t2, t3 = [], []
+        for _ in range(repeat):
+            t2.append(bench_dostep.per_step_us(timer, two, 2, steps))
+            t3.append(bench_dostep.per_step_us(timer, path, 3, steps))
+        b2, b3 = min(t2), min(t3)
+        ratios[path.stem] = (b3 / b2, 1e3 * (b3 - b2), b2)
+        line(f"   {path.stem:24s} {b2:14.3f} {b3:14.3f} {b3 / b2:6.3f} {1e3 * (b3 - b2):9.1f}")
+    missed = {n: r for n, r in ratios.items() if r[0] > 1.05}
+    TARGETS.append((f"fmi3DoStep within 5 % of fmi2DoStep on every FMU"
+                    + (f" (over: {', '.join(f'{n} {r[0]:.3f}, {r[1]:+.1f} ns on {1e3 * r[2]:.0f} ns' for n, r in missed.items())}"
+                       ")" if missed else ""), not missed))
+    line(f"   {'bench':32s} {'RTF FMI 2':>10s} {'RTF FMI 3':>10s}")
+    for bench in (["Bus36m_Circle", "Scania18m_Damping", "MultiAxle_StepSteer"] if QUICK else ssp.bench_names()):
+        rtf = {}
+        for fmi in ("2", "3"):
+            bench_fmi3.timed(bench, fmi, None)            # packed and unpacked once, untimed
+        for fmi in ("2", "3"):
+            runs = [bench_fmi3.timed(bench, fmi, None) for _ in range(3)]
+            rtf[fmi] = min(span / wall for wall, span, _ in runs)
+        line(f"   {bench:32s} {rtf['2']:10.0f} {rtf['3']:10.0f}")
+
+
 def masters_section():
     load = os.getloadavg()[0]
     line(f"\n5. Against ecos and libcosim on the portable packs (benchmarks/masters.py; load average {load:.1f}): "
@@ -380,9 +424,10 @@ def main():
                             f"{cpu:.2f} from the CPU times)", wall >= 1.8))
 
     masters_section()
+    fmi3_section()
 
     load1 = os.getloadavg()
-    line(f"\nTargets (issues 13 and 30), load average {load1[0]:.1f} (1 min) at the end, "
+    line(f"\nTargets (issues 13, 23, 24 and 30), load average {load1[0]:.1f} (1 min) at the end, "
          f"{time.time() - t_start:.0f} s in all:")
     for what, met in TARGETS:
         line(f"   [{'met' if met else 'MISSED'}] {what}")
