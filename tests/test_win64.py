@@ -68,6 +68,18 @@ def _wine_env():
                 WINEDLLOVERRIDES="mscoree,mshtml=")
 
 
+def _wine_run(args):
+    """the importer under Wine with its output captured. Wine now and then loses a console
+    program's whole stdout (exit 0, nothing printed; seen once in a CI run of 2026-12-04 with
+    two test workers starting Wine side by side): then the run is made again, twice at most.
+    What the run prints is still asserted in full."""
+    for _ in range(3):
+        p = subprocess.run(args, capture_output=True, text=True, env=_wine_env(), timeout=300)
+        if p.returncode != 0 or p.stdout.strip():
+            return p
+    return p
+
+
 @pytest.fixture(scope="module", autouse=True)
 def wineserver():
     """One Wine server and its service processes for the module's runs, started by a
@@ -194,8 +206,7 @@ def test_win64_cosimulation_equals_linux64(name):
     h = float(ex.stepSize)
     stop = min(float(ex.stopTime), 200 * h)    # at most 200 steps of the default experiment
     tol = float(ex.tolerance) if ex.tolerance else 1e-6
-    p = subprocess.run([wine, str(exe), str(tree), "--run", repr(stop), repr(h), repr(tol)],
-                       capture_output=True, text=True, env=_wine_env(), timeout=300)
+    p = _wine_run([wine, str(exe), str(tree), "--run", repr(stop), repr(h), repr(tol)])
     assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
     win = {k: float(v) for k, v in (line.split() for line in p.stdout.splitlines())}
     outputs = [v.name for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
@@ -237,12 +248,12 @@ def test_win64_csv_road_from_the_resources(tmp_path):
 
     def win_run(road_file):
         args = [f"{k}={v!r}" for k, v in place.items()] + ["road=0", f"roadFile={road_file}"]
-        return subprocess.run([wine, str(exe), drive_path, "--run", repr(stop), repr(h), repr(tol)]
-                              + args, capture_output=True, text=True, env=_wine_env(), timeout=300)
+        return _wine_run([wine, str(exe), drive_path, "--run", repr(stop), repr(h), repr(tol)] + args)
 
     p = win_run("slalom.csv")
     assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
     win = {k: float(v) for k, v in (line.split() for line in p.stdout.splitlines())}
+    assert win, "the Wine run printed no outputs, three times"
     # the road is really read: a file that is not there is refused
     missing = win_run("no_such_road.csv")
     assert missing.returncode != 0 and "run failed" in missing.stdout
