@@ -141,14 +141,21 @@ def stair_bench(tmp_path, connect_feedthrough):
         connections = ('<ssd:Connections><ssd:Connection startElement="Stair" startConnector="counter" '
                        'endElement="Feedthrough" endConnector="Int32_input"/></ssd:Connections>')
         models.append("Feedthrough")
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="Stairs">'
-           f'<ssd:System name="Stairs"><ssd:Elements>{elements}</ssd:Elements>{connections}</ssd:System>'
+    return bench_ssp(tmp_path / "Stairs.ssp", elements, connections,
+                     {f"resources/{m}.fmu": reference_fmu(m) for m in models})
+
+
+def bench_ssp(path, elements, connections, files):
+    """an .ssp at path: an SSP 1.0 System of the elements and connections (SSD text), stopping
+    at 10 s, with files {name in the archive: the file}"""
+    name = path.stem
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
+           f'<ssd:System name="{name}"><ssd:Elements>{elements}</ssd:Elements>{connections}</ssd:System>'
            f'<ssd:DefaultExperiment startTime="0" stopTime="10"/></ssd:SystemStructureDescription>')
-    path = tmp_path / "Stairs.ssp"
     with zipfile.ZipFile(path, "w") as z:
         z.writestr("SystemStructure.ssd", ssd)
-        for m in models:
-            z.write(reference_fmu(m), f"resources/{m}.fmu")
+        for arcname, f in files.items():
+            z.write(f, arcname)
     return path
 
 
@@ -270,14 +277,8 @@ def test_a_bench_of_fmi3_reference_fmus_equals_fmpy(core, folder, tmp_path):
     resources/fmi3/<Name>.fmu), in either loop: Dahlquist's x as FMPy computes it alone"""
     elements = (_component("Stair", [("counter", "output", "Integer")], folder)
                 + _component("Dahlquist", [("x", "output", "Real")], folder))
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="S">'
-           f'<ssd:System name="S"><ssd:Elements>{elements}</ssd:Elements></ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="10"/></ssd:SystemStructureDescription>')
-    ssp = tmp_path / "S.ssp"
-    with zipfile.ZipFile(ssp, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        for m in ("Stair", "Dahlquist"):
-            z.write(reference_fmu(m, 3), f"resources/{folder}{m}.fmu")
+    ssp = bench_ssp(tmp_path / "S.ssp", elements, "",
+                    {f"resources/{folder}{m}.fmu": reference_fmu(m, 3) for m in ("Stair", "Dahlquist")})
     with Simulation(ssp, step=0.2, record=["Dahlquist.x"]) as sim:
         r = sim.run(core=core)
         assert sim.stepping.startswith("C core" if core else "Python loop")

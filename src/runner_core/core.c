@@ -9,11 +9,6 @@
 #include <string.h>
 #include <time.h>
 
-#if defined(__GNUC__)
-#define AC_EXPORT __attribute__((visibility("default")))
-#else
-#define AC_EXPORT
-#endif
 
 static double now(void) {                     /* time.perf_counter(): CLOCK_MONOTONIC */
     struct timespec ts;

@@ -24,12 +24,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#if defined(__GNUC__)
-#define AC_EXPORT __attribute__((visibility("default")))
-#else
-#define AC_EXPORT
-#endif
-
 #define EPS 1e-9                    /* lsbus.EPS: two times this close are one instant */
 #define MAX_ITERATIONS 100          /* lsbus.MAX_ITERATIONS */
 #define MAX_TERMS 64                /* terminals of one FMU (artibus.runner.lsbus_core checks) */

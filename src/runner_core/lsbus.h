@@ -16,6 +16,13 @@
 
 #include "fmi3FunctionTypes.h"
 
+/* the stepping core's exported functions (core.c and lsbus.c; core.h includes this header) */
+#if defined(__GNUC__)
+#define AC_EXPORT __attribute__((visibility("default")))
+#else
+#define AC_EXPORT
+#endif
+
 /* where an FMU is (lsbus.Fmu.mode): in Event Mode before fmi3UpdateDiscreteStates,
  * after it ('need' says whether it asked for a further iteration), in Step Mode */
 enum { AC_LS_EVENT = 0, AC_LS_UPDATED = 1, AC_LS_STEP = 2 };
