@@ -5,8 +5,8 @@ builds of its FMUs (fmus/<Bench>.ssp) and with their FMI 3.0 builds (fmus/fmi3/<
 Each bench runs REPEAT times per build, FMI 2.0 and 3.0 in turn (a busy moment of the
 shared machine hits both), in one process (the packs and the FMUs' unpacked copies made
 before the first timed run); the wall time is Simulation.wall (initialisation and stepping,
-not the set-up), the stepping as Simulation.stepping says (the C core where it applies,
-with --python the Python loop). Printed: the simulated span, the median real-time factor
+not the set-up), the stepping as Simulation.stepping says (the one loop, the C core; with
+--python a bench's network ticked in Python, run(core=False)). Printed: the simulated span, the median real-time factor
 of each build (span / wall), the best, and FMI 3.0's median wall over FMI 2.0's; the
 machine's load average before and after (the figures are this machine's at that load).
 
@@ -30,7 +30,8 @@ def timed(bench, fmi, core):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--python", action="store_true", help="the Python loop (run(core=False)), not the C core")
+    ap.add_argument("--python", action="store_true",
+                    help="the networks ticked in Python (run(core=False)), not in C")
     ap.add_argument("benches", nargs="*")
     a = ap.parse_args(argv)
     core = False if a.python else None
@@ -49,7 +50,7 @@ def main(argv=None):
                 walls[fmi].append(w)
         m2, m3 = statistics.median(walls["2"]), statistics.median(walls["3"])
         print(f"{bench:28s} {span:7.1f} {span / m2:10.0f} {span / m3:10.0f} {span / min(walls['2']):8.0f} "
-              f"{span / min(walls['3']):8.0f} {m3 / m2:8.3f}  {stepping.split(':')[0]}")
+              f"{span / min(walls['3']):8.0f} {m3 / m2:8.3f}  {stepping}")
     load1 = os.getloadavg()
     print(f"load average after: {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f}")
 

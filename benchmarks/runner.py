@@ -1,9 +1,11 @@
 """Benchmark (prints, not a test) of the SSP runner.
 
 1. Every bench: real-time factor, and the runner's own share of the wall time
-   (wall time minus the time spent inside the FMUs' doStep and getReal), with
-   the stepping core in C (issue 13: the runner's own share at most 10 %) and
-   with the runner's Python loop (run(core=False)), the two runs alternately.
+   (wall time minus the time spent inside the FMUs' doStep and getReal), in the
+   one stepping loop, the C core (issues 13, 37: the runner's own share at most
+   10 %); a bench with a network (CAN, FMI-LS-BUS) also with its network ticked
+   in Python (run(core=False), the network's reference implementation, which the
+   core calls back for), the two runs alternately.
    The wall time includes the initialisation (FMUs in initialization mode,
    connected inputs to a fixed point: in C with the core, timed there): "own"
    counts the time inside the FMUs' calls there (getReal, setReal, exitInitialization-
@@ -18,7 +20,8 @@
    BusKinematics, one connection, 26 recorded connectors), Jacobi, 60 s at
    10 ms, set-up included; once with both driving straight (the masters'
    own cost) and once with the leader on an S-curve (the FMUs' work, the same
-   in both, dominates). Target: ours at least 5 x faster.
+   in both, dominates). Target: ours at least 5 x faster (no network: one run of
+   ours, in the C core).
 
 usage: .venv/bin/python benchmarks/runner.py
 """
@@ -64,13 +67,13 @@ def _timed_initialization(sim):
             [(u.fmu, "set_values") for u in sim.units]
     wrapped = [(obj, name, inside(getattr(obj, name))) for obj, name in calls]
 
-    def timed(start):
+    def timed(start, stepper):
         for obj, name, f in wrapped:
             setattr(obj, name, f)
         settled = getattr(sim, "settle_wall", 0.0)
         t0 = time.perf_counter()
         try:
-            initialize(start)
+            initialize(start, stepper)
         finally:
             spent[0] = time.perf_counter() - t0
             spent[1] += getattr(sim, "settle_wall", 0.0) - settled
@@ -81,30 +84,25 @@ def _timed_initialization(sim):
 
 
 def bench(name, label=None, **overrides):
-    runs = {True: [], False: []}      # core: [(wall, own share, own share of the loop, init)]
-    why = None
+    with runner.Simulation(name, overrides=overrides) as sim:
+        cores = (None, False) if sim.network is not None else (None,)
+    runs = {core: [] for core in cores}   # core: [(wall, own share, own share of the loop, init)]
+    stepping = {}
     for _ in range(REPEAT):
-        for core in (True, False):    # alternately: the machine's load drifts
-            if runs[core] is None:
-                continue
+        for core in cores:            # alternately: the machine's load drifts
             with runner.Simulation(name, overrides=overrides) as sim:
                 init = _timed_initialization(sim)
-                r = sim.run(core=None if core else False)
-                if core and sim.stepping != "C core":
-                    runs[core], why = None, sim.stepping
-                    continue
+                r = sim.run(core=core)
+                stepping[core] = sim.stepping
                 span = r.time[-1] - r.time[0]
                 fmu = sum(u.wall for u in sim.units)
                 runs[core].append((sim.wall, 1 - (fmu + init[1]) / sim.wall,
                                    1 - fmu / (sim.wall - init[0]), init[0]))
     parts = []
     for core, rows in runs.items():
-        if rows is None:
-            parts.append(f"C core: does not apply ({why})")
-            continue
         walls = [w for w, *_ in rows]
         w, own, loop, init = min(rows)
-        parts.append(f"{'C core' if core else 'Python'}: best {span / w:5.0f} x ({w:.3f} s), median "
+        parts.append(f"{stepping[core]}: best {span / w:5.0f} x ({w:.3f} s), median "
                      f"{span / statistics.median(walls):5.0f} x, own {100 * own:4.1f} % "
                      f"(loop {100 * loop:4.1f} %, init {1e3 * init:4.1f} ms)")
     print(f"{label or name:32s} {span:5.1f} s at {sim.base_step} s | " + " | ".join(parts))
@@ -142,23 +140,21 @@ def against_fmpy(stop=60.0, h=0.01, steer=True):
             t0 = time.perf_counter()
             simulate_ssp(str(path), stop_time=stop, step_size=h, parameter_set=pset)
             t_fmpy.append(time.perf_counter() - t0)
-            for core in (True, False):
-                t0 = time.perf_counter()
-                with runner.Simulation(path, step=h, algorithm="jacobi", overrides=params) as sim:
-                    sim.run(stop_time=stop, core=core)
-                    loop.append((core, sim.wall))
-                    fmu.append((core, sum(u.wall for u in sim.units)))
-                t_ours.append((core, time.perf_counter() - t0))
+            t0 = time.perf_counter()
+            with runner.Simulation(path, step=h, algorithm="jacobi", overrides=params) as sim:
+                sim.run(stop_time=stop)
+                loop.append(sim.wall)
+                fmu.append(sum(u.wall for u in sim.units))
+                stepping = sim.stepping
+            t_ours.append(time.perf_counter() - t0)
     what = "leader on an S-curve" if steer else "both straight"
     t_fmpy = min(t_fmpy)
-    for core in (True, False):
-        ours = [t for c, t in t_ours if c is core]
-        best = min(range(REPEAT), key=ours.__getitem__)
-        t, lp, fm = ours[best], [x for c, x in loop if c is core][best], [x for c, x in fmu if c is core][best]
-        print(f"two BusKinematics ({what}), 26 connectors, {stop:g} s at {h} s, Jacobi: "
-              f"best of {REPEAT}: fmpy.ssp.simulate_ssp {t_fmpy:.3f} s, artibus "
-              f"({'C core' if core else 'Python loop'}) {t:.3f} s with set-up "
-              f"({lp:.3f} s stepping, {fm:.3f} s of it inside the FMUs): {t_fmpy / t:.1f} x faster")
+    best = min(range(REPEAT), key=t_ours.__getitem__)
+    t, lp, fm = t_ours[best], loop[best], fmu[best]
+    print(f"two BusKinematics ({what}), 26 connectors, {stop:g} s at {h} s, Jacobi: "
+          f"best of {REPEAT}: fmpy.ssp.simulate_ssp {t_fmpy:.3f} s, artibus "
+          f"({stepping}) {t:.3f} s with set-up "
+          f"({lp:.3f} s stepping, {fm:.3f} s of it inside the FMUs): {t_fmpy / t:.1f} x faster")
 
 
 if __name__ == "__main__":

@@ -6,7 +6,7 @@
    instance (no FMPy wrapper), best of REPEAT blocks, in us per step; next to it
    its cost in the benches (doStep + getReal + setReal per step, timed by the C
    stepping core around each call, from the first bench that has it).
-2. Benches (every bench of ssp/benches, the C stepping core where it applies):
+2. Benches (every bench of ssp/benches in the one stepping loop, the C core, its network in C):
    real-time factor (simulated span / wall time of Simulation.run, the
    initialisation included, the set-up -- unpacking, loading -- not: Simulation.
    wall, from the initialisation to the Result), best and median of REPEAT runs (in rounds: each bench once a round), and the runner's own share of the best run's wall time:
@@ -163,28 +163,29 @@ def bench_run(name, in_bench, variant=None):
         call = time.perf_counter() - t0
         span = r.time[-1] - r.time[0]
         # an FMI-LS-BUS network's FMU calls (timed by the C core) count as the FMUs'
-        ls_fmu = getattr(sim.can, "fmu_wall", 0.0) if sim.can is not None else 0.0
+        network = sim.network                                   # CAN or FMI-LS-BUS, or None
+        ls_fmu = getattr(network, "fmu_wall", 0.0) if network is not None else 0.0
         fmu = sum(u.wall for u in sim.units) + ls_fmu
         w = sim.wall
-        net = (sim.can.wall if sim.can is not None else 0.0) - ls_fmu   # the network's ticks' own (C core)
-        core = getattr(sim, "core_wall", 0.0)                   # inside artibus_core_run (0: the Python loop)
+        net = (network.wall if network is not None else 0.0) - ls_fmu   # the network's ticks' own (C core)
+        core = sim.core_wall                                    # inside artibus_core_run
         # own = 1 - (fmu + init[1]) / w, in parts: the initialisation's own, the C core's own
         # (outside the FMUs' calls and the network's ticks), the network's ticks, Python's (the rest)
-        parts = ((init[0] - init[1]) / w, (core - fmu - net) / w if core else 0.0, net / w,
+        parts = ((init[0] - init[1]) / w, (core - fmu - net) / w, net / w,
                  (w - init[0] - core) / w)
         for u in sim.units:
             model = u.fmu.md.modelName
             steps = round(span / u.step)
-            if sim.stepping == "C core" and steps and model not in in_bench:
+            if steps and model not in in_bench:          # (timed by the core in every run)
                 in_bench[model] = (u.wall / steps, name)
         return (w, 1 - (fmu + init[1]) / w, parts, init[0], sim.stepping, call, span, sim.base_step,
-                sim.can is not None)
+                network is not None)
 
 
 def benches(todo, in_bench):
     """Every (bench, variant) of todo, REPEAT rounds of one run each in turn (a slow
     phase of this shared machine, minutes long, then touches every bench alike
-    instead of all runs of one); a bench whose runs took LONG s stops (the Python loop)."""
+    instead of all runs of one); a bench whose runs took LONG s in all stops repeating."""
     rows = {key: [] for key in todo}
     for _ in range(REPEAT):
         for (name, variant), runs in rows.items():
@@ -372,7 +373,7 @@ def main():
         from artibus.runner.simulation import Simulation
         with Simulation("Bus36m_Circle_LSBUS") as sim:
             r = sim.run()
-            net, span = sim.can.net, r.time[-1] - r.time[0]
+            net, span = sim.lsbus.net, r.time[-1] - r.time[0]
             per_s = {f.name: f.n_events / span for f in net.nodes + [net.bus]}
         line(f"   FMI-LS-BUS: Bus36m_Circle_LSBUS {lsbus.rt:.0f} x real time against Bus36m_Circle_CAN "
              f"{can.rt:.0f} x ({lsbus.rt / can.rt:.2f}); fmi3EnterEventMode per simulated second: "

@@ -103,6 +103,6 @@ def test_the_drawing_is_imported_when_asked_for(tmp_path):
     still import what they need when first used."""
     code = ("import sys; from artibus import report; assert 'matplotlib' not in sys.modules; "
             "report.signals; assert 'matplotlib' in sys.modules; from artibus.report import Kpi, plots")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
                        env={**os.environ, "MPLBACKEND": "Agg"})
     assert r.returncode == 0, r.stderr

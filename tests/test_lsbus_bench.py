@@ -27,12 +27,14 @@ SIGNALS = ("Bus.FjointY[1]", "Bus.FjointY[2]", "Bus.xAxle[4]", "Bus.yAxle[4]", "
 
 
 def run_lsbus(bench, wire_time, variant=None, core=False):
-    """the bench's Result, each FMU's Event Mode entries, the CAN frames on the wire; by the
-    Python master (core False, the reference: tests/test_lsbus_core.py has the C core's)"""
+    """the bench's Result, each FMU's Event Mode entries, the CAN frames on the wire; with the
+    network in Python (core False: artibus.runner.lsbus.Network, the reference, its outputs onto
+    the plant as stimuli; tests/test_lsbus_core.py holds the network in C to it)"""
     with Simulation(bench, lsbus_wire_time=wire_time, overrides=overrides(bench, variant)) as sim:
         result = sim.run(stop_time=stop(bench, variant), core=core)
-        assert sim.stepping.startswith("C core" if core else "Python loop")
-        net = sim.can.net
+        assert sim.stepping == ("C core" if core else "C core; in Python: the network, switched off (core=False); "
+                                                      "stimuli (Python functions of time)")
+        net = sim.lsbus.net
         return result, {f.name: f.n_events for f in net.nodes + [net.bus]}, len(net.wire_frames())
 
 

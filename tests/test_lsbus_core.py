@@ -1,11 +1,13 @@
-"""The FMI-LS-BUS network in the C stepping core (issue 24: src/runner_core/lsbus.c, through
-artibus.runner.lsbus_core): it must make the same calls in the same order as the Python
-master (artibus.runner.lsbus.Network), so the results must be the same bit for bit.
+"""The FMI-LS-BUS network in C (issue 24: src/runner_core/lsbus.c, through
+artibus.runner.lsbus_core): it must make the same calls in the same order as the network in
+Python (artibus.runner.lsbus.Network, its reference implementation, which the one stepping
+loop, the C core, calls back for with run(core=False)), so the results must be the same bit
+for bit.
 
 What is expected comes from elsewhere:
-- the Python master's run of the same bench (the reference; tests/test_lsbus_bench.py checks
-  it against Bus36m_Circle_CAN's Real-wired network): every recorded column byte for byte, the
-  frames on the wire (times, identifiers, payloads), each FMU's Event Mode entries;
+- the run of the same bench with the network in Python (the reference; tests/test_lsbus_bench.py
+  checks it against Bus36m_Circle_CAN's Real-wired network): every recorded column byte for
+  byte, the frames on the wire (times, identifiers, payloads), each FMU's Event Mode entries;
 - the Real-wired bench Bus36m_Circle_CAN's KPIs (within 1e-9, wire time off);
 - the Event Mode entries' closed form, from the Tx clock's period in the node FMUs'
   modelDescription.xml and the order within an instant (lsbus.py's docstring): per tick each
@@ -31,6 +33,8 @@ from artibus.runner.simulation import Simulation, run as run_bench
 pytestmark = pytest.mark.slow
 BENCH = "Bus36m_Circle_LSBUS"
 NODES = ("Sensors", "ECU1", "ECU2", "ECU3", "Act1", "Act2", "Act3")
+#: the network in Python: its outputs onto the plant's inputs too, as stimuli (LsBusSteering.stimuli)
+IN_PYTHON = "C core; in Python: the network, switched off (core=False); stimuli (Python functions of time)"
 
 
 def needs(*names):
@@ -45,19 +49,20 @@ def fmus():
 
 
 def run(core, wire_time=False, variant=None, stop_time=None, bench=BENCH):
-    """(Result, {FMU: Event Mode entries}, frames on the wire, the bus's log)"""
+    """(Result, {FMU: Event Mode entries}, frames on the wire, the bus's log); core: the
+    network in C (True) or in Python (False)"""
     overrides = ssp.variant_overrides(bench, [variant]) if variant else {}
     stop = stop_time or (ssp.variant_stop_time(bench, [variant]) if variant else None)
     with Simulation(bench, lsbus_wire_time=wire_time, overrides=overrides) as sim:
         result = sim.run(stop_time=stop, core=core)
-        assert sim.stepping == "C core" if core else sim.stepping.startswith("Python loop")
-        net = sim.can.net
+        assert sim.stepping == ("C core" if core else IN_PYTHON)
+        net = sim.lsbus.net
         return (result, {f.name: f.n_events for f in net.nodes + [net.bus]}, net.wire_frames(), list(net.bus.log))
 
 
 @pytest.mark.parametrize("bench, wire_time, variant", [(BENCH, False, None), (BENCH, False, "laneChange"),
                                                        (BENCH, True, None), (f"{BENCH}_Backwards", False, None)])
-def test_the_core_runs_the_bench_bit_for_bit_as_the_python_master(bench, wire_time, variant):
+def test_the_network_in_c_runs_the_bench_bit_for_bit_as_the_network_in_python(bench, wire_time, variant):
     ref, ref_events, ref_frames, _ = run(False, wire_time, variant, bench=bench)
     got, events, frames, _ = run(True, wire_time, variant, bench=bench)
     # the comparison means something: the bus moves, frames flow
@@ -114,12 +119,24 @@ def test_event_mode_entries_per_simulated_second_are_the_closed_form(core_off):
           f"{(events['bus'] + 1) / duration:g} for the bus; {len(frames)} frames")
 
 
-def test_a_clock_after_the_discrete_states_is_refused_by_the_core():
+@pytest.fixture
+def lsbus_cores(monkeypatch):
+    """the _LsBusCore of each run in the test (the network in C), as its run begins"""
+    cores, begin = [], lsbus_core._LsBusCore.begin
+
+    def kept(self, n):
+        cores.append(self)
+        return begin(self, n)
+    monkeypatch.setattr(lsbus_core._LsBusCore, "begin", kept)
+    return cores
+
+
+def test_a_clock_after_the_discrete_states_is_refused_by_the_core(lsbus_cores):
     with Simulation(BENCH) as sim:
         sim.run(stop_time=0.05, core=True)
-        net, lib = sim._core_can, sim._core_can.lib
-        c = net.c
-        vr = sim.can.net.nodes[1].terminals[next(iter(sim.can.net.nodes[1].terminals))].tx_clock
+        (net,) = lsbus_cores
+        lib, c = net.lib, net.c
+        vr = sim.lsbus.net.nodes[1].terminals[next(iter(sim.lsbus.net.nodes[1].terminals))].tx_clock
         vrs = (c_uint * 1)(vr)
         lib.artibus_lsbus_set_clocks.argtypes = [c_void_p, c_int, c_void_p, c_size_t]
         node = net.fmus[1]
@@ -130,7 +147,7 @@ def test_a_clock_after_the_discrete_states_is_refused_by_the_core():
         node.mode = 2                             # Step Mode
         assert lib.artibus_lsbus_set_clocks(addressof(c), 1, vrs, 1) == 1
         assert "Step Mode" in c.message.decode()
-        sim.can.net.nodes[1].fmu.enterEventMode()
+        sim.lsbus.net.nodes[1].fmu.enterEventMode()
         node.mode = 0                             # in Event Mode: the clock goes to the FMU, which takes it
         assert lib.artibus_lsbus_set_clocks(addressof(c), 1, vrs, 1) == 0
 
@@ -154,7 +171,7 @@ def test_a_truncated_binary_from_a_node_is_answered_with_a_format_error_not_a_cr
     def truncating(self, n):
         address = begin(self, n)
         f = self.fmus[0]                          # Sensors, the first node
-        real = _GET_BINARY(f.GetBinary)
+        real = _GET_BINARY(f.getBinary)
 
         def short(instance, vrs, nvr, sizes, values, nvalues):
             status = real(instance, vrs, nvr, sizes, values, nvalues)
@@ -165,7 +182,7 @@ def test_a_truncated_binary_from_a_node_is_answered_with_a_format_error_not_a_cr
 
         hook = _GET_BINARY(short)
         self._keep.append(hook)
-        f.GetBinary = cast(hook, c_void_p).value
+        f.getBinary = cast(hook, c_void_p).value
         return address
 
     _, _, ref_frames, _ = run(True, stop_time=0.2)
@@ -178,14 +195,20 @@ def test_a_truncated_binary_from_a_node_is_answered_with_a_format_error_not_a_cr
     assert warnings and any("malformed" in m for m in warnings), log[:3]
 
 
-def test_a_stimulus_of_the_user_s_own_leaves_the_bench_to_the_python_loop():
-    """the core propagates the network's outputs as stimuli, no other Python function of time"""
-    with Simulation(BENCH, stimuli={"Bus.Fx[2]": lambda t: 0.0}) as sim:
-        sim.run(stop_time=0.02)
-        assert sim.stepping == "Python loop: stimuli (Python functions of time)"
+def test_a_stimulus_of_the_user_s_own_is_called_back_for_with_the_network():
+    """the core propagates the network's outputs onto the plant in C (core.h's ac_stimulus), no
+    other Python function of time: with a user's own stimulus the stimuli are called back for
+    in Python, the network's outputs with them, and stepping says so. Its stimulus adds 0 to
+    the plant's Fx[2] (the driver's force, not the network's): the run is the bench's plain
+    one, the network in C, bit for bit."""
     with Simulation(BENCH) as sim:
-        sim.run(stop_time=0.02)
+        plain = sim.run(stop_time=1.0)
         assert sim.stepping == "C core"
+    with Simulation(BENCH, stimuli={"Bus.Fx[2]": lambda t: 0.0}) as sim:
+        got = sim.run(stop_time=1.0)
+        assert sim.stepping.startswith("C core; in Python: ")
+        assert sim.stepping.endswith("stimuli (Python functions of time)")
+    assert np.ptp(plain["Bus.yAxle[6]"]) > 0 and got.array().tobytes() == plain.array().tobytes()
 
 
 _DO_STEP = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_int, c_void_p, c_void_p, c_void_p, c_void_p)
@@ -193,20 +216,20 @@ _DO_STEP = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_int, c_void_p, c_voi
 
 def test_an_fmu_s_failed_call_is_an_error_naming_the_function_and_the_time(monkeypatch):
     """ECU2's fmi3DoStep failing from t = 0.1 s (returning fmi3Error, FMI 3.0.2 2.2.3): the run
-    stops there with the Python master's error (the time, the function, the status)"""
+    stops there with the error the network in Python gives (the time, the function, the status)"""
     begin = lsbus_core._LsBusCore.begin
 
     def failing(self, n):
         address = begin(self, n)
         f = self.fmus[2]                          # ECU2
-        real = _DO_STEP(f.DoStep)
+        real = _DO_STEP(f.doStep)
 
         def step(instance, t, h, no_set, *out):
             return 3 if t >= 0.1 - 1e-9 else real(instance, t, h, no_set, *out)
 
         hook = _DO_STEP(step)
         self._keep.append(hook)
-        f.DoStep = cast(hook, c_void_p).value
+        f.doStep = cast(hook, c_void_p).value
         return address
 
     monkeypatch.setattr(lsbus_core._LsBusCore, "begin", failing)
@@ -225,8 +248,8 @@ def test_the_networks_fmu_calls_are_timed_only_when_asked(monkeypatch):
         monkeypatch.setattr(lsbus_core, "TIME_FMU_CALLS", timed)
         with Simulation("Bus36m_Circle_LSBUS") as sim:
             sim.run(stop_time=2.0)
-            assert sim.stepping.startswith("C core")
-            walls[timed] = (sim.can.wall, sim.can.fmu_wall)
+            assert sim.stepping == "C core"
+            walls[timed] = (sim.lsbus.wall, sim.lsbus.fmu_wall)
     assert walls[False][1] == 0.0 and walls[False][0] > 0
     wall, fmu = walls[True]
     assert 0 < fmu < wall

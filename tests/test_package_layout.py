@@ -6,7 +6,8 @@
    at module granularity: ``from artibus.x import y`` is an edge to the module
    ``artibus.x.y`` where that is a module, else to ``artibus.x``; a package is
    its ``__init__``;
-2. no module above MAX_LINES lines;
+2. no module above MAX_LINES lines; in the runner, the FMU and the bench sub-packages
+   (LONG_FUNCTION_PARTS), no function above MAX_FUNCTION_LINES lines either (issue 37);
 3. no private name (a leading underscore, not a dunder) imported from another
    sub-package (the first level below artibus: ``artibus.runner``,
    ``artibus.can``, ...; a module at the top, e.g. ``artibus.cli``, is a part of
@@ -20,6 +21,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "artibus"
 MAX_LINES = 600
+MAX_FUNCTION_LINES = 100
+LONG_FUNCTION_PARTS = ("artibus.runner", "artibus.fmu", "artibus.bench")
 
 
 # --- the checkers ---------------------------------------------------------------------
@@ -134,6 +137,22 @@ def long_modules(root, limit=MAX_LINES):
     return out
 
 
+def long_functions(root, parts, limit=MAX_FUNCTION_LINES):
+    """[(module, function, lines)] of the functions and methods (nested ones too) of the
+    modules in ``parts`` (sub-packages) longer than ``limit`` lines, decorators and
+    docstring included."""
+    out = []
+    for name, path in sorted(modules(root).items()):
+        if not any(name == p or name.startswith(p + ".") for p in parts):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                first = min([node.lineno] + [d.lineno for d in node.decorator_list])
+                if node.end_lineno - first + 1 > limit:
+                    out.append((name, node.name, node.end_lineno - first + 1))
+    return out
+
+
 def _part(name):
     """The sub-package a module belongs to: artibus.runner.core -> artibus.runner."""
     return ".".join(name.split(".")[:2])
@@ -200,6 +219,25 @@ def test_long_module_found_in_a_broken_package(tmp_path):
     assert long_modules(pkg) == [("pkg.long", MAX_LINES + 1)]
 
 
+def test_long_function_found_in_a_broken_package(tmp_path):
+    """A function, a method and a nested function over the limit are found, in the parts
+    named only; one of exactly the limit is not."""
+    body = "    x = 1\n"
+    pkg = _write(tmp_path, {
+        "pkg/__init__.py": "",
+        "pkg/one/__init__.py": "",
+        "pkg/one/m.py": ("def ok():\n" + body * (MAX_FUNCTION_LINES - 1)
+                         + "def long():\n" + body * MAX_FUNCTION_LINES
+                         + "class C:\n    @staticmethod\n    def method():\n" + ("    " + body) * (MAX_FUNCTION_LINES - 1)
+                         + "def outer():\n    def inner():\n" + ("    " + body) * (MAX_FUNCTION_LINES + 1)),
+        "pkg/two/__init__.py": "",
+        "pkg/two/n.py": "def long():\n" + body * (MAX_FUNCTION_LINES + 5),
+    })
+    found = sorted(long_functions(pkg, ("pkg.one",)))
+    assert found == [("pkg.one.m", "inner", MAX_FUNCTION_LINES + 2), ("pkg.one.m", "long", MAX_FUNCTION_LINES + 1),
+                     ("pkg.one.m", "method", MAX_FUNCTION_LINES + 1), ("pkg.one.m", "outer", MAX_FUNCTION_LINES + 3)]
+
+
 def test_private_import_found_in_a_broken_package(tmp_path):
     """A private name from another sub-package is found (by name, by a module's
     name, relative or absolute); from its own sub-package, or a dunder, it is not."""
@@ -229,6 +267,12 @@ def test_the_package_has_no_import_cycle():
 def test_no_module_above_the_limit():
     assert not long_modules(PACKAGE), f"modules above {MAX_LINES} lines: " + ", ".join(
         f"{m} ({n})" for m, n in long_modules(PACKAGE))
+
+
+def test_no_long_function_in_the_runner_fmu_and_bench():
+    bad = long_functions(PACKAGE, LONG_FUNCTION_PARTS)
+    assert not bad, f"functions above {MAX_FUNCTION_LINES} lines: " + ", ".join(
+        f"{m}.{f} ({n})" for m, f, n in bad)
 
 
 def test_no_private_name_imported_from_another_sub_package():

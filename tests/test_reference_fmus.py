@@ -130,7 +130,8 @@ def _component(name, connectors, folder=""):
 
 def stair_bench(tmp_path, connect_feedthrough):
     """Stair and Dahlquist side by side; with connect_feedthrough, Stair's counter
-    into Feedthrough's Integer input too (Integer connections: the Python loop)."""
+    into Feedthrough's Integer input too (an Integer connection: the core calls back
+    for it, in Python)."""
     elements = _component("Stair", [("counter", "output", "Integer")])
     elements += _component("Dahlquist", [("x", "output", "Real")])
     connections = ""
@@ -159,14 +160,13 @@ def bench_ssp(path, elements, connections, files):
     return path
 
 
-@pytest.mark.parametrize("core", [True, False], ids=["C core", "Python loop"])
-def test_a_bench_holding_stair_ends_at_9_s(core, tmp_path):
-    """Stair's end ends the bench, in either loop: the last row at 9 s, Dahlquist's
+def test_a_bench_holding_stair_ends_at_9_s(tmp_path):
+    """Stair's end ends the bench (the C core's AC_ENDED): the last row at 9 s, Dahlquist's
     x as FMPy computes it alone up to 9 s, the run's end said, not a failure."""
     ssp = stair_bench(tmp_path, connect_feedthrough=False)
     with Simulation(ssp, step=0.2, record=["Dahlquist.x"]) as sim:
-        r = sim.run(core=core)
-        assert sim.stepping.startswith("C core" if core else "Python loop")
+        r = sim.run()
+        assert sim.stepping == "C core"
     assert r.terminated is not None
     assert r.terminated.component == "Stair" and r.terminated.time == pytest.approx(9.0)
     assert r.time[-1] == pytest.approx(9.0) and len(r.time) == 46
@@ -270,18 +270,18 @@ def test_fmi3_terminate_simulation_ends_the_run(tmp_path, monkeypatch, capsys):
     assert len(read_csv(out)[1]) == 6
 
 
-@pytest.mark.parametrize("core", [True, False], ids=["C core", "Python loop"])
 @pytest.mark.parametrize("folder", ["", "fmi3/"], ids=["resources", "resources-fmi3"])
-def test_a_bench_of_fmi3_reference_fmus_equals_fmpy(core, folder, tmp_path):
+def test_a_bench_of_fmi3_reference_fmus_equals_fmpy(folder, tmp_path):
     """FMI 3.0 FMUs of others in a bench (their .ssd source resources/<Name>.fmu or
-    resources/fmi3/<Name>.fmu), in either loop: Dahlquist's x as FMPy computes it alone"""
+    resources/fmi3/<Name>.fmu), through the core's fmi3 calls: Dahlquist's x as FMPy
+    computes it alone"""
     elements = (_component("Stair", [("counter", "output", "Integer")], folder)
                 + _component("Dahlquist", [("x", "output", "Real")], folder))
     ssp = bench_ssp(tmp_path / "S.ssp", elements, "",
                     {f"resources/{folder}{m}.fmu": reference_fmu(m, 3) for m in ("Stair", "Dahlquist")})
     with Simulation(ssp, step=0.2, record=["Dahlquist.x"]) as sim:
-        r = sim.run(core=core)
-        assert sim.stepping.startswith("C core" if core else "Python loop")
+        r = sim.run()
+        assert sim.stepping == "C core"
     _, theirs = fmpy_table(reference_fmu("Dahlquist", 3), 0.2)
     assert len(r.time) == 51
     np.testing.assert_array_equal(r["Dahlquist.x"], theirs[:, 1])

@@ -238,9 +238,10 @@ def test_asc_time_going_backwards_is_an_error_naming_the_frame(tmp_path):
         logs.read_log(f)
 
 
-@pytest.mark.parametrize("stamp", ["nan", "inf", "-0.5"])
+@pytest.mark.parametrize("stamp", ["nan", "inf"])
 def test_asc_non_finite_stamp_is_an_error(tmp_path, stamp):
-    """python-can skips such a line without a word (the probe: replayed silently)"""
+    """python-can skips such a line without a word (the probe: replayed silently).
+    (-0.5 after 0.01 is time going back, said as such: test_reliability_round4.py)"""
     f = _asc(tmp_path / "nan.asc", ["0.010000", stamp])
     with pytest.raises(ArtibusError, match=rf"nan\.asc, line 6: time stamp '{stamp}' is not a finite number"):
         logs.read_log(f)

@@ -190,7 +190,7 @@ def test_screenshot_with_headless_chromium(site, page, tmp_path):
            "--disable-background-networking", "--disable-component-update", "--disable-sync",
            f"--user-data-dir={tmp_path / 'profile'}", f"--screenshot={shot}", "--window-size=1280,2000",
            (root / page).resolve().as_uri()]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)   # (a failure bound only)
     assert shot.is_file(), r.stderr[-2000:]
     a = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
     assert a.shape[:2] == (2000, 1280)

@@ -1,19 +1,39 @@
-"""The runner's stepping core in C (src/runner_core/core.c, issue 13) against
-the runner's Python loop: the same result table bit for bit on every bench it
-applies to and on the runner's own two-FMU benches (Gauss-Seidel, Jacobi,
-multi-rate, transformations), the same error, log and partial results when an
-FMU fails midway (in fmi2DoStep, in fmi2SetReal), and today's loop where the
-core does not apply; the initialisation's rounds to the fixed point in the
-core (the same initialised state on every bench, the same errors when an FMU
-fails there or the inputs do not settle). ``Simulation.run(core=False)`` (or ARTIBUS_CORE=0) is the
-Python loop, ``core=True`` the core (an error where it does not apply)."""
+"""The runner's one stepping loop, the C core (src/runner_core/core.c, driven by
+artibus.runner.core; issues 13, 37), held to references that share no code with it
+(issue 37: "the Python step loop goes; it is no oracle"):
+
+- FMPy's simulate_fmu: every FMU of fmus/ and fmus/fmi3/ alone as a one-component bench
+  gives FMPy's table bit for bit at the same step;
+- closed forms through BusKinematics' eq. 19 (kappa0 = tan(gammaF) / L0), evaluated in
+  Python's float arithmetic (each operation rounded once: a fused multiply-add in the
+  core's transformations would change last bits) with the C library's tan, bit for bit:
+  Gauss-Seidel, Jacobi, linear transformations composed through a nested system, three
+  rates (a component takes its input as it stands when its step begins and holds its
+  output over the step), stimuli sampled at the start of the step; the initialisation's
+  fixed point (every connected input is its transformed source output);
+- a CAN bench's network in C against the same network in Python (run(core=False):
+  artibus.can.Network, its reference implementation; tests/test_can_core.py in detail),
+  in the one loop, over each whole manoeuvre, run and initialisation;
+- determinism: every bench run twice in one process (the second run on the first one's
+  recycled table) gives the same table bit for bit. That is all a network-free bench is
+  compared with here: its values are held by tests/test_masters.py (ecos, libcosim,
+  fmpy.ssp) and the benches' and models' own tests;
+- a failing FMU midway (fmi2DoStep, fmi2SetReal) and in the initialisation (fmi2SetReal,
+  fmi2ExitInitializationMode, rounds that do not settle): the error names the component
+  and the time, and the rows kept with it are those of a run stopped just before;
+- the parts in Python the core calls back for (stimuli; a network with faults or switched
+  off) named in Simulation.stepping; a core library not built an error naming it.
+"""
+import math
 import zipfile
 
+import fmpy
 import numpy as np
 import pytest
 
-from artibus import ArtibusError, ROOT, fmu_path
+from artibus import ArtibusError, ROOT, fmu_dir, fmu_path
 from artibus.bench import ssp
+from artibus.fmu import Result
 from artibus.runner import Simulation, core_library_path
 from artibus.runner.lsbus_bench import read_spec
 
@@ -23,22 +43,19 @@ pytestmark = pytest.mark.skipif(not core_library_path().is_file(),
                                 reason=f"{core_library_path()} not built (cmake target artibus_core)")
 
 
-def both(ssp_file, run_kw=None, **kw):
-    """(result with the core, result with the Python loop); each run checks which stepped."""
-    out = []
-    for core in (True, False):
-        with Simulation(ssp_file, **kw) as sim:
-            out.append(sim.run(core=core, **(run_kw or {})))
-            assert sim.stepping == ("C core" if core else "Python loop: switched off (core=False)")
-            walls = [u.wall for u in sim.units]
-            assert all(w > 0 for w in walls) and sum(walls) < sim.wall   # the FMUs' share, measured in C too
-            net = sim.can.wall if sim.can is not None else 0.0
-            if core:   # the core's own time around them: the FMUs' calls and the network's ticks are within it
-                assert sum(walls) + net < sim.core_wall < sim.wall
-                assert (net > 0) == (sim.can is not None)
-            else:      # the Python loop's network is not timed
-                assert net == 0.0
-    return out
+def timed_run(ssp_file, core=None, run_kw=None, **kw):
+    """(Result, Simulation.stepping, whether the bench has a CAN network) of one run; checks its walls: the FMUs' share (timed
+    in C around each call) within the core's own time (inside artibus_core_run), within
+    the run's; a CAN network ticked in C timed too (within the core's time), one ticked
+    in Python not (its wall 0, its ticks within the core's time)."""
+    with Simulation(ssp_file, **kw) as sim:
+        result = sim.run(core=core, **(run_kw or {}))
+        walls = [u.wall for u in sim.units]
+        assert all(w > 0 for w in walls) and sum(walls) < sim.wall
+        net = sim.can.wall if sim.can is not None else 0.0
+        assert sum(walls) + net < sim.core_wall < sim.wall
+        assert (net > 0) == (sim.can is not None and "the network" not in sim.stepping)
+        return result, sim.stepping, sim.can is not None
 
 
 def assert_bit_for_bit(a, b):
@@ -49,28 +66,137 @@ def assert_bit_for_bit(a, b):
     assert x.tobytes() == y.tobytes()          # also -0.0 against 0.0 and NaN payloads
 
 
-# --- the benches ---------------------------------------------------------------------
+def kappa(gamma_f, l0=L0):
+    """BusKinematics' eq. 19 in Python floats: tan(gammaF) / L0, element by element."""
+    return np.array([math.tan(float(g)) / l0 for g in gamma_f])
 
-#: the benches compared here, core against Python loop: not those with an FMI-LS-BUS network,
-#: whose core run tests/test_lsbus_core.py compares with the Python master
+
+def linear(x, factor, offset):
+    """An SSP linear transformation as Python evaluates it: factor x, rounded, + offset, rounded."""
+    return [factor * float(v) + offset for v in x]
+
+
+# --- every FMU alone against FMPy's simulate_fmu ---------------------------------------
+
+#: 1/64 s: FMPy's communication points are t_k = k h and its step sizes t_{k+1} - t_k,
+#: which are h exactly only when every k h is (a power of two); ours are h. At 0.01 s the
+#: integrating FMUs (BusKinematics, BusDynamics, MultiAxle3DOF) differ in the last bits.
+H_FMPY = 1 / 64
+#: start values that make an FMU move alone (a test stimulus of its own, a constant input
+#: it integrates), given to both: as the bench's overrides and as FMPy's start_values
+ALONE_START = {"BusKinematics": {"testSteerAmp": 0.2}, "TrainGuidance": {"testSteerAmp": 0.2},
+               "ForceMinimization": {"testSteerAmp": 0.2}, "ArticulationDamper": {"LambdaDot": 0.1}}
+#: the FMUs whose outputs move alone (the others' outputs are constant with constant inputs)
+ALONE_MOVING = {"ArticulationDamper", "BusDynamics", "BusKinematics", "DampingController", "ForceMinimization",
+                "MultiAxle3DOF", "SteeringActuator", "SteeringECU", "SwayBaseline", "TrainGuidance", "TypesTest"}
+#: FMI-LS-BUS FMUs (Binary and Clock variables): run by their network, tests/test_lsbus_*.py
+LSBUS_FMUS = {"CanBus", "SteeringECU_LSBUS", "SteeringActuator_LSBUS", "SteeringSensors_LSBUS"}
+ALONE = [(fmi, p.stem) for fmi, d in (("2", fmu_dir()), ("3", fmu_dir() / "fmi3"))
+         for p in sorted(d.glob("*.fmu")) if p.stem not in LSBUS_FMUS]
+
+
+def _connector_type(v):
+    """The SSP 1.0 connector type of a model variable (FMI 2.0 or 3.0), None: not one."""
+    if v.type in ("Real", "Float64", "Float32"):
+        return "<ssc:Real/>"
+    if v.type == "Integer" or v.type.startswith(("Int", "UInt")):
+        return "<ssc:Integer/>"
+    if v.type in ("Boolean", "String"):
+        return f"<ssc:{v.type}/>"
+    if v.type == "Enumeration":
+        return f'<ssc:Enumeration name="{v.declaredType.name}"/>'
+    return None
+
+
+def alone_bench(tmp_path, fmu, stop):
+    """(an .ssp holding the FMU as its one component, named by the model, every output
+    a connector; nothing connected: the inputs stay at their start values, as in FMPy),
+    the component's name, the outputs' names)."""
+    md = fmpy.read_model_description(str(fmu))
+    outs = [(v.name, _connector_type(v)) for v in md.modelVariables
+            if v.causality == "output" and _connector_type(v)]
+    conns = "".join(f'<ssd:Connector name="{n}" kind="output">{t}</ssd:Connector>' for n, t in outs)
+    name = md.modelName
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="alone">'
+           f'<ssd:System name="root"><ssd:Elements><ssd:Component name="{name}" source="resources/{fmu.name}" '
+           f'type="application/x-fmu-sharedlibrary"><ssd:Connectors>{conns}</ssd:Connectors></ssd:Component>'
+           f'</ssd:Elements></ssd:System><ssd:DefaultExperiment startTime="0" stopTime="{stop}"/>'
+           f'</ssd:SystemStructureDescription>')
+    path = tmp_path / f"{fmu.stem}.ssp"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        z.write(fmu, f"resources/{fmu.name}")
+    return path, name, [n for n, _ in outs]
+
+
+@pytest.mark.parametrize("fmi, name", ALONE, ids=[f"{n}-fmi{f}" for f, n in ALONE])
+def test_every_fmu_alone_is_fmpys_simulate_fmu_bit_for_bit(tmp_path, fmi, name):
+    """The reference: FMPy's simulate_fmu (Co-Simulation) of the same FMU at the same
+    step, its default experiment's stop time (at most 10 s): the same time column and
+    every output FMPy records (FMPy records no String), bit for bit. Through the core's
+    FMI 2.0 or 3.0 calls, Integer/Boolean/Enumeration outputs through its callback."""
+    fmu = (fmu_dir() / "fmi3" if fmi == "3" else fmu_dir()) / f"{name}.fmu"
+    de = fmpy.read_model_description(str(fmu)).defaultExperiment
+    stop = min(float(de.stopTime) if de is not None and de.stopTime else 10.0, 10.0)
+    path, comp, outs = alone_bench(tmp_path, fmu, stop)
+    start = ALONE_START.get(name, {})
+    ours, stepping, _ = timed_run(path, step=H_FMPY, record=[f"{comp}.{n}" for n in outs],
+                               overrides={f"{comp}.{k}": v for k, v in start.items()})
+    assert stepping.startswith("C core")
+    theirs = fmpy.simulate_fmu(str(fmu), fmi_type="CoSimulation", step_size=H_FMPY, output_interval=H_FMPY,
+                               stop_time=stop, start_values=start)
+    assert len(ours.time) == len(theirs) == round(stop / H_FMPY) + 1
+    assert ours.time.tobytes() == np.asarray(theirs["time"], float).tobytes()
+    cols = theirs.dtype.names[1:]
+    assert {f"{comp}.{n}" for n in cols} == set(ours.names[1:]) - set(ours.strings)
+    for n in cols:
+        assert ours[f"{comp}.{n}"].tobytes() == np.asarray(theirs[n], float).tobytes(), n
+    moving = [n for n in cols if np.ptp(np.asarray(theirs[n], float)) > 0]
+    assert bool(moving) == (name in ALONE_MOVING), moving       # the comparison means something
+
+
+# --- the benches -------------------------------------------------------------------------
+
+#: every bench but those with an FMI-LS-BUS network (tests/test_lsbus_core.py holds their
+#: network in C to the one in Python)
 CORE_BENCHES = [b for b in ssp.bench_names() if read_spec(ssp.BENCH_DIR / b / "SystemStructure.ssd") is None]
 
+
+def twice(bench, **kw):
+    """(first run, second run) of a bench in one process: the first in the C core with its
+    network (if any) in C; the second with its network in Python (run(core=False)), on the
+    first run's recycled table (artibus.runner.tables) and new structs."""
+    first, stepping, network = timed_run(bench, **kw)
+    assert stepping == "C core"
+    kept = Result.from_array(list(first.names), first.array().copy())
+    kept.terminated = first.terminated
+    del first                                     # its table free for the second run to take
+    second, stepping, _ = timed_run(bench, core=False, **kw)
+    assert stepping == ("C core; in Python: the network, switched off (core=False)" if network else "C core")
+    return kept, second
+
+
 @pytest.mark.parametrize("bench", CORE_BENCHES)
-def test_every_bench_bit_for_bit(bench):
-    """The CAN benches too: the core ticks their network (tests/test_can_core.py)."""
-    core, python = both(bench)
-    assert len(core.time) > 100 and np.all(np.isfinite(core.array()))
-    assert_bit_for_bit(core, python)
+def test_every_bench_twice_the_same_and_its_can_network_in_python(bench):
+    """A CAN bench: its network in C (artibus.runner.can_core) equals the network in Python
+    (artibus.can.Network, the reference) bit for bit over the whole default experiment.
+    Every other bench: the two runs are the same loop, so this is determinism (no state
+    kept between runs, a recycled table written whole); its values' references are above
+    (each FMU against FMPy) and in tests/test_masters.py (the benches in other masters)."""
+    first, second = twice(bench)
+    assert len(first.time) > 100 and np.all(np.isfinite(first.array()))
+    assert first.terminated is None and second.terminated is None
+    assert_bit_for_bit(first, second)
 
 
-def test_damping_bench_variant_bit_for_bit():
-    """The damping bench with the 100 Hz baseline next to the 50 Hz controller."""
-    core, python = both("Scania18m_Damping",
-                        overrides=ssp.variant_overrides("Scania18m_Damping", ["baseline", "lc25_50"]))
-    assert_bit_for_bit(core, python)
+def test_damping_bench_variant_twice_the_same():
+    """The damping bench with the 100 Hz baseline next to the 50 Hz controller (determinism)."""
+    first, second = twice("Scania18m_Damping",
+                             overrides=ssp.variant_overrides("Scania18m_Damping", ["baseline", "lc25_50"]))
+    assert_bit_for_bit(first, second)
 
 
-# --- the runner's own benches (tests/test_runner.py) ------------------------------------
+# --- the runner's own benches (tests/test_runner.py): closed forms ------------------------
 
 SLOW = ('<ssd:Annotations><ssc:Annotation type="org.artibus.simulation">'
         '<Simulation xmlns="urn:artibus" stepSize="{}"/></ssc:Annotation></ssd:Annotations>')
@@ -79,32 +205,39 @@ SLOW = ('<ssd:Annotations><ssc:Annotation type="org.artibus.simulation">'
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
 @pytest.mark.parametrize("factor, offset", [(2.0, 0.01), (0.7, 0.013)])
 def test_two_fmu_bench_with_a_transformation(tmp_path, algorithm, factor, offset):
-    """0.7 beta + 0.013 rounds twice: a fused multiply-add (the core compiled
-    with contraction on an FMA machine) would change last bits."""
+    """gammaF = factor beta + offset, through BusKinematics' eq. 19 (kappa0 = tan(gammaF) /
+    L0) bit for bit: 0.7 beta + 0.013 rounds twice, so a fused multiply-add in the core (its
+    code compiled with contraction on an FMA machine) would change last bits."""
     path = make_ssp(tmp_path, LEAD_FOLLOW["elements"],
                     connection("Lead", "beta[1]", "Follow", "gammaF", f'factor="{factor}" offset="{offset}"'))
-    core, python = both(path, step=0.05, overrides=QUIET, algorithm=algorithm)
-    assert_bit_for_bit(core, python)
-    om, ka = core["Lead.beta[1]"], core["Follow.kappa[0]"]
+    r, stepping, _ = timed_run(path, step=0.05, overrides=QUIET, algorithm=algorithm)
+    assert stepping == "C core"
+    om, ka = r["Lead.beta[1]"], r["Follow.kappa[0]"]
     assert np.max(np.abs(om)) > 0.05
-    # the semantics, through BusKinematics' eq. 19 (kappa0 = tan(gammaF) / L0), gammaF = factor beta + offset
     if algorithm == "gauss-seidel":     # the follower sees the leader at the end of the step
-        np.testing.assert_allclose(ka, np.tan(factor * om + offset) / L0, rtol=1e-12, atol=1e-15)
-    else:                               # one step late
-        np.testing.assert_allclose(ka[1:], np.tan(factor * om[:-1] + offset) / L0, rtol=1e-12, atol=1e-15)
+        np.testing.assert_array_equal(ka, kappa(linear(om, factor, offset)))
+    else:                               # one step late; at the start the leader's initial output
+        np.testing.assert_array_equal(ka[1:], kappa(linear(om[:-1], factor, offset)))
+        np.testing.assert_array_equal(ka[:1], kappa(linear(om[:1], factor, offset)))
 
 
 def test_nested_system_composed_transformations(tmp_path):
+    """Lead -> (x2 +0.01) -> system connector -> (x0.5) -> Follow: one transformation,
+    factor 1, offset 0.005, bit for bit."""
     path = nested_bench(tmp_path)
-    core, python = both(path, step=0.05, overrides={"Sub.Follow.testSteerAmp": 0.0})
-    assert_bit_for_bit(core, python)
-    np.testing.assert_allclose(core["Sub.Follow.kappa[0]"], np.tan(core["Lead.beta[1]"] + 0.005) / L0, rtol=1e-12)
+    r, _, _ = timed_run(path, step=0.05, overrides={"Lead.testSteerAmp": 0.2, "Sub.Follow.testSteerAmp": 0.0})
+    np.testing.assert_array_equal(r["Sub.Follow.kappa[0]"], kappa(linear(r["Lead.beta[1]"], 1.0, 0.005)))
+    assert np.max(np.abs(r["Lead.beta[1]"])) > 1e-3
 
 
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
 def test_multi_rate_three_rates(tmp_path, algorithm):
     """Lead at the base step 0.05 s, Follow at 0.1 s, Third at 0.15 s (the plan's
-    period is 6 base steps), chained Lead -> Follow -> Third, many outputs recorded."""
+    period is 6 base steps), chained Lead -> Follow -> Third, many outputs recorded.
+    A component whose step begins at base step k takes its input from its source's
+    output as it stands then: recorded in row k + 1 (Gauss-Seidel: the source, earlier
+    in the order, has done base step k) or row k (Jacobi); it holds its output over its
+    step, shown at the step's end (row k + its ratio)."""
     outs = [(f"{n}[{i}]", "output") for n in ("theta", "x", "y", "kappa", "beta") for i in (0, 1)
             if (n, i) != ("beta", 0)]
     elements = (component("Lead", outs)
@@ -113,25 +246,31 @@ def test_multi_rate_three_rates(tmp_path, algorithm):
     connections = (connection("Lead", "beta[1]", "Follow", "gammaF", 'factor="-1.5"')
                    + connection("Follow", "beta[1]", "Third", "gammaF", 'offset="0.02"'))
     path = make_ssp(tmp_path, elements, connections, stop=12.0)
-    core, python = both(path, step=0.05, algorithm=algorithm,
-                        overrides={"Lead.testSteerAmp": 0.2, "Follow.testSteerAmp": 0.0, "Third.testSteerAmp": 0.0})
-    assert_bit_for_bit(core, python)
-    ka = core["Follow.kappa[0]"]
+    r, stepping, _ = timed_run(path, step=0.05, algorithm=algorithm,
+                            overrides={"Lead.testSteerAmp": 0.2, "Follow.testSteerAmp": 0.0,
+                                       "Third.testSteerAmp": 0.0})
+    assert stepping == "C core" and len(r.time) == 241
+    ka = r["Follow.kappa[0]"]
     np.testing.assert_array_equal(ka[1::2], ka[0:-1:2])          # held over its 0.1 s
-    k3 = core["Third.kappa[0]"]
+    k3 = r["Third.kappa[0]"]
     assert np.all(k3[1::3] == k3[0:-1:3]) and np.all(k3[2::3] == k3[0:-2:3])   # held over 0.15 s
     assert np.max(np.abs(k3)) > 1e-3
+    late = 0 if algorithm == "gauss-seidel" else 1
+    starts2, starts3 = np.arange(0, 240, 2), np.arange(0, 240, 3)
+    np.testing.assert_array_equal(ka[starts2 + 2], kappa(linear(r["Lead.beta[1]"][starts2 + 1 - late], -1.5, 0.0)))
+    np.testing.assert_array_equal(k3[starts3 + 3], kappa(linear(r["Follow.beta[1]"][starts3 + 1 - late], 1.0, 0.02)))
 
 
-def test_progress_bar_is_the_same(tmp_path, capsys):
-    """With the progress bar the core runs in pieces between the bar's updates."""
+def test_progress_bar_runs_in_pieces_the_same(tmp_path, capsys):
+    """With the progress bar the core runs in 50 pieces between the bar's updates; without
+    it in one: the same table bit for bit, the bar drawn 50 times."""
     results, bars = [], []
-    for core in (True, False):
+    for progress in (True, False):
         with Simulation(make_ssp(tmp_path, **LEAD_FOLLOW), step=0.05, overrides=QUIET) as sim:
-            results.append(sim.run(core=core, progress=True))
+            results.append(sim.run(progress=progress))
         bars.append(capsys.readouterr().err)
     assert_bit_for_bit(*results)
-    assert bars[0] == bars[1] and bars[0].count("\r") == 50 and bars[0].endswith("]\n")
+    assert bars[0].count("\r") == 50 and bars[0].endswith("]\n") and bars[1] == ""
 
 
 # --- a failing FMU midway ------------------------------------------------------------
@@ -149,28 +288,35 @@ def bench_with(tmp_path, elements, connections, fmus, stop=10.0):
     return path
 
 
-def failures(path, algorithm, **kw):
-    errors = []
-    for core in (True, False):
+def failure(path, algorithm, component, **kw):
+    """The SimulationError of a run that fails: it names the component, the time (the last
+    row kept's) and the FMU's last error message, carries the FMU's log, and the rows kept
+    are those of the same run stopped at that time (its last row's), bit for bit."""
+    with Simulation(path, step=0.05, algorithm=algorithm, **kw) as sim:
+        with pytest.raises(Exception) as e:
+            sim.run()
+        assert sim.stepping == "C core"
+        log = [m for u in sim.units if u.path == component for m in u.fmu.log]
+    e = e.value
+    assert type(e).__name__ == "SimulationError"
+    errors = [m for m in log if m.startswith(("[Error]", "[Fatal]"))]
+    assert e.log == log and errors and str(e).endswith(errors[-1])
+    if len(e.result.time):
+        t = e.result.time[-1]
+        assert f"component '{component}' failed at t = {t:g} s: " in str(e)
         with Simulation(path, step=0.05, algorithm=algorithm, **kw) as sim:
-            with pytest.raises(Exception) as e:
-                sim.run(core=core)
-            assert sim.stepping.startswith("C core" if core else "Python loop")
-        errors.append(e.value)
-    a, b = errors
-    assert type(a) is type(b) and type(a).__name__ == "SimulationError"
-    assert str(a) == str(b) and a.log == b.log
-    assert_bit_for_bit(a.result, b.result)
-    return a
+            before = sim.run(stop_time=t)
+        assert_bit_for_bit(e.result, before)
+    return e
 
 
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
-def test_failing_do_step_same_error_and_partial_results(tmp_path, algorithm):
+def test_failing_do_step_error_and_partial_results(tmp_path, algorithm):
     """gammaF = 40 beta[1] reaches pi/2 midway: Follow's fmi2DoStep refuses it."""
     elements = component("Lead", [("beta[1]", "output")]) + component(
         "Follow", [("gammaF", "input"), ("kappa[0]", "output")], SLOW.format(0.1))
     path = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF", 'factor="40"'))
-    e = failures(path, algorithm, overrides=QUIET)
+    e = failure(path, algorithm, "Follow", overrides=QUIET)
     assert "component 'Follow' failed at t = " in str(e) and "beyond pi/2" in str(e)
     beta = e.result["Lead.beta[1]"]
     assert 1.0 < e.result.time[-1] < 10.0
@@ -179,11 +325,11 @@ def test_failing_do_step_same_error_and_partial_results(tmp_path, algorithm):
 
 
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
-def test_failing_set_real_same_error_and_partial_results(tmp_path, algorithm):
-    """pct = 1000 beta[1] + 25 leaves the damper's 0..50 % midway: its
-    fmi2SetReal refuses it, and the error names the damper (the Python loop
-    named the unit that stepped last before this change)."""
-    e = failures(damper_bench(tmp_path, 25), algorithm, overrides={"Lead.testSteerAmp": 0.2})
+def test_failing_set_real_error_and_partial_results(tmp_path, algorithm):
+    """pct = 1000 beta[1] + 25 leaves the damper's 0..50 % midway: its fmi2SetReal refuses
+    it, and the error names the damper (the unit whose call failed, not the one that
+    stepped last)."""
+    e = failure(damper_bench(tmp_path, 25), algorithm, "Damper", overrides={"Lead.testSteerAmp": 0.2})
     assert "component 'Damper' failed at t = " in str(e) and "pct" in str(e)
     assert 0.5 < e.result.time[-1] < 10.0
     beta = e.result["Lead.beta[1]"]
@@ -191,20 +337,28 @@ def test_failing_set_real_same_error_and_partial_results(tmp_path, algorithm):
     assert np.max(np.abs(1000 * beta[:-1])) <= 25 and abs(1000 * beta[-1]) > 23
 
 
-# --- where the core does not apply, and where it is found ---------------------------------
+# --- the parts in Python, and where the core is found -----------------------------------
 
-def test_stimuli_take_the_python_loop(tmp_path):
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_stimuli_run_in_the_core_called_back(tmp_path, algorithm):
+    """A stimulus (a Python function of time) is added to its input's connection value
+    at the start of each of the component's steps (the core calls back for it): with
+    GS gammaF(row k + 1) = (2 beta(row k + 1) + 0.01) + f(t_k), bit for bit."""
     path = make_ssp(tmp_path, **LEAD_FOLLOW)
-    with Simulation(path, step=0.05, overrides=QUIET, stimuli={"Follow.gammaF": lambda t: 0.01}) as sim:
+    with Simulation(path, step=0.05, overrides=QUIET, algorithm=algorithm,
+                    stimuli={"Follow.gammaF": lambda t: 0.01 * math.sin(t)}) as sim:
         r = sim.run()
-        assert sim.stepping == "Python loop: stimuli (Python functions of time)"
-    np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(2.0 * r["Lead.beta[1]"] + 0.02) / L0, rtol=1e-12)
-    with Simulation(path, step=0.05, stimuli={"Follow.gammaF": lambda t: 0.01}) as sim:
-        with pytest.raises(ArtibusError, match="does not apply: stimuli"):
-            sim.run(core=True)
+        assert sim.stepping == "C core; in Python: stimuli (Python functions of time)"
+    t, om, ka = r.time, r["Lead.beta[1]"], r["Follow.kappa[0]"]
+    src = om[1:] if algorithm == "gauss-seidel" else om[:-1]
+    np.testing.assert_array_equal(ka[1:], kappa([g + 0.01 * math.sin(tk) for g, tk in zip(linear(src, 2.0, 0.01),
+                                                                                        t[:-1])]))
+    assert np.max(np.abs(0.01 * np.sin(t))) > 0.009
 
 
 def test_switched_off_or_not_built(tmp_path, monkeypatch):
+    """ARTIBUS_CORE=0 ticks the networks in Python (a bench without one: the same run);
+    a core library that is not there is an error naming it, at the run."""
     path = make_ssp(tmp_path, **LEAD_FOLLOW)
     with Simulation(path, step=0.1) as sim:
         sim.run(stop_time=1.0)
@@ -212,12 +366,17 @@ def test_switched_off_or_not_built(tmp_path, monkeypatch):
     monkeypatch.setenv("ARTIBUS_CORE", "0")
     with Simulation(path, step=0.1) as sim:
         sim.run(stop_time=1.0)
-        assert sim.stepping == "Python loop: switched off (ARTIBUS_CORE=0)"
+        assert sim.stepping == "C core"
+    with Simulation("Bus36m_Circle_CAN") as sim:
+        sim.run(stop_time=0.5)
+        assert sim.stepping == "C core; in Python: the network, switched off (ARTIBUS_CORE=0)"
     monkeypatch.delenv("ARTIBUS_CORE")
     monkeypatch.setenv("ARTIBUS_CORE_LIB", str(tmp_path / "nowhere.so"))
     with Simulation(path, step=0.1) as sim:
-        sim.run(stop_time=1.0)
-        assert sim.stepping == f"Python loop: {tmp_path / 'nowhere.so'} is not built"
+        with pytest.raises(ArtibusError) as e:
+            sim.run(stop_time=1.0)
+    assert str(e.value) == (f"{sim.bench.file}: the C stepping core: {tmp_path / 'nowhere.so'} is not built "
+                            "(scripts/setup.sh builds it)")
 
 
 def test_library_next_to_the_fmus_in_use(tmp_path, monkeypatch):
@@ -237,33 +396,43 @@ def test_library_next_to_the_fmus_in_use(tmp_path, monkeypatch):
 
 # --- the initialisation's rounds to the fixed point in the core (artibus_core_settle) ---------
 
-def initialised(sim, core):
-    """Every unit's inputs, outputs and inputs last set, and the CAN network's
-    E2E state, right after Simulation._initialize (the run stops after a few steps)."""
+def initialised(sim, core=None):
+    """Every unit's inputs, outputs and inputs last set, and the CAN network's E2E state,
+    right after Simulation._initialize (the run stops after a few steps); checks there that
+    the state is the fixed point: every connected input is its source's output through
+    the connection's transformation (in Python floats), bit for bit, and the inputs last
+    set are the inputs."""
     state, initialize = [], sim._initialize
 
-    def snapshot(start):
-        initialize(start)
+    def snapshot(start, stepper):
+        initialize(start, stepper)
+        for u in sim.units:
+            raw = u.raw
+            for i, out, j, factor, offset in u.sources:
+                assert raw.inp[i].hex() == (factor * out[j] + offset).hex(), (u.path, u.in_names[i])
+            assert raw.written == (bytes(raw.inp)[:8 * raw.n_in] if raw.n_in else None), u.path
         state.extend((bytes(u.raw.inp), bytes(u.raw.out), u.raw.written) for u in sim.units)
         if sim.can is not None:
             state.extend((m.counter, m.last_counter, m.good_tick) for m in sim.can.messages)
     sim._initialize = snapshot
     sim.run(stop_time=sim.bench.start_time + 5 * sim.base_step, core=core)
-    assert sim.stepping.startswith("C core" if core else "Python loop")
     return state
 
 
 @pytest.mark.parametrize("bench", CORE_BENCHES)
-def test_initialisation_of_every_bench_bit_for_bit(bench):
-    """Every unit's inputs, outputs and inputs last set after the rounds to the fixed
-    point in the core (artibus_core_settle), the Python loop's, bit for bit."""
-    states = []
-    for core in (True, False):
+def test_initialisation_of_every_bench_is_the_fixed_point(bench):
+    """After the rounds to the fixed point in the core (artibus_core_settle, which times the
+    FMUs' calls there): every connected input its transformed source output (initialised's
+    checks); a CAN bench's network settled in Python (its reference) gives the same state,
+    bit for bit, every unit's inputs and outputs and the messages' E2E state."""
+    with Simulation(bench) as sim:
+        state = initialised(sim)
+        assert sim.settle_wall > 0 and sim.stepping == "C core"
+        network = sim.can is not None
+    if network:
         with Simulation(bench) as sim:
-            states.append(initialised(sim, core))
-            settled = getattr(sim, "settle_wall", 0.0)
-            assert (settled > 0) if core else settled == 0.0     # the core's rounds ran (and timed the FMUs)
-    assert states[0] == states[1]
+            assert initialised(sim, core=False) == state
+            assert sim.stepping == "C core; in Python: the network, switched off (core=False)"
 
 
 def damper_bench(tmp_path, offset):
@@ -279,40 +448,36 @@ def damper_bench(tmp_path, offset):
 
 
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
-def test_failing_set_real_in_the_initialisation_same_error(tmp_path, algorithm):
+def test_failing_set_real_in_the_initialisation(tmp_path, algorithm):
     """pct = 75 % at the start, outside the damper's 0..50 %: its fmi2SetReal in the
-    initialisation's first round refuses it; the same error names the damper."""
-    e = failures(damper_bench(tmp_path, 75), algorithm)
+    initialisation's first round refuses it; the error names the damper, no rows."""
+    e = failure(damper_bench(tmp_path, 75), algorithm, "Damper")
     assert "component 'Damper' failed at t = 0 s" in str(e) and "pct" in str(e)
     assert len(e.result.time) == 0
 
 
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
-def test_not_settled_same_error(tmp_path, monkeypatch, algorithm):
-    """One round allowed: pct goes 0 -> 25 in it, so the inputs have not settled."""
+def test_not_settled(tmp_path, monkeypatch, algorithm):
+    """One round allowed: pct goes 0 -> 25 in it, so the inputs have not settled; two are
+    enough."""
     import artibus.runner.simulation
     monkeypatch.setattr(artibus.runner.simulation, "MAX_INIT_ITERATIONS", 1)
     path = damper_bench(tmp_path, 25)
-    errors = []
-    for core in (True, False):
-        with Simulation(path, step=0.05, algorithm=algorithm) as sim:
-            with pytest.raises(ArtibusError) as e:
-                sim.run(core=core)
-            assert sim.stepping.startswith("C core" if core else "Python loop")
-            errors.append(str(e.value))
-    assert errors[0] == errors[1] and errors[0].endswith("initialisation did not settle in 1 iterations "
-                                                         "of the connected inputs")
+    with Simulation(path, step=0.05, algorithm=algorithm) as sim:
+        with pytest.raises(ArtibusError) as e:
+            sim.run()
+        assert sim.stepping == "C core"
+    assert str(e.value) == f"{sim.bench.file}: initialisation did not settle in 1 iterations of the connected inputs"
     monkeypatch.setattr(artibus.runner.simulation, "MAX_INIT_ITERATIONS", 2)      # two are enough
-    for core in (True, False):
-        with Simulation(path, step=0.05, algorithm=algorithm) as sim:
-            assert sim.run(stop_time=0.2, core=core)["Damper.Mmax"].size == 5
+    with Simulation(path, step=0.05, algorithm=algorithm) as sim:
+        assert sim.run(stop_time=0.2)["Damper.Mmax"].size == 5
 
 
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
-def test_failing_exit_initialization_same_error(tmp_path, algorithm):
+def test_failing_exit_initialization(tmp_path, algorithm):
     """A damper whose geometry its model_init refuses (R = Xrear = Yrear = 5 cm:
     a cylinder 2 cm long), no output read: its fmi2ExitInitializationMode fails,
-    after the rounds; the same error names the damper."""
+    after the rounds; the error names the damper, no rows."""
     import artibus.runner
     damper = ('<ssd:Component name="Damper" source="resources/ArticulationDamper.fmu" '
               'type="application/x-fmu-sharedlibrary"><ssd:Connectors>'
@@ -324,17 +489,17 @@ def test_failing_exit_initialization_same_error(tmp_path, algorithm):
     functions = []
     initialize = artibus.runner.Simulation._initialize
 
-    def spy(self, start):
+    def spy(self, start, stepper):
         try:
-            initialize(self, start)
+            initialize(self, start, stepper)
         except Exception as e:
             functions.append(getattr(e, "function", None))
             raise
     artibus.runner.Simulation._initialize = spy
     try:
-        e = failures(path, algorithm, overrides={"Damper.R": 0.05, "Damper.Xrear": 0.05, "Damper.Yrear": 0.05})
+        e = failure(path, algorithm, "Damper", overrides={"Damper.R": 0.05, "Damper.Xrear": 0.05, "Damper.Yrear": 0.05})
     finally:
         artibus.runner.Simulation._initialize = initialize
-    assert functions == ["fmi2ExitInitializationMode"] * 2
+    assert functions == ["fmi2ExitInitializationMode"]
     assert "component 'Damper' failed at t = 0 s" in str(e) and "geometry R = 0.05 m" in str(e)
     assert len(e.result.time) == 0

@@ -72,7 +72,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 import tracemalloc
 from pathlib import Path
 
@@ -84,6 +83,7 @@ from artibus.runner import core as runner_core, plan as runner_plan, results as 
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_runner import LEAD_FOLLOW, component, connection, make_ssp  # noqa: E402
+from held_run import BOUND, HeldRun  # noqa: E402
 
 SLOW = ('<ssd:Annotations><ssc:Annotation type="org.artibus.simulation">'
         '<Simulation xmlns="urn:artibus" stepSize="{}"/></ssc:Annotation></ssd:Annotations>')
@@ -218,56 +218,59 @@ def long_bench(tmp_path):
 def test_bad_output_is_refused_before_the_run(tmp_path, long_bench, where):
     """Issue 15: -o to a directory or a read-only place ended in a traceback after
     the whole run, its results lost. Now: one line, before simulating (a run of
-    10^6 s would take hours)."""
+    10^6 s would take hours): the run reports no step (artibus.runner.markers;
+    the same bench reports its steps in the tests below)."""
     o = {"dir": tmp_path, "missing": tmp_path / "no" / "r.csv", "readonly": "/proc/r.csv"}[where]
-    t0 = time.perf_counter()
-    r = artibus("run", str(long_bench), "--stop-time", "1e6", "-o", str(o), cwd=tmp_path, timeout=120)
-    assert r.returncode == 1 and "Traceback" not in r.stderr
-    assert r.stderr.startswith(f"artibus: error: -o {o}:") and len(r.stderr.strip().splitlines()) == 1
-    assert time.perf_counter() - t0 < 60
+    with HeldRun(["run", long_bench, "--stop-time", "1e6", "-o", o], cwd=tmp_path, hold=False) as run:
+        err = run.finish()
+    assert run.proc.returncode == 1 and "Traceback" not in err
+    assert err.startswith(f"artibus: error: -o {o}:") and len(err.strip().splitlines()) == 1
+    assert run.seen == []                                     # not one piece of steps taken
 
 
-def _wait_for(predicate, timeout=60.0):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        got = predicate()
-        if got:
-            return got
-        time.sleep(0.005)
-    return None
-
-
-def _run_in_background(tmp_path, bench, out, stop):
+def _held_run(tmp_path, bench, out, stop, env=None):
+    """artibus run BENCH -o OUT in the background, held at each marker (held_run),
+    its temporary files in a directory of the test's own."""
     tmpdir = tmp_path / "tmpdir"
     tmpdir.mkdir()
-    proc = subprocess.Popen([sys.executable, "-m", "artibus", "run", str(bench), "--stop-time", str(stop),
-                             "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), **NO_CACHE})
-    return proc, tmpdir
+    return HeldRun(["run", bench, "--stop-time", stop, "-o", out], cwd=tmp_path,
+                   env={"TMPDIR": str(tmpdir), **NO_CACHE, **(env or {})}), tmpdir
+
+
+def _check_partial(run, err, sig, out, t_held, h):
+    """The run signalled while held after the step loop reached t_held: exit
+    128 + signal, one line, OUT absent, OUT.partial.csv with every base step
+    from 0 to t_held (whole rows: the run stood between two pieces) and its units."""
+    assert run.proc.returncode == 128 + sig, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    partial = runner.partial_path(out)
+    assert err.strip() == (f"artibus: stopped by {signal.Signals(sig).name}; partial results up to "
+                           f"t = {t_held:g} s in {partial}")
+    assert not out.exists() and sorted(p.name for p in out.parent.iterdir()) == [partial.name,
+                                                                            runner.units_path(partial).name]
+    table = np.loadtxt(partial, delimiter=",", skiprows=1)
+    assert table.shape[0] == round(t_held / h) + 1 and table[0, 0] == 0.0
+    assert table[-1, 0] == pytest.approx(t_held, rel=1e-12)
+    np.testing.assert_allclose(np.diff(table[:, 0]), h, rtol=1e-6)   # whole rows, every base step
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_interrupt_while_simulating_keeps_partial_results(tmp_path, long_bench, sig):
     """Issue 15: SIGINT while simulating kept nothing, SIGTERM left the unpacked
     bench behind. Now: OUT.partial.csv with the rows up to then, OUT absent,
-    one line, exit code 128 + signal, no temporary directory left."""
+    one line, exit code 128 + signal, no temporary directory left. Issue 41: the
+    signal comes while the run is held at its first marker of the step loop
+    (after the C core's first piece, t = 250 s of 1000 s): it cannot have ended,
+    however fast or loaded the machine (a sleep of 2 s was after its end)."""
     out = tmp_path / "out" / "r.csv"
     out.parent.mkdir()
-    proc, tmpdir = _run_in_background(tmp_path, long_bench, out, 1e5)
-    assert _wait_for(lambda: any(tmpdir.iterdir()))        # the bench unpacked: setting up
-    time.sleep(2.0)                                           # set up, initialised, stepping
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 128 + sig, err
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
-    partial = runner.partial_path(out)
-    assert err.startswith(f"artibus: stopped by {signal.Signals(sig).name}; partial results up to t = ")
-    assert str(partial) in err
-    assert not out.exists() and sorted(p.name for p in out.parent.iterdir()) == [partial.name,
-                                                                            runner.units_path(partial).name]
-    table = np.loadtxt(partial, delimiter=",", skiprows=1)
-    assert table.shape[0] > 10 and table[0, 0] == 0.0 and table[-1, 0] < 1e5
-    np.testing.assert_allclose(np.diff(table[:, 0]), 0.05, rtol=1e-6)   # whole rows, every base step
+    run, tmpdir = _held_run(tmp_path, long_bench, out, 1000)
+    with run:
+        t_held = float(run.wait_for(lambda line: line.startswith("t="))[2:])
+        assert 0 < t_held < 1000
+        run.signal(sig)
+        err = run.finish()
+    _check_partial(run, err, sig, out, t_held, 0.05)
     assert list(tmpdir.iterdir()) == []
 
 
@@ -277,20 +280,22 @@ def test_interrupt_while_writing_finishes_the_write(tmp_path, long_bench, sig):
     final name; issue 28: then the finished run was discarded ("nothing written").
     Now: the write finishes, the complete results under the final name (whole
     rows, every base step) with their units, the message says so; no temporary
-    file, no temporary directory."""
+    file, no temporary directory. Issue 41: the signal comes while the run is
+    held where the write has begun (its "saving" marker), not when a temporary
+    file was seen (a fast write could be over before the test looked)."""
     out = tmp_path / "out" / "r.csv"
     out.parent.mkdir()
-    proc, tmpdir = _run_in_background(tmp_path, long_bench, out, 20000)
-    tmp = _wait_for(lambda: [p for p in out.parent.iterdir() if ".tmp-" in p.name], timeout=300)
-    assert tmp, "the results were never being written"
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 128 + sig, err
+    run, tmpdir = _held_run(tmp_path, long_bench, out, 1000)
+    with run:
+        run.wait_for(lambda line: line == f"saving {out}")     # held inside the write: signal it there
+        run.signal(sig)
+        err = run.finish()
+    assert run.proc.returncode == 128 + sig, err
     assert err.strip() == (f"artibus: stopped by {signal.Signals(sig).name}; the finished run's results "
                            f"are complete in {out}")
     assert sorted(p.name for p in out.parent.iterdir()) == [out.name, runner.units_path(out).name]
     table = np.loadtxt(out, delimiter=",", skiprows=1)
-    assert table[0, 0] == 0.0 and table[-1, 0] == pytest.approx(20000)
+    assert table.shape[0] == 20001 and table[0, 0] == 0.0 and table[-1, 0] == pytest.approx(1000)
     np.testing.assert_allclose(np.diff(table[:, 0]), 0.05, rtol=1e-6)
     assert list(tmpdir.iterdir()) == []
 
@@ -323,29 +328,34 @@ def test_results_too_large_for_memory_refused_before_the_run(tmp_path, long_benc
     with pytest.raises(ArtibusError, match=r"3 columns of results would take 2\.4 GB, more than half"):
         runner_results.check_room(100_000_000, 3, "b.ssd", available=4_000_000_000)
     runner_results.check_room(100_000_000, 3, "b.ssd", available=8_000_000_000)
-    t0 = time.perf_counter()
-    r = artibus("run", str(long_bench), "--step", "1e-9", "--stop-time", "100", "-o", str(tmp_path / "r.csv"),
-                cwd=tmp_path, timeout=120)
-    assert r.returncode == 1 and "Traceback" not in r.stderr and "--record" in r.stderr
-    assert time.perf_counter() - t0 < 60 and not (tmp_path / "r.csv").exists()
+    with HeldRun(["run", long_bench, "--step", "1e-9", "--stop-time", "100", "-o", tmp_path / "r.csv"],
+                 cwd=tmp_path, hold=False) as run:
+        err = run.finish()
+    assert run.proc.returncode == 1 and "Traceback" not in err and "--record" in err
+    assert run.seen == [] and not (tmp_path / "r.csv").exists()     # refused before a step
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_interrupt_in_the_python_loop_keeps_partial_results(tmp_path, long_bench, sig):
-    """As test_interrupt_while_simulating_keeps_partial_results, through the runner's
-    Python loop (ARTIBUS_CORE=0: stimuli, CAN routes, or no C core)."""
-    out = tmp_path / "r.csv"
-    tmpdir = tmp_path / "tmpdir"
-    tmpdir.mkdir()
-    proc = subprocess.Popen([sys.executable, "-m", "artibus", "run", str(long_bench), "--stop-time", "1e5",
-                             "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmpdir), **NO_CACHE, "ARTIBUS_CORE": "0"})
-    assert _wait_for(lambda: any(tmpdir.iterdir()))
-    time.sleep(2.0)
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 128 + sig and "Traceback" not in err, err
-    table = np.loadtxt(runner.partial_path(out), delimiter=",", skiprows=1)
-    assert table.shape[0] > 10
-    np.testing.assert_allclose(np.diff(table[:, 0]), 0.05, rtol=1e-6)
-    assert not out.exists() and list(tmpdir.iterdir()) == []
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_ctrl_c_inside_a_python_callback_keeps_the_rows_done(long_bench, algorithm):
+    """Issue 37: the one stepping loop calls back into Python (here a stimulus, a Python
+    function of time) in the middle of a base step. Ctrl-C there (the stimulus raises
+    KeyboardInterrupt when called at t = 1 s, base step 20 of 0.05 s) unwinds through no C
+    frame: the core stops, and the KeyboardInterrupt comes out with the rows of the base
+    steps done before it (0 .. 1 s, 21 whole rows), as between two pieces of steps."""
+    calls = []
+
+    def stimulus(t):
+        calls.append(t)
+        if t >= 1.0 - 1e-9:
+            raise KeyboardInterrupt
+        return 0.0
+    with runner.Simulation(long_bench, step=0.05, algorithm=algorithm,
+                           stimuli={"Follow.gammaF": stimulus}) as sim:
+        with pytest.raises(KeyboardInterrupt) as e:
+            sim.run(stop_time=1000.0)
+        assert "in Python: stimuli" in sim.stepping
+    table = e.value.result.array()
+    assert table.shape[0] == 21 and table[-1, 0] == pytest.approx(1.0, rel=1e-12)
+    np.testing.assert_allclose(np.diff(table[:, 0]), 0.05, rtol=1e-9)
+    assert np.all(np.isfinite(table))
+    assert calls[-1] == pytest.approx(1.0, rel=1e-12)          # called at each step's start until then

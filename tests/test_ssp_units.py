@@ -187,5 +187,5 @@ def test_run_ssv_values_with_a_unit(tmp_path):
     np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(r["Lead.beta[1]"]) / 4.0, rtol=1e-12)
     bad = f.read_text().replace('name="cm"><ssc:BaseUnit m="1"', 'name="cm"><ssc:BaseUnit kg="1"')
     f.write_text(bad)
-    with pytest.raises(ArtibusError, match=r"user\.ssv: Parameter 'Follow\.L0' = 400\.0 cm: unit 'cm' .*'m'"):
+    with pytest.raises(ArtibusError, match=r"user\.ssv:1: Parameter 'Follow\.L0' = 400\.0 cm: unit 'cm' .*'m'"):
         run(_follow_bench(tmp_path), step=0.05, overrides=read_parameters(f, keep_units=True))

@@ -25,6 +25,9 @@ from artibus.bench import script, ssp
 from artibus.study import sweep as sw
 from artibus.study.sweep import cluster as sw_cluster, worker as sw_worker
 
+sys.path.insert(0, str(Path(__file__).parent))
+from held_run import BOUND, HeldRun  # noqa: E402
+
 BENCH = "Bus36m_Circle"
 FIXED = {"Driver.roadBefore": 2.0}
 STOP = 3.0
@@ -193,21 +196,23 @@ def _case_files(out):
 
 
 def test_an_interrupted_sweep_resumes_without_running_a_finished_case_again(tmp_path, client, external):
-    """artibus sweep --scheduler (the command line on the external cluster) killed after some cases, run again."""
+    """artibus sweep --scheduler (the command line on the external cluster) killed after some cases, run again.
+    Killed while held at its third "case" marker (artibus.runner.markers: the case file written), so
+    exactly three cases are on disk, however fast the machine (issue 41: not after polling the folder)."""
     out = tmp_path / "s"
     grid = {"Driver.vSet": "2:6.5:0.5", "Driver.R": "15,20"}       # 20 cases
-    cmd = [sys.executable, "-m", "artibus", "sweep", SSP, "--grid"] + [f"{k}={v}" for k, v in grid.items()] + \
-          ["--set", "Driver.roadBefore=2", "--stop-time", "3", "--scheduler", external, "-o", str(out)]
-    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    try:
-        deadline = time.time() + 90
-        while len(_case_files(out)) < 3 and time.time() < deadline and p.poll() is None:
-            time.sleep(0.02)
-    finally:
-        os.killpg(p.pid, signal.SIGKILL)
-        p.wait()
+    args = ["sweep", SSP, "--grid"] + [f"{k}={v}" for k, v in grid.items()] + \
+           ["--set", "Driver.roadBefore=2", "--stop-time", "3", "--scheduler", external, "-o", out]
+    with HeldRun(args, cwd=tmp_path, new_session=True) as run:
+        for _ in range(2):
+            run.wait_for(lambda line: line.startswith("case "))
+            run.release()
+        run.wait_for(lambda line: line.startswith("case "))
+        run.kill_group(signal.SIGKILL)
+        run.proc.wait()
     before = _case_files(out)
-    assert 3 <= len(before) < 20, "killed too late: raise the number of cases"
+    assert sorted(before) == sorted(f"{line[5:]}.parquet" for line in run.seen if line.startswith("case "))
+    assert len(before) == 3
     assert not (out / "results.parquet").exists()
     res = _run(out, client, grid=grid, fixed={"Driver.roadBefore": 2})
     assert res.table.num_rows == 20 and res.failed == 0
@@ -258,6 +263,18 @@ def test_a_changed_ssv_reruns_exactly_the_cases_it_touches(tmp_path, client):
     assert rows2[("fast", 15.0)][KPI] == _plain_kpis({"Driver.vSet": 5.5, "Driver.R": 15.0})[KPI]
 
 
+def _scheduler_address(sched_file, proc):
+    """The address in the scheduler file the dask scheduler writes when it listens: polled
+    until it is complete JSON (it is not written atomically); BOUND only bounds a failure."""
+    deadline = time.monotonic() + BOUND
+    while True:
+        try:
+            return json.loads(sched_file.read_text())["address"]
+        except (OSError, ValueError, KeyError):
+            assert proc.poll() is None and time.monotonic() < deadline, "the dask scheduler did not start"
+            time.sleep(0.1)
+
+
 @pytest.fixture(scope="module")
 def external(tmp_path_factory):
     """A `dask scheduler` and two `dask worker --nthreads 1` processes on this machine; its address."""
@@ -267,17 +284,14 @@ def external(tmp_path_factory):
                                "--scheduler-file", str(sched_file)], stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL, start_new_session=True)]
     try:
-        deadline = time.time() + 60
-        while not sched_file.is_file() and time.time() < deadline:
-            time.sleep(0.1)
+        address = _scheduler_address(sched_file, procs[0])
         for _ in range(2):
             procs.append(subprocess.Popen([dask, "worker", "--scheduler-file", str(sched_file), "--nthreads", "1",
                                            "--nworkers", "1", "--no-dashboard"], stdout=subprocess.DEVNULL,
                                           stderr=subprocess.DEVNULL, start_new_session=True))
-        address = json.loads(sched_file.read_text())["address"]
         from dask.distributed import Client
-        with Client(address, timeout="30s") as c:
-            c.wait_for_workers(2, timeout=60)
+        with Client(address, timeout=f"{BOUND:g}s") as c:
+            c.wait_for_workers(2, timeout=BOUND)
             assert len(c.scheduler_info()["workers"]) == 2
         yield address
     finally:

@@ -17,8 +17,17 @@ $ARTIBUS_CACHE_MB megabytes (default 500), the ones used longest ago are
 removed, but none used in the last hour (another run may be loading it).
 ``clean()`` removes every entry not in use; ``ARTIBUS_CACHE_MB=0`` unpacks
 into a temporary directory per run instead, removed after it (the behaviour
-before the cache)."""
+before the cache).
+
+The cache reads nothing an archive can supply: what ``stored`` keeps is
+named ``.artibus-<name>.pickle`` in the entry, and an archive with a member of
+that prefix is refused before it is unpacked (``extract``); a kept object is
+loaded only when its bytes carry the HMAC-SHA256 this cache's writer made of
+them with the cache's own secret key (``$ARTIBUS_CACHE/unpacked/.hmac-key``,
+made once, mode 0600), so a file changed on disk or put there by anything
+else is never unpickled: it is made again."""
 import hashlib
+import hmac
 import os
 import pickle
 import shutil
@@ -30,6 +39,9 @@ DEFAULT_MB = 500
 KEEP_RECENT_S = 3600.0        # an entry used in the last hour is never pruned
 _PREFIX_TMP = ".tmp-"
 _PREFIX_TRASH = ".trash-"
+OWN_PREFIX = ".artibus-"      # the cache's own files in an entry (``stored``): no archive member may start so
+_KEY_FILE = ".hmac-key"        # in the root: the secret the kept objects are signed with
+_MAGIC = b"artibus-stored-1\n"  # a kept object: _MAGIC, HMAC-SHA256(key, payload), the pickle payload
 
 
 def root():
@@ -88,10 +100,30 @@ def _key(path):
 def extract(archive, dest):
     """Every member of the zip ``archive`` into the directory ``dest``, the
     archive checked first (artibus.files.extract_archive: member count and
-    unpacked size, links, duplicates, paths that leave the folder):
-    ArtibusError naming the archive and the member otherwise."""
+    unpacked size, links, duplicates, paths that leave the folder; here: no
+    member named like the cache's own files, ``_refuse_own_names``): ArtibusError
+    naming the archive and the member otherwise."""
     from artibus.files import extract_archive
+    _refuse_own_names(archive)
     extract_archive(archive, dest)
+
+
+def _refuse_own_names(archive):
+    """ArtibusError naming ``archive`` and the member when a member's name, or
+    a folder on its path, starts with OWN_PREFIX: such a file would sit where
+    the cache keeps what it read (``stored``), so the archive could supply it.
+    An archive that is not a readable zip is left to extract_archive to name."""
+    import zipfile
+    try:
+        with zipfile.ZipFile(archive) as z:
+            names = z.namelist()
+    except (zipfile.BadZipFile, OSError):
+        return
+    from artibus.base import ArtibusError
+    for name in names:
+        if any(p.startswith(OWN_PREFIX) for p in name.replace("\\", "/").split("/")):
+            raise ArtibusError(f"{archive}: member '{name}' has a name reserved for artibus's cache "
+                               f"(starting with '{OWN_PREFIX}'); refused")
 
 
 def unpacked(archive):
@@ -141,30 +173,93 @@ def unpacked(archive):
 
 def stored(entry, name, make):
     """What ``make()`` returns, kept in the cache entry ``entry`` (a directory
-    ``unpacked`` returned) as the pickle ``name``: made once per content, read
-    back after. A temporary directory (the cache off) keeps nothing."""
+    ``unpacked`` returned) as ``.artibus-<name>.pickle``: made once per content,
+    read back after, but only when its signature is the cache's own
+    (``_load``): a file not from this cache's writer is made again and
+    replaced. A temporary directory (the cache off) keeps nothing."""
     entry = Path(entry)
     base = root()
     if base is None or entry.parent != base:
         return make()
-    f = entry / f".artibus-{name}.pickle"
+    f = entry / f"{OWN_PREFIX}{name}.pickle"
+    key = _secret(base)
+    if key is None:                     # (no key can be kept: nothing is read or kept)
+        return make()
+    found, value = _load(f, key)
+    if found:
+        return value
+    value = make()
+    _save(f, key, value)
+    return value
+
+
+def _load(f, key):
+    """(True, the object) kept in ``f`` when its HMAC is this cache's, checked
+    before a byte of it is unpickled; (False, None) otherwise (none yet, a
+    file changed or not ours, from another version)."""
     try:
         with open(f, "rb") as fh:
-            return pickle.load(fh)
-    except Exception:                   # none yet, or from another version: made again
-        pass
-    value = make()
+            data = fh.read()
+    except OSError:
+        return False, None
+    n = len(_MAGIC)
+    head, mac, payload = data[:n], data[n:n + 32], data[n + 32:]
+    if head != _MAGIC or not hmac.compare_digest(mac, hmac.new(key, payload, "sha256").digest()):
+        return False, None
+    try:
+        return True, pickle.loads(payload)
+    except Exception:                   # (ours, but of another version of a class)
+        return False, None
+
+
+def _save(f, key, value):
+    """``value`` pickled and signed into ``f`` (a temporary name, renamed)."""
     tmp = f.with_name(f"{f.name}.{os.getpid()}-{os.urandom(4).hex()}")
     try:
+        payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
         with open(tmp, "wb") as fh:
-            pickle.dump(value, fh, protocol=pickle.HIGHEST_PROTOCOL)
+            fh.write(_MAGIC + hmac.new(key, payload, "sha256").digest() + payload)
         os.replace(tmp, f)
     except Exception:                   # (not picklable, not writable: made each time)
         try:
             os.unlink(tmp)
         except OSError:
             pass
-    return value
+
+
+def _secret(base):
+    """The cache's secret key (32 random bytes in base/.hmac-key, readable by
+    its owner only), made once: written under a temporary name and linked to
+    its final one, so runs at once all read the first one made and none reads
+    half of it. None when it can be neither read nor made."""
+    f = Path(base) / _KEY_FILE
+    for _ in range(2):
+        try:
+            key = f.read_bytes()
+            if len(key) == 32:
+                return key
+            return None                 # (not ours: nothing is trusted, nothing is replaced)
+        except FileNotFoundError:
+            pass
+        except OSError:
+            return None
+        tmp = f.with_name(f"{_PREFIX_TMP}key-{os.getpid()}-{os.urandom(4).hex()}")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(os.urandom(32))
+            try:
+                os.link(tmp, f)
+            except FileExistsError:     # another run made it first: that one it is
+                pass
+        except OSError:
+            return None
+        finally:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+    return None
 
 
 def _touch(entry):

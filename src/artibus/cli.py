@@ -30,8 +30,10 @@ import signal
 import sys
 from pathlib import Path
 
-from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds, fmu_dir, fmu_path
-from artibus.files import check_output, make_dir
+from artibus.console import path_error, quiet_exit, stdout_gone
+from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds, fmu_path
+from artibus.files import atomic_dir, bench_inputs, check_output, given as _given, make_dir, report_said
+from artibus.inventory import cmd_info, cmd_list
 
 
 class Terminated(KeyboardInterrupt):
@@ -44,106 +46,14 @@ def _on_sigterm(signum, frame):
     raise Terminated()
 
 
-def _check_output(path):
-    return check_output(path, "-o")
+def _check_output(path, inputs=(), what="-o"):
+    from artibus.runner.results import check_results_file
+    return check_results_file(path, what, inputs)     # (none of the run's inputs: issue 41)
 
 
 def _fmu_arg(text):
     p = Path(text)
     return p if p.suffix == ".fmu" else fmu_path(text)
-
-
-def _fmu_names():
-    return sorted(p.stem for p in fmu_dir().glob("*.fmu"))
-
-
-def cmd_info(args):
-    from fmpy import read_model_description
-    from artibus.bench import ssp
-    name = str(args.fmu)
-    if name.endswith(".ssp") or name in ssp.bench_names():
-        return _info_ssp(name)
-    p = Path(name)
-    if p.suffix == ".fmu":
-        if not p.is_file():
-            raise ArtibusError(f"{p}: no such file")
-        path = p
-    elif (fmu_dir() / f"{name}.fmu").is_file():
-        path = fmu_dir() / f"{name}.fmu"
-    else:
-        import difflib
-        known = ssp.bench_names() + _fmu_names()
-        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
-        hint = f"; did you mean {' or '.join(close)}?" if close else f" (see `artibus list`)"
-        raise ArtibusError(f"{name}: no such bench or FMU{hint}")
-    try:
-        md = read_model_description(str(path))
-    except Exception as e:  # a corrupt or foreign file: name it
-        raise ArtibusError(f"{path}: not a readable FMU ({e})") from None
-    print(f"{md.modelName}: {md.description}")
-    de = md.defaultExperiment
-    if de:
-        print(f"default experiment: {de.startTime} .. {de.stopTime} s, step {de.stepSize} s")
-    for caus in ("parameter", "input", "output"):
-        vs = [v for v in md.modelVariables if v.causality == caus]
-        print(f"\n{caus}s ({len(vs)}):")
-        for v in vs:
-            start = f" = {v.start}" if v.start is not None else ""
-            print(f"  {v.name:18s} {v.type:8s}{start:>12s}  {v.description or ''}")
-    return 0
-
-
-def _info_ssp(path):
-    from artibus.bench import ssp
-    bench = ssp.read(ssp.ssp_path(path))
-    print(f"{bench.name}: {bench.file}")
-    print(f"default experiment: {bench.start_time} .. {bench.stop_time} s")
-    print("\ncomponents:")
-    for c in bench.components.values():
-        step = f", step {c.step} s" if c.step else ""
-        print(f"  {c.path}: {c.source}{step}, {len(c.parameters)} parameters bound")
-    print("\nconnections:")
-    for c in bench.connections:
-        tr = f"  (x {c.factor:g} + {c.offset:g})" if (c.factor, c.offset) != (1.0, 0.0) else ""
-        print(f"  {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}{tr}")
-    if bench.version == "2.0":           # its FMI-LS-BUS network (artibus.bench.ssp2)
-        from artibus.bench.ssp2 import network_lines
-        print("", *network_lines(ssp.ssp_path(path)), sep="\n")
-    return 0
-
-
-def cmd_list(args):
-    """One line per bench and per FMU; --parameters: every bench's bound parameters too."""
-    from artibus.bench import ssp
-    names = ssp.bench_names()
-    print(f"benches ({len(names)}; `artibus info BENCH` for one, `artibus run BENCH` to run it):"
-          if names else "no benches in ssp/benches/")
-    for name in names:
-        try:
-            bench = ssp.read(ssp.ssp_path(name))
-        except Exception as e:  # an unpacked or broken bench is still listed
-            print(f"  {name}: ({e})")
-            continue
-        variants = ssp.variants(ssp.ssp_path(name))
-        more = f"; variants: {', '.join(variants)}" if variants else ""
-        print(f"  {name}: {', '.join(bench.components)}; {bench.stop_time:g} s{more}")
-        if args.parameters:
-            for c in bench.components.values():
-                for k, v in sorted(c.parameters.items()):
-                    print(f"      {c.path}.{k} = {v}")
-    fmus = _fmu_names()
-    if fmus:
-        from fmpy import read_model_description
-        print(f"\nFMUs ({len(fmus)} in {fmu_dir()}; `artibus info FMU` for its variables):")
-        for f in fmus:
-            try:
-                d = read_model_description(str(fmu_dir() / f"{f}.fmu")).description or ""
-            except Exception as e:
-                d = f"(unreadable: {e})"
-            print(f"  {f}: {d[:100] + ('...' if len(d) > 100 else '')}")
-    if not args.parameters:
-        print("\n(`artibus list --parameters` adds every bench's parameter values)")
-    return 0
 
 
 def cmd_pack(args):
@@ -171,7 +81,7 @@ def cmd_pack(args):
     if args.variant and len(benches) != 1:
         raise ArtibusError("--variant selects a variant of one BENCH")
     for name in benches:
-        print(pack_portable(name, args.variant, out=args.output and _check_output(Path(args.output))))
+        print(pack_portable(name, args.variant, out=args.output and _check_output(args.output, bench_inputs(name))))
     return 0
 
 
@@ -195,7 +105,7 @@ def cmd_run(args):
                 user=user, stop_time=args.stop_time, step=args.step, record=args.record,
                 algorithm=args.algorithm, can=args.can, can_log=args.can_log, can_faults=args.can_fault,
                 report=args.report, output=args.output, progress=sys.stderr.isatty(), single_rate=args.single_rate,
-                checked=lambda out: setattr(args, "_out", out), fmi=args.fmi)
+                checked=lambda out: setattr(args, "_out", out), fmi=args.fmi, inputs=_given(args.ssv, "an --ssv file"))
     return 0
 
 
@@ -203,7 +113,7 @@ def cmd_replay(args):
     from artibus import runner
     from artibus.bench.parameters import parse_set
     from artibus.can import replay
-    out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"))
+    out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"), _given([args.log, args.dbc, args.steering_map], "a file replay reads") + bench_inputs(args.bench))
     rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
                         overrides=parse_set(args.set), steering_map_name=args.steering_map,
                         variants=args.variant, fmi=args.fmi)
@@ -222,7 +132,8 @@ def cmd_replay(args):
                 print(f"    {label}: {rms:.3f} {unit} RMS, {mx:.3f} {unit} max")
     if args.report:
         title = f"{Path(args.log).name} replayed into {args.bench}"
-        replay.report_page(rep, args.report, title, f"{args.log} replayed into the bench {args.bench}.")
+        with atomic_dir(args.report) as tmp:         # whole or not at all (artibus.files)
+            replay.report_page(rep, tmp, title, f"{args.log} replayed into the bench {args.bench}.")
         for i in sorted(p.name for p in Path(args.report).iterdir() if p.suffix in (".png", ".csv", ".html")):
             print(f"    {Path(args.report) / i}")
     return 0
@@ -232,7 +143,7 @@ def cmd_can_decode(args):
     from artibus.base import ROOT
     from artibus import can
     if args.csv:
-        check_output(args.csv, "--csv")
+        _check_output(args.csv, _given([args.log, args.dbc], "a file decode reads"), "--csv")
     unknown = {}
     rows = can.decode_log(args.log, args.dbc or ROOT / "ssp" / "can" / "Bus36m.dbc", unknown)
     if unknown:
@@ -257,7 +168,7 @@ def cmd_plot(args):
     """artibus plot RESULTS.csv SIGNAL...: a PNG, a panel per unit (artibus.report.quick)."""
     from artibus.report import quick
     if args.output:
-        check_output(args.output, "-o")
+        _check_output(args.output, _given([args.results], "the results plotted"))
     png, chosen = quick.results_plot(args.results, args.signal, args.output)
     print(f"{png}: {len(chosen)} signals ({', '.join(chosen)})")
     return 0
@@ -267,7 +178,7 @@ def cmd_can_plot(args):
     """artibus can plot LOG [--signal MSG.SIG]...: frame timing and decoded signals as a PNG."""
     from artibus.report import quick
     if args.output:
-        check_output(args.output, "-o")
+        _check_output(args.output, _given([args.log, args.dbc], "a file the plot reads"))
     png, chosen, known = quick.can_plot(args.log, args.signal or (), dbc=args.dbc, out=args.output)
     print(f"{png}: the frames' timing" + (f" and {', '.join(chosen)}" if chosen else ""))
     if not chosen:
@@ -287,9 +198,9 @@ def cmd_bode(args):
         raise ArtibusError("bode: give the output to measure, --measure COMP.VAR" + hint)
     if not args.output and not args.plot:
         raise ArtibusError("bode: say where the results go: -o FILE.csv (the table) and/or --plot FILE.png")
-    out = _check_output(Path(args.output)) if args.output else None
+    out = _check_output(Path(args.output), bench_inputs(args.bench)) if args.output else None
     if args.plot:
-        check_output(args.plot, "--plot")
+        _check_output(args.plot, bench_inputs(args.bench), "--plot")
     overrides = {**ssp.variant_overrides(args.bench, args.variant), **parse_set(args.set)}
     bode.measure(args.bench, args.input, args.measure, args.fmin, args.fmax, args.n, args.amplitude,
                  periods=args.periods, settle=args.settle, overrides=overrides, step=args.step,
@@ -323,7 +234,7 @@ def cmd_simulate(args):
     from artibus.bench.fmi import simulated_fmu
     fmu = _fmu_arg(args.fmu)
     run = simulated_fmu(fmu, args.fmu, args.fmi)     # --fmi 3: its FMI 3.0 build, checked as FMI 2.0's
-    out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"))
+    out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"), _given([fmu, args.ssv], "a file simulate reads") + bench_inputs(fmu))
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
     extra = parse_set(args.set)
     if any("[" in k for k in extra):          # mu[*], mu[1:6]: each element
@@ -563,7 +474,18 @@ def main(argv=None):
         # (a background job of a script: Python then installs no handler of its own)
         previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()             # (a reader gone: the BrokenPipeError here, not at the exit)
+        return code
+    except BrokenPipeError:            # `artibus list | head -1`: the reader has all it wanted
+        if not stdout_gone():
+            raise
+        return quiet_exit()
+    except OSError as e:               # a name longer than the file system allows: one line
+        if path_error(e) is None:
+            raise
+        print(f"artibus: error: {path_error(e)}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt as e:     # Ctrl-C (SIGINT) or SIGTERM: one line, 130 or 143
         sig = signal.Signals(getattr(e, "signum", signal.SIGINT))
         partial = getattr(e, "partial", None)
@@ -575,7 +497,7 @@ def main(argv=None):
             what = f"partial results not saved: {e.partial_error}"
         else:
             what = "nothing written"
-        print(f"artibus: stopped by {sig.name}; {what}", file=sys.stderr)
+        print(f"artibus: stopped by {sig.name}; {report_said(e, what)}", file=sys.stderr)
         return 128 + sig.value
     except ArtibusError as e:
         print(f"artibus: error: {e}", file=sys.stderr)

@@ -12,6 +12,10 @@ is left beside it, never under the final name).
         fig.savefig(tmp)                        # (tmp keeps the suffix: format by extension)
 
 A full disk (ENOSPC, EDQUOT) becomes an ArtibusError naming the file.
+
+A report folder is written the same way, whole (atomic_dir: a new folder beside
+it, swapped in at the end), and no output may replace an input of its run
+(check_not_input: the same file by identity, so a hard or symbolic link too).
 """
 import contextlib
 import errno
@@ -200,6 +204,207 @@ def make_dir(path, what="--report"):
     if not Path(path).is_dir():
         raise ArtibusError(f"{what} {path}: not a directory")
     return Path(path)
+
+
+# --- an output never replaces an input (issue 41) --------------------------------
+
+def _identity(path):
+    """(st_dev, st_ino) of the file ``path`` names, through symbolic links: two
+    names of one file (a hard link, a symbolic link) have the same; None where
+    there is no such file."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _holders(path):
+    """The identities of every folder that holds ``path``: its parents as written
+    (made absolute) and as resolved (its symbolic links followed)."""
+    p = Path(os.path.abspath(path))
+    found = set()
+    for q in (*p.parents, *Path(os.path.realpath(p)).parents):
+        ident = _identity(q)
+        if ident is not None:
+            found.add(ident)
+    return found
+
+
+def check_not_input(path, what, inputs, folder=False, beside=None):
+    """The output ``path`` (``what``: its option, "-o", "--report", ...) checked
+    before anything runs against the run's ``inputs`` [(path, what it is)] by
+    identity, so a hard link or a symbolic link to an input counts: an output
+    that is an input would replace the bench, an FMU or a parameter file with
+    results. ``folder``: ``path`` is a folder the output replaces whole (a
+    report, atomic_dir), refused also when it holds an input. ``beside``: the
+    output the user named, when ``path`` is a file written beside it (its
+    units). ArtibusError naming the input otherwise; returns ``path``."""
+    me = _identity(path)
+    kind = "folder" if folder else "file"
+    named = f"{what} {beside}: {path}, written beside it," if beside is not None else f"{what} {path}"
+    for inp, label in inputs:
+        ident = _identity(inp)
+        if ident is None:
+            continue
+        if ident == me:
+            link = "" if os.path.abspath(path) == os.path.abspath(inp) else ", the same file by another name"
+            raise ArtibusError(f"{named} is {label} ({inp}{link}); choose another {kind}")
+        if folder and me is not None and me in _holders(inp):
+            raise ArtibusError(f"{named} holds {label} ({inp}), which writing the report there would "
+                               f"remove; choose another folder")
+    return Path(path)
+
+
+def given(paths, what):
+    """[(path, what it is)] of the files the user gave as inputs (--ssv FILE, a log, ...)."""
+    return [(Path(p), what) for p in paths or () if p is not None]
+
+
+def _fmus_of(pack):
+    """The names of the FMUs in the .ssp ``pack`` (resources/NAME.fmu), none where it is unreadable."""
+    import zipfile
+    try:
+        with zipfile.ZipFile(pack) as z:
+            return {Path(n).name for n in z.namelist() if n.endswith(".fmu")}
+    except (OSError, zipfile.BadZipFile):
+        return set()
+
+
+def bench_inputs(bench):
+    """[(path, what it is)]: the files a run of ``bench`` (a name of ssp/benches
+    or the path of an .ssp) reads, and the runner's own files every bench is
+    packed from, which no output may replace (check_not_input): the .ssp given,
+    the runner's packs and FMUs in the FMU folder (fmus/*.ssp, *.fmu, fmus/fmi3/),
+    and every file under ssp/ (the benches' folders with their variants,
+    parameter sets, roads, CAN databases, logs)."""
+    from artibus.base import ROOT, fmu_dir
+    found = []
+    p, own = Path(str(bench)), fmu_dir()
+    if p.suffix == ".ssp":
+        found.append((p, "the bench being run"))
+    used = _fmus_of(p if p.suffix == ".ssp" else own / f"{p.name}.ssp")
+    for d in (own, own / "fmi3"):
+        for f in sorted(d.glob("*.ssp")):
+            found.append((f, "the runner's pack of the bench being run" if f.stem == p.stem
+                          else "one of the runner's packs in the FMU folder"))
+        found += [(f, "an FMU of the bench being run" if f.name in used else "one of the runner's FMUs")
+                  for f in sorted(d.glob("*.fmu"))]
+    for f in sorted((ROOT / "ssp").rglob("*")):
+        if f.is_file():
+            found.append((f, f"one of the benches' source files ({f.parent.relative_to(ROOT)}/)"))
+    return found
+
+
+def swap_dir(tmp, path):
+    """The complete folder ``tmp`` takes the name ``path``; the folder that had
+    it (an earlier report) is removed once the new one is in place, and left
+    in place if the new one cannot take its name. renameat2(RENAME_EXCHANGE)
+    swaps the two at once (Linux, glibc >= 2.28); elsewhere two renames, with
+    the old folder renamed back if the second one fails."""
+    import shutil
+    tmp, path = Path(tmp), Path(path)
+    if not path.exists():
+        os.rename(tmp, path)
+        return path
+    if _exchange(tmp, path):
+        shutil.rmtree(tmp, ignore_errors=True)          # (the earlier folder, now under tmp's name)
+        return path
+    old = path.with_name(f"{path.name}.old{TMP_MARK}{os.getpid()}-{os.urandom(3).hex()}")
+    os.rename(path, old)
+    try:
+        os.rename(tmp, path)
+    except BaseException:
+        os.rename(old, path)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+    return path
+
+
+def _exchange(a, b):
+    """Swap the names of ``a`` and ``b`` in one step (renameat2 with
+    RENAME_EXCHANGE); False where the system or file system cannot."""
+    import ctypes
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    at_fdcwd, rename_exchange = -100, 2
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    return renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0
+
+
+def report_said(e, what):
+    """The command line's message after an interrupt (``what``: what it says of
+    the results) with what became of the report folder (``e.report``, set by
+    atomic_dir): the earlier one kept, none written, or the new one complete."""
+    report = getattr(e, "report", None)
+    if report is None:
+        return what
+    said = {"kept": f"the earlier report in {report[0]} is kept as it was",
+            "none": f"no report written to {report[0]}",
+            "complete": f"the report in {report[0]} is complete"}[report[1]]
+    return said if what == "nothing written" and report[1] == "complete" else f"{what}; {said}"
+
+
+def _not_a_report(path):
+    """What of the folder ``path`` shows it is not a report (its first few
+    entries) when it has entries and no index.html, else None."""
+    try:
+        names = sorted(os.listdir(path))
+    except OSError:
+        return None
+    if not names or "index.html" in names:
+        return None
+    return ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+
+
+@contextlib.contextmanager
+def atomic_dir(path, what="--report"):
+    """A folder written whole or not at all (a report): yields a new temporary
+    folder beside ``path`` (``NAME.tmp-PID-XXXX``); when the block ends without
+    an exception it is swapped in (swap_dir, SIGINT and SIGTERM held until the
+    swap is done), otherwise removed, ``path`` left as it was. A folder that has
+    files but no index.html is not an earlier report: refused, not replaced."""
+    import shutil
+    path = Path(path)
+    final = Path(os.path.realpath(path)) if path.is_symlink() else Path(os.path.abspath(path))
+    if final.exists() and not final.is_dir():
+        raise ArtibusError(f"{what} {path}: not a directory")
+    if final in (Path.cwd(), *Path.cwd().parents):
+        raise ArtibusError(f"{what} {path}: is the working directory or holds it; "
+                           f"the report replaces its folder whole: give another one")
+    foreign = _not_a_report(final)
+    if foreign:
+        raise ArtibusError(f"{what} {path}: holds files that are not a report ({foreign}); the report "
+                           f"replaces its folder whole: give a new or empty folder, or an earlier report's")
+    make_dir(final.parent, what)
+    tmp = final.with_name(f"{final.name}{TMP_MARK}{os.getpid()}-{os.urandom(3).hex()}")
+    state, made, swapping = ("kept" if final.is_dir() else "none"), False, False
+    try:
+        tmp.mkdir()
+        made = True
+        yield tmp
+        with signals_held():
+            swapping = True
+            swap_dir(tmp, final)
+            state = "complete"
+    except BaseException as e:
+        if state != "complete":
+            shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(e, KeyboardInterrupt):        # for the command line's message (report_said)
+            e.report = (path, state)
+            raise
+        if swapping and isinstance(e, OSError):
+            raise ArtibusError(f"{what} {path}: the new report could not take its name ({e.strerror or e}); "
+                               + ("the earlier one is kept" if state == "kept" else "nothing written")) from None
+        err = _disk_error(path, e)
+        if err is not None:
+            raise err from None
+        if isinstance(e, OSError) and not made:
+            raise ArtibusError(f"{what} {path}: cannot make a folder beside it ({e.strerror})") from None
+        raise
 
 
 # --- archives (.ssp, .fmu): checked as a whole before anything is unpacked ----------

@@ -195,6 +195,19 @@ static inline double test_sine(double amp, double period, double t) {
     return (amp != 0.0 && t < period) ? amp * sin(2 * M_PI * t / period) : 0.0;
 }
 
+/* The most samples one communication step may take (issue 41): a discrete
+ * controller takes every sample instant of a step, so the work of one doStep
+ * grows with h / Ts. A model that samples names its sample period in its
+ * config.h,
+ *     #define MODEL_SAMPLE_PERIOD(d) ((d)->Ts)     (d: the ModelData, checked Ts > 0)
+ * and the layer (core_do_step) refuses a step of more than this many samples
+ * with Error and a message naming the function, the step and the limit, before
+ * the model sees it: a doStep returns in bounded time whatever the step (1e5
+ * samples: 1 ms to 0.2 s in these controllers, release build), and the importer
+ * splits a longer span into steps. The steps of any bench (one sample or a few)
+ * are far below. */
+#define MAX_SAMPLES_PER_STEP 1e5
+
 /* A discrete controller (an ECU) samples at t0 + k Ts; a communication step
  * [t, t + h) takes every sample instant in it, from the inputs held over the
  * step. True while sample k falls in the step, its instant in *tk:

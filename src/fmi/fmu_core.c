@@ -544,6 +544,21 @@ static Status check_outputs(ModelInstance *comp, const char *fn) {
     return OK;
 }
 
+/* a step of a sampled model (MODEL_SAMPLE_PERIOD in its config.h) that would take
+   more than MAX_SAMPLES_PER_STEP samples: Error naming the step and the limit (fmu.h) */
+static Status too_many_samples(ModelInstance *comp, const char *fn, double h) {
+#ifdef MODEL_SAMPLE_PERIOD
+    const double Ts = MODEL_SAMPLE_PERIOD(&comp->v.d);
+    if (!(h / Ts <= MAX_SAMPLES_PER_STEP))
+        return log_error(comp, "%s: communicationStepSize = %.15g s is %.3g samples of Ts = %g s, more than "
+                               "the %g one step may take: take steps of at most %.15g s", fn, h, h / Ts, Ts,
+                         MAX_SAMPLES_PER_STEP, MAX_SAMPLES_PER_STEP * Ts);
+#else
+    (void)comp; (void)fn; (void)h;
+#endif
+    return OK;
+}
+
 Status core_do_step(ModelInstance *comp, const char *fn, double t, double h) {
     const double now = comp->v.time;
     if (!(fabs(t - now) <= 1e-9 * fmax(1.0, fabs(now))))
@@ -554,6 +569,7 @@ Status core_do_step(ModelInstance *comp, const char *fn, double t, double h) {
     if (now + h > comp->stopTime * (1 + 1e-12) + 1e-12)
         return leave(comp, log_error(comp, "%s: step to t = %.17g goes beyond stopTime = %.17g",
                                      fn, now + h, comp->stopTime));
+    if (too_many_samples(comp, fn, h)) return leave(comp, Error);
     Status status = model_do_step(comp, now, h);
     comp->restart = comp->forget = false;
     if (status <= Warning) {

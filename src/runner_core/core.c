@@ -50,7 +50,7 @@ static void record(ac_sim *sim, long row, double t) {   /* _Recorder.take */
     }
 }
 
-static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t) */
+static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t): its sources, its C stimuli */
     for (int s = 0; s < u->n_sources; s++) {
         const ac_source *q = &u->sources[s];
         *q->dst = q->factor * *q->src + q->offset;
@@ -61,6 +61,19 @@ static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t) */
     }
 }
 
+/* the Python callback for unit j (what: an AC_HOOK_*), if the unit has it: AC_OK or AC_HOOK */
+static int hook(ac_sim *sim, int what, int j, long k, double t) {
+    if (j >= 0 && !(sim->units[j].hooks & what))
+        return AC_OK;
+    return sim->hook(what, j, k, t) < 0 ? AC_HOOK : AC_OK;
+}
+
+/* Simulation._propagate(u, t): the sources and C stimuli, then what Python adds */
+static int propagate_unit(ac_sim *sim, int j, long k, double t) {
+    propagate(&sim->units[j]);
+    return hook(sim, AC_HOOK_PROPAGATE, j, k, t);
+}
+
 static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the FMU holds them already */
     if (!u->n_in)
         return 0;
@@ -68,7 +81,7 @@ static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the F
         return 1;
     for (size_t i = 0; i < u->n_in; i++) {   /* memcmp(in, written) != 0, a few doubles: no call */
         unsigned long long a, b;
-        memcpy(&a, &u->in[i], sizeof a);
+        memcpy(&a, &u->inp[i], sizeof a);
         memcpy(&b, &u->written[i], sizeof b);
         if (a != b)
             return 1;
@@ -80,8 +93,8 @@ static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the F
 static fmi2Status set_inputs(ac_unit *u) {
     if (u->fmi == 3)
         return (fmi2Status)u->setFloat64(u->component, (const fmi3ValueReference *)u->in_vrs, u->n_in,
-                                         u->in, u->n_in);
-    return u->setReal(u->component, u->in_vrs, u->n_in, u->in);
+                                         u->inp, u->n_in);
+    return u->setReal(u->component, u->in_vrs, u->n_in, u->inp);
 }
 
 static fmi2Status get_outputs(ac_unit *u) {
@@ -105,6 +118,26 @@ static fmi2Status do_step(ac_unit *u, double t, int *end) {
         return (fmi2Status)st;
     }
     return u->doStep(u->component, t, u->step, fmi2True);
+}
+
+/* After a step that returned st (or asked to end, FMI 3.0): did the FMU end the simulation?
+ * FMI 3.0: terminateSimulation (FMI 3.0 4.2.1); FMI 2.0: fmi2Discard with fmi2Terminated true
+ * (FMI 2.0 4.2.3), its fmi2LastSuccessfulTime, NaN when it gives none. An FMU that cannot
+ * say (its status functions fail or are missing) has not ended it. Sets u->terminate and
+ * u->last_successful_time. */
+static int unit_ended(ac_unit *u, fmi2Status st) {
+    if (u->fmi == 3)
+        return u->terminate;
+    fmi2Boolean terminated = fmi2False;
+    if (st != fmi2Discard || !u->getBooleanStatus
+        || u->getBooleanStatus(u->component, fmi2Terminated, &terminated) != fmi2OK || !terminated)
+        return 0;
+    fmi2Real last = NAN;
+    if (!u->getRealStatus || u->getRealStatus(u->component, fmi2LastSuccessfulTime, &last) != fmi2OK)
+        last = NAN;
+    u->terminate = 1;
+    u->last_successful_time = last;
+    return 1;
 }
 
 /* _RawCalls.write (write: its inputs changed), then Simulation._step(u, t)
@@ -134,13 +167,14 @@ static int call_unit(ac_unit *u, int write, int step, double t, fmi2Status *st) 
     }
     u->ticks += stamp() - w;
     if (write) {                             /* the FMU holds them now */
-        memcpy(u->written, u->in, u->n_in * sizeof(double));
+        memcpy(u->written, u->inp, u->n_in * sizeof(double));
         u->has_written = 1;
     }
     return failed;
 }
 
 static void no_failure(ac_sim *sim) {       /* no failure yet (fail() fills these) */
+    sim->ended_unit = -1;
     sim->fail_unit = -1;
     sim->fail_function = AC_OK;
     sim->fail_status = 0;
@@ -521,18 +555,28 @@ AC_EXPORT int artibus_core_can_settle(ac_can *c) {
     return -1;
 }
 
-AC_EXPORT int artibus_core_abi(void) { return ARTIBUS_CORE_ABI; }
-
 AC_EXPORT void artibus_core_record_start(ac_sim *sim) { record(sim, 0, sim->start); }
 
-/* _RawCalls.read: fmi2GetReal of its outputs, its time in ticks */
-static int read_unit(ac_unit *u, fmi2Status *st) {
-    if (!u->n_out)
-        return AC_OK;
-    const unsigned long long w = stamp();
-    *st = get_outputs(u);
-    u->ticks += stamp() - w;
-    return *st > fmi2Warning ? AC_GET_REAL : AC_OK;
+/* _RawCalls.read: fmi2GetReal of its outputs, its time in ticks; then its typed outputs (Python) */
+static int read_unit(ac_sim *sim, int j, long k, double t, fmi2Status *st) {
+    ac_unit *u = &sim->units[j];
+    if (u->n_out) {
+        const unsigned long long w = stamp();
+        *st = get_outputs(u);
+        u->ticks += stamp() - w;
+        if (*st > fmi2Warning)
+            return AC_GET_REAL;
+    }
+    return hook(sim, AC_HOOK_READ, j, k, t);
+}
+
+/* _RawCalls.write: its Real inputs when they changed, then its typed ones (Python) */
+static int write_unit(ac_sim *sim, int j, long k, double t, fmi2Status *st) {
+    ac_unit *u = &sim->units[j];
+    int failed = AC_OK;
+    if (inputs_changed(u) && (failed = call_unit(u, 1, 0, 0.0, st)))
+        return failed;
+    return hook(sim, AC_HOOK_WRITE, j, k, t);
 }
 
 static int settled(double b, double x) {     /* runner._settled, one pair (tol 1e-12) */
@@ -540,8 +584,77 @@ static int settled(double b, double x) {     /* runner._settled, one pair (tol 1
     return b == x || (isfinite(x) && fabs(b - x) <= tol + tol * fabs(x));
 }
 
-static int settle_rounds(ac_sim *sim, ac_settle *z) {
+/* every input within tolerance of its value at the round's start (before), the typed ones the same */
+static int round_settled(ac_sim *sim, const double *before, int *done) {
+    size_t at = 0;
+    *done = 1;
+    for (int j = 0; j < sim->n_units && *done; j++) {
+        const ac_unit *u = &sim->units[j];
+        for (size_t i = 0; i < u->n_in && *done; i++)
+            *done = settled(before[at + i], u->inp[i]);
+        at += u->n_in;
+    }
+    if (*done && sim->hook) {
+        const int r = sim->hook(AC_HOOK_SETTLED, -1, -1, 0.0);
+        if (r < 0)
+            return AC_HOOK;
+        *done = r == 0;
+    }
+    return AC_OK;
+}
+
+/* one round's first half: each unit of the order read, its inputs propagated
+ * (Gauss-Seidel: its own, if it has sources; Jacobi: every unit's) */
+static int settle_reads(ac_sim *sim, ac_settle *z, double t0) {
     fmi2Status st = fmi2OK;
+    int failed;
+    for (int o = 0; o < z->n_order; o++) {
+        const int j = z->order[o];
+        const ac_unit *u = &sim->units[j];
+        if ((failed = read_unit(sim, j, -1, t0, &st)))
+            return fail(sim, j, failed, st, -1);
+        if (!z->gauss_seidel) {              /* self._propagate(None, start) */
+            for (int q = 0; q < sim->n_units; q++)
+                if ((failed = propagate_unit(sim, q, -1, t0)))
+                    return fail(sim, q, failed, st, -1);
+        } else if (u->n_sources || u->n_stimuli || (u->hooks & AC_HOOK_PROPAGATE)) {
+            if ((failed = propagate_unit(sim, j, -1, t0)))
+                return fail(sim, j, failed, st, -1);
+        }
+    }
+    return AC_OK;
+}
+
+/* the round's second half: the network settled, each unit of the order propagated and
+ * written, every unit read */
+static int settle_writes(ac_sim *sim, ac_settle *z, double t0) {
+    fmi2Status st = fmi2OK;
+    int failed;
+    if (z->can) {                            /* _CanCore.settle */
+        const int bad = artibus_core_can_settle(z->can);
+        if (bad >= 0)
+            return fail(sim, bad, AC_CAN, fmi2OK, -1);
+        z->can_settles++;
+    } else if (z->hook_settle && sim->hook(AC_HOOK_SETTLE, -1, -1, t0) < 0) {
+        return fail(sim, -1, AC_HOOK, fmi2OK, -1);
+    }
+    for (int o = 0; o < z->n_order; o++) {
+        const int j = z->order[o];
+        const ac_unit *u = &sim->units[j];
+        if ((u->n_sources || u->n_stimuli || (u->hooks & AC_HOOK_PROPAGATE))
+            && (failed = propagate_unit(sim, j, -1, t0)))
+            return fail(sim, j, failed, st, -1);
+        if ((failed = write_unit(sim, j, -1, t0, &st)))
+            return fail(sim, j, failed, st, -1);
+    }
+    for (int j = 0; j < sim->n_units; j++)
+        if ((failed = read_unit(sim, j, -1, t0, &st)))
+            return fail(sim, j, failed, st, -1);
+    return AC_OK;
+}
+
+static int settle_rounds(ac_sim *sim, ac_settle *z) {
+    const double t0 = sim->start;
     int failed;
     double *before = z->before;
     for (int it = 0; it < z->max_iter; it++) {
@@ -550,45 +663,16 @@ static int settle_rounds(ac_sim *sim, ac_settle *z) {
         for (int j = 0; j < sim->n_units; j++) {
             const ac_unit *u = &sim->units[j];
             if (u->n_in)
-                memcpy(before + at, u->in, u->n_in * sizeof(double));
+                memcpy(before + at, u->inp, u->n_in * sizeof(double));
             at += u->n_in;
         }
-        for (int o = 0; o < z->n_order; o++) {
-            const int j = z->order[o];
-            ac_unit *u = &sim->units[j];
-            if ((failed = read_unit(u, &st)))
-                return fail(sim, j, failed, st, -1);
-            if (!z->gauss_seidel)            /* self._propagate(None, start) */
-                for (int q = 0; q < sim->n_units; q++)
-                    propagate(&sim->units[q]);
-            else if (u->n_sources || u->n_stimuli)
-                propagate(u);
-        }
-        if (z->can) {                        /* _CanCore.settle */
-            const int bad = artibus_core_can_settle(z->can);
-            if (bad >= 0)
-                return fail(sim, bad, AC_CAN, fmi2OK, -1);
-            z->can_settles++;
-        }
-        for (int o = 0; o < z->n_order; o++) {
-            const int j = z->order[o];
-            ac_unit *u = &sim->units[j];
-            if (u->n_sources || u->n_stimuli)
-                propagate(u);
-            if (inputs_changed(u) && (failed = call_unit(u, 1, 0, 0.0, &st)))
-                return fail(sim, j, failed, st, -1);
-        }
-        for (int j = 0; j < sim->n_units; j++)
-            if ((failed = read_unit(&sim->units[j], &st)))
-                return fail(sim, j, failed, st, -1);
-        int done = 1;
-        at = 0;
-        for (int j = 0; j < sim->n_units && done; j++) {
-            const ac_unit *u = &sim->units[j];
-            for (size_t i = 0; i < u->n_in && done; i++)
-                done = settled(before[at + i], u->in[i]);
-            at += u->n_in;
-        }
+        if (sim->hook && sim->hook(AC_HOOK_SNAPSHOT, -1, -1, t0) < 0)
+            return fail(sim, -1, AC_HOOK, fmi2OK, -1);
+        if ((failed = settle_reads(sim, z, t0)) || (failed = settle_writes(sim, z, t0)))
+            return failed;
+        int done;
+        if ((failed = round_settled(sim, before, &done)))
+            return fail(sim, -1, failed, fmi2OK, -1);
         if (done)
             return AC_OK;
     }
@@ -606,7 +690,7 @@ static int exit_initialization(ac_sim *sim, ac_settle *z) {
         u->ticks += stamp() - w;
         if (st > fmi2Warning)
             return fail(sim, j, AC_EXIT_INIT, st, -1);
-        if ((failed = read_unit(u, &st)))
+        if ((failed = read_unit(sim, j, -1, sim->start, &st)))
             return fail(sim, j, failed, st, -1);
     }
     return AC_OK;
@@ -669,50 +753,115 @@ AC_EXPORT int artibus_core_run(ac_sim *sim, long k0, long k1) {
     return result;
 }
 
+/* the networks' ticks at base step k, before its operations: self.can.tick(k // can_ratio, t) */
+static int tick_networks(ac_sim *sim, long k, double t) {
+    if (sim->can && (sim->can->ratio == 1 || k % sim->can->ratio == 0)) {
+        const unsigned long long w = stamp();
+        const int bad = can_tick(sim->can, k / sim->can->ratio, t);
+        sim->can->stamps += stamp() - w;
+        if (bad >= 0)
+            return fail(sim, bad, AC_CAN, fmi2OK, k);
+    }
+    if (sim->lsbus && (sim->lsbus->ratio == 1 || k % sim->lsbus->ratio == 0)) {   /* LsBusSteering.tick */
+        const unsigned long long w = stamp();
+        const int bad = artibus_lsbus_tick(sim->lsbus, t);
+        sim->lsbus->stamps += stamp() - w;
+        if (bad)
+            return fail(sim, -1, AC_LSBUS, fmi2OK, k);
+    }
+    if (sim->hook_ratio && k % sim->hook_ratio == 0 && sim->hook(AC_HOOK_TICK, -1, k / sim->hook_ratio, t) < 0)
+        return fail(sim, -1, AC_HOOK, fmi2OK, k);
+    return AC_OK;
+}
+
+/* op i of the plan at base step k (t its start): AC_OK or the function that failed, with
+ * *st; *skip 1 when it did the next op too (a write and the step right after it) */
+static int do_op(ac_sim *sim, int i, int end, long k, double t, fmi2Status *st, int *skip) {
+    const double h = sim->h;
+    const int j = sim->op_unit[i];
+    ac_unit *u = &sim->units[j];
+    const int step = sim->op_kind[i] == AC_WRITE && i + 1 < end && sim->op_kind[i + 1] == AC_STEP
+                     && sim->op_unit[i + 1] == j;
+    int failed = AC_OK;
+    *skip = 0;
+    switch (sim->op_kind[i]) {
+    case AC_PROPAGATE:
+        return propagate_unit(sim, j, k, t);
+    case AC_WRITE:                                   /* _RawCalls.write, and its step if next */
+        if (u->hooks & AC_HOOK_WRITE) {              /* (its typed inputs between the two) */
+            if ((failed = write_unit(sim, j, k, t, st)) || !step)
+                return failed;
+            *skip = 1;
+            failed = call_unit(u, 0, 1, t + h - u->step, st);
+        } else {
+            const int write = inputs_changed(u);
+            *skip = step;
+            if (write || step)
+                failed = call_unit(u, write, step, t + h - u->step, st);
+        }
+        break;
+    default:                                         /* Simulation._step(u, t + h - u.step) */
+        failed = call_unit(u, 0, 1, t + h - u->step, st);
+        break;
+    }
+    if (!failed && (step || sim->op_kind[i] == AC_STEP))
+        failed = hook(sim, AC_HOOK_READ, j, k, t);   /* its typed outputs */
+    return failed;
+}
+
+/* The rest of base step k after the unit of op i ended the simulation (Simulation._finish_step):
+ * its outputs read (getters are allowed after fmi2Discard: its values at its last successful
+ * time), then the ops the plan has after it, so that every unit ends the step at t + h; a unit
+ * that ends the simulation there too is read as well. AC_OK, or a failure (ended_unit set). */
+static int finish_step(ac_sim *sim, int i, int end, long k, double t) {
+    fmi2Status st = fmi2OK;
+    int failed;
+    const int ended = sim->op_unit[i];
+    sim->ended_unit = ended;
+    if ((failed = read_unit(sim, ended, k, t, &st)))
+        return fail(sim, ended, failed, st, k);
+    for (i++; i < end; i++) {
+        const int j = sim->op_unit[i];
+        ac_unit *u = &sim->units[j];
+        if (sim->op_kind[i] == AC_PROPAGATE)
+            failed = propagate_unit(sim, j, k, t);
+        else if (sim->op_kind[i] == AC_WRITE)
+            failed = write_unit(sim, j, k, t, &st);
+        else if ((failed = call_unit(u, 0, 1, t + sim->h - u->step, &st)) == AC_DO_STEP && unit_ended(u, st))
+            failed = read_unit(sim, j, k, t, &st);
+        else if (!failed)
+            failed = hook(sim, AC_HOOK_READ, j, k, t);
+        if (failed)
+            return fail(sim, j, failed, st, k);
+    }
+    sim->ended_unit = -1;
+    return AC_OK;
+}
+
 static int run_steps(ac_sim *sim, long k0, long k1) {
     const double h = sim->h;
     no_failure(sim);
     for (long k = k0; k < k1; k++) {
         const double t = sim->start + (double)k * h;         /* t = start + k * h */
         const int p = (int)(k % sim->period);
-        if (sim->can && (sim->can->ratio == 1 || k % sim->can->ratio == 0)) {              /* self.can.tick(k // can_ratio, t) */
-            const unsigned long long w = stamp();
-            const int bad = can_tick(sim->can, k / sim->can->ratio, t);
-            sim->can->stamps += stamp() - w;
-            if (bad >= 0)
-                return fail(sim, bad, AC_CAN, fmi2OK, k);
-        }
-        if (sim->lsbus && (sim->lsbus->ratio == 1 || k % sim->lsbus->ratio == 0)) {   /* LsBusSteering.tick(k // ratio, t) */
-            const unsigned long long w = stamp();
-            const int bad = artibus_lsbus_tick(sim->lsbus, t);
-            sim->lsbus->stamps += stamp() - w;
-            if (bad)
-                return fail(sim, -1, AC_LSBUS, fmi2OK, k);
-        }
+        int failed = tick_networks(sim, k, t);
+        if (failed)
+            return failed;
         const int end = sim->op_start[p + 1];
         for (int i = sim->op_start[p]; i < end; i++) {
-            const int j = sim->op_unit[i];
-            ac_unit *u = &sim->units[j];
             fmi2Status st = fmi2OK;
-            int failed = AC_OK;
-            switch (sim->op_kind[i]) {
-            case AC_PROPAGATE:
-                propagate(u);
-                break;
-            case AC_WRITE: {                                 /* _RawCalls.write, and its step if next */
-                const int step = i + 1 < end && sim->op_kind[i + 1] == AC_STEP && sim->op_unit[i + 1] == j;
-                const int write = inputs_changed(u);
-                if (write || step)
-                    failed = call_unit(u, write, step, t + h - u->step, &st);
-                i += step;
-                break;
-            }
-            default:                                         /* Simulation._step(u, t + h - u.step) */
-                failed = call_unit(u, 0, 1, t + h - u->step, &st);
-                break;
+            int skip;
+            failed = do_op(sim, i, end, k, t, &st, &skip);
+            i += skip;
+            if (failed == AC_DO_STEP && unit_ended(&sim->units[sim->op_unit[i]], st)) {
+                const int j = sim->op_unit[i];               /* the FMU's own end: a normal end */
+                if ((failed = finish_step(sim, i, end, k, t)))
+                    return failed;
+                record(sim, k + 1, sim->start + (double)(k + 1) * h);
+                return fail(sim, j, AC_ENDED, st, k);
             }
             if (failed)
-                return fail(sim, j, failed, st, k);
+                return fail(sim, sim->op_unit[i], failed, st, k);
         }
         record(sim, k + 1, sim->start + (double)(k + 1) * h);   /* t = start + (k + 1) * h */
     }

@@ -26,7 +26,11 @@
 #include "fmi3FunctionTypes.h"
 #include "lsbus.h"
 
-#define ARTIBUS_CORE_ABI 13         /* artibus_core_abi(): Python checks it */
+/* The structs below and lsbus.h's are the one declaration of the core's data:
+ * their layout is generated into the library (gen_layout.py: artibus_core_layout,
+ * each field's kind, offset and size), and Python's ctypes structures are built
+ * from it (artibus.runner.layout). A field added here needs no change elsewhere
+ * but its use. */
 
 /* one connection into a unit's input: *dst = factor * *src + offset */
 typedef struct {
@@ -45,6 +49,27 @@ typedef struct {
     int has_base;
 } ac_stimulus;
 
+/* A callback into Python (artibus.runner.core._Hooks) for what the core does not do in C:
+ * a unit's Integer, Boolean, String and Enumeration variables (read with FMPy's calls) and
+ * its stimuli (Python functions of time: artibus bode's sine, an LS-BUS network's outputs
+ * in its Python master), and a network that ticks in Python (CAN with faults, a tamper
+ * function or a real interface; an FMI-LS-BUS network the C master does not run). The
+ * core calls it where the one stepping loop needs it (what, below; unit -1: the network's),
+ * k the base step (-1 in the initialisation), t the time. Returns 0 (AC_HOOK_SETTLED: the
+ * unit's typed inputs unchanged since AC_HOOK_SNAPSHOT), 1 (AC_HOOK_SETTLED: changed), or
+ * -1: Python keeps the exception (an FMU call that failed, Ctrl-C) and the core stops with
+ * AC_HOOK. */
+typedef int ac_hook(int what, int unit, long k, double t);
+enum {
+    AC_HOOK_PROPAGATE = 1,          /* after the unit's sources: its typed sources, its stimuli */
+    AC_HOOK_READ = 2,               /* after its fmi2GetReal: its typed outputs */
+    AC_HOOK_WRITE = 4,              /* after its fmi2SetReal, before its step: its typed inputs */
+    AC_HOOK_TICK = 8,               /* the network's tick k (unit -1), before the base step's operations */
+    AC_HOOK_SETTLE = 16,            /* the network's settle in the initialisation (unit -1) */
+    AC_HOOK_SNAPSHOT = 32,          /* a round of the initialisation begins: the typed inputs kept */
+    AC_HOOK_SETTLED = 64            /* a round ends: are the unit's typed inputs the same? */
+};
+
 typedef struct {
     void *component;                /* fmi2Component or fmi3Instance */
     int fmi;                        /* 2: the fmi2 functions below are called, 3: the fmi3 ones */
@@ -59,7 +84,7 @@ typedef struct {
     const fmi2ValueReference *out_vrs;
     double *out;                    /* n_out: read by fmi2GetReal after each of its steps */
     const fmi2ValueReference *in_vrs;
-    double *in;                     /* n_in: its inputs */
+    double *inp;                    /* n_in: its inputs */
     double *written;                /* n_in: the input values last set */
     int has_written;                /* 0: never set, the next write sets them */
     int n_sources;
@@ -70,6 +95,10 @@ typedef struct {
     double last_successful_time;    /* FMI 3.0: its last fmi3DoStep's lastSuccessfulTime */
     int n_stimuli;                  /* applied after its sources (Simulation._propagate's order) */
     const ac_stimulus *stimuli;
+    int hooks;                      /* AC_HOOK_PROPAGATE | _READ | _WRITE | _SNAPSHOT: what ac_sim.hook does for it */
+    /* FMI 2.0: fmi2DoStep's fmi2Discard ends the run when fmi2Terminated is true (FMI 2.0 4.2.3) */
+    fmi2GetBooleanStatusTYPE *getBooleanStatus;
+    fmi2GetRealStatusTYPE *getRealStatus;
 } ac_unit;
 
 /* what the plan does with a unit */
@@ -81,7 +110,11 @@ enum { AC_PROPAGATE = 0, AC_WRITE = 1, AC_STEP = 2 };
 /* AC_DO_STEP: fmi2DoStep/fmi3DoStep returned fmi2Discard or worse, or fmi3DoStep
  * asked to terminate the simulation (ac_unit.terminate) */
 /* AC_LSBUS: the FMI-LS-BUS network's tick failed (ac_lsbus's fail_* and message say why) */
-enum { AC_OK = 0, AC_DO_STEP = 1, AC_GET_REAL = 2, AC_SET_REAL = 3, AC_CAN = 4, AC_LSBUS = 7 };
+/* AC_HOOK: the Python callback failed (it keeps the exception); AC_ENDED: not a failure, an FMU
+ * ended the simulation (fail_unit: which, its ac_unit.last_successful_time, NaN: none
+ * given) in base step fail_k, which the others finished and which was recorded */
+enum { AC_OK = 0, AC_DO_STEP = 1, AC_GET_REAL = 2, AC_SET_REAL = 3, AC_CAN = 4, AC_LSBUS = 7, AC_HOOK = 8,
+       AC_ENDED = 9 };
 
 /* --- the CAN network's tick (artibus.can.Network.tick without faults, log,
  * tamper or a real interface): the frames due at a tick in identifier order,
@@ -180,9 +213,10 @@ typedef struct {
     long fail_k;                    /* the base step that failed */
     double wall;                    /* seconds inside artibus_core_run, added (the FMUs' and the network's too) */
     ac_lsbus *lsbus;                /* NULL: no FMI-LS-BUS network; else ticked every lsbus->ratio base steps */
+    ac_hook *hook;                  /* NULL: none needed (no unit's hooks, no hook_ratio) */
+    int hook_ratio;                 /* base steps per tick of a network in Python (AC_HOOK_TICK), 0: none */
+    int ended_unit;                 /* a failure after an FMU ended the run in the same base step: that FMU, else -1 */
 } ac_sim;
-
-int artibus_core_abi(void);
 
 /* The codec alone (tests against cantools): a frame's data from raw signal
  * values; a signal's value from a frame; the bits of a frame on the wire. */
@@ -218,7 +252,8 @@ typedef struct {
     int n_order;
     int gauss_seidel;               /* 0: Jacobi */
     int max_iter;                   /* MAX_INIT_ITERATIONS */
-    ac_can *can;                    /* NULL: no network */
+    ac_can *can;                    /* NULL: no network in C */
+    int hook_settle;                /* 1: the network settles in Python (AC_HOOK_SETTLE) */
     double *before;                 /* scratch: the units' n_in summed */
     const ac_exit_init *exit_init;  /* n_units, or NULL: Python exits */
     /* results */

@@ -29,11 +29,13 @@
 #define FMU_BINARY "%s/binaries/linux64/%s.so"
 #endif
 #endif
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "fmi2FunctionTypes.h"
 #include "vartable.h"
@@ -230,6 +232,39 @@ int main(int argc, char **argv) {
             CHECK(fmi2DoStep(c, 0, h, fmi2True) == fmi2Error, "doStep in error state accepted");
             double t;
             CHECK(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t) == fmi2OK, "GetRealStatus in error state");
+        }
+    }
+
+    /* 6b. huge steps (issue 41): one doStep(0, h) from the start values returns, in
+       bounded CPU time, OK or fmi2Error with a message naming fmi2DoStep or the
+       integrator; then reset, and the run of part 2 gives the same result again */
+    {
+        static const double HUGE_STEPS[] = { 1e3, 1e6, 1e9, 1e12, 1e15, 1e50, 1e100, 1e200, 1e300, DBL_MAX };
+        static double ref[MODEL_NVARS];
+        fmi2Reset(c);
+        CHECK(start(c) == fmi2OK && run(c, 0, steps, h, ref), "reference run: %s", last_message);
+        for (size_t i = 0; i < sizeof HUGE_STEPS / sizeof HUGE_STEPS[0]; i++) {
+            const double hh = HUGE_STEPS[i];
+            fmi2Reset(c);
+            CHECK(start(c) == fmi2OK, "initialisation before doStep(0, %g): %s", hh, last_message);
+            errors_logged = 0;
+            last_message[0] = 0;
+            const clock_t c0 = clock();
+            const fmi2Status st = fmi2DoStep(c, 0.0, hh, fmi2True);
+            const double seconds = (double)(clock() - c0) / CLOCKS_PER_SEC;
+            /* 10 s: the sanitizers slow the FMU down tenfold; the 1 s of the release build is
+               tests/test_dostep_bounded.py's */
+            CHECK(seconds < 10.0, "doStep(0, %g) took %.2f s", hh, seconds);
+            CHECK(st == fmi2OK || st == fmi2Warning || st == fmi2Error, "doStep(0, %g) returned %d", hh, st);
+            CHECK(st != fmi2Error || (errors_logged > 0 && (strstr(last_message, "fmi2DoStep") ||
+                                                            strstr(last_message, "CVODE") ||
+                                                            strstr(last_message, "ARKODE"))),
+                  "doStep(0, %g) failed without a message naming it: %s", hh, last_message);
+            if (st == fmi2Error)
+                CHECK(fmi2DoStep(c, 0.0, h, fmi2True) == fmi2Error, "doStep after a refused step accepted");
+            fmi2Reset(c);
+            CHECK(start(c) == fmi2OK && run(c, 0, steps, h, b), "run after doStep(0, %g): %s", hh, last_message);
+            CHECK(memcmp(ref, b, n_real * sizeof(double)) == 0, "run after doStep(0, %g) differs", hh);
         }
     }
 

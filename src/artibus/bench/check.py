@@ -199,9 +199,28 @@ def _dynamics(values, get):
                 probs.append(Problem(f"lHr[{h}]", r, f"hinge {h} lies {r - get[f'lFront[{h + 1}]']:.3g} m ahead of "
                                                      f"the front of module {h + 1}'s body (lFront[{h + 1}] = "
                                                      f"{get[f'lFront[{h + 1}]']:g}); more than a gangway ({GANGWAY:g} m)"))
-    # static axle loads as BusDynamics computes them (dyn_static_loads): module by
-    # module from the rear, each module's axles and, with fewer than two axles,
-    # its front hinge carry its weight and what its rear hinge passes on
+    _static_loads(get, probs, nm, na, ok, on)
+    # yaw inertia against mass and body length
+    for k in range(1, nm + 1):
+        if not ok.get(k):
+            continue
+        m, J = get[f"m[{k}]"], get[f"Jz[{k}]"]
+        L = get[f"lFront[{k}]"] + get[f"lRear[{k}]"]
+        ratio = J / (m * L * L)
+        if not J_BAND[0] <= ratio <= J_BAND[1]:
+            probs.append(Problem(f"Jz[{k}]", J, f"implausible for m[{k}] = {m:g} kg and a body {L:g} m long: "
+                                                f"J/(m L^2) = {ratio:.3g}, expected {J_BAND[0]:.3g}..{J_BAND[1]:.3g} "
+                                                f"(a uniform box: about 1/12, m (L^2 + w^2)/12 = "
+                                                f"{m * (L * L + get[f'width[{k}]'] ** 2) / 12:.4g} kg.m2)"))
+    return probs
+
+
+def _static_loads(get, probs, nm, na, ok, on):
+    """the static axle loads as BusDynamics computes them (dyn_static_loads): module by
+    module from the rear, each module's axles and, with fewer than two axles, its front
+    hinge carry its weight and what its rear hinge passes on; a negative load, or a module
+    on fewer than two supports, is a Problem in ``probs`` (``ok``: {module: its masses and
+    lengths valid}; ``on``: {module: the xA of its axles})"""
     if all(ok.get(k) for k in on) and all(get.get(f"lHf[{h}]") is not None and get.get(f"lHr[{h}]") is not None
                                         for h in range(1, nm)):
         import numpy as np
@@ -230,19 +249,6 @@ def _dynamics(values, get):
                                                             f"(from module {k + 1})" if passed else "")
                                          + " do not rest between its supports"))
             passed = float(F[-1]) if hinge else 0.0
-    # yaw inertia against mass and body length
-    for k in range(1, nm + 1):
-        if not ok.get(k):
-            continue
-        m, J = get[f"m[{k}]"], get[f"Jz[{k}]"]
-        L = get[f"lFront[{k}]"] + get[f"lRear[{k}]"]
-        ratio = J / (m * L * L)
-        if not J_BAND[0] <= ratio <= J_BAND[1]:
-            probs.append(Problem(f"Jz[{k}]", J, f"implausible for m[{k}] = {m:g} kg and a body {L:g} m long: "
-                                                f"J/(m L^2) = {ratio:.3g}, expected {J_BAND[0]:.3g}..{J_BAND[1]:.3g} "
-                                                f"(a uniform box: about 1/12, m (L^2 + w^2)/12 = "
-                                                f"{m * (L * L + get[f'width[{k}]'] ** 2) / 12:.4g} kg.m2)"))
-    return probs
 
 
 def _kinematics(values, get):
@@ -266,16 +272,22 @@ def _kinematics(values, get):
     return probs
 
 
-def check_file(path, model=None, converted=None):
+def check_file(path, model=None, converted=None, units=None):
     """(model, [Problem]) of an .ssv file. A value given with a unit is checked
     in the unit of the FMU's variable (artibus.bench.units; ``converted``:
-    filled with {name: (value, unit, converted value, the variable's unit)})."""
+    filled with {name: (value, unit, converted value, the variable's unit)};
+    ``units``: with {unit: its definition, the file's, else the FMU's, or None}
+    of the units the file's values are given in)."""
     from artibus.bench.parameters import read_parameters
-    from artibus.bench.units import Quantity
+    from artibus.bench.units import Quantity, fmu_units
     values = read_parameters(path, keep_units=True)
     model = model or _model({k: getattr(v, "value", v) for k, v in values.items()})
     if any(isinstance(v, Quantity) for v in values.values()):
         md = _fmu_md(model) if model else None
+        fmu_defs = fmu_units(md) if md is not None else {}
+        for v in values.values():
+            if isinstance(v, Quantity) and units is not None:
+                units.setdefault(v.unit, v.definitions.get(v.unit) or fmu_defs.get(v.unit))
         if md is not None:
             from artibus.bench.units import convert
             variables = {v.name: v for v in md.modelVariables}
@@ -302,9 +314,11 @@ def _fmu_md(model):
 
 def check_bench(bench, out=print):
     """``artibus check BENCH``: what of the bench the runner does not apply, what
-    is artibus-specific (with what another master does instead), and the
-    values converted from the unit their file gives to the FMU's. 0: the bench
-    reads (its values convert, its bindings resolve), else an ArtibusError."""
+    is artibus-specific (with what another master does instead), the units its
+    values are given in (their factors) and the values converted from the unit
+    their file gives to the FMU's. 0: the bench reads (its values convert, its
+    bindings resolve, each of its variable's type and range, each input with one
+    source: artibus.bench.rules, as `artibus run` checks them), else an ArtibusError."""
     from artibus.bench import ssp as ssp_mod
     from artibus.bench.portability import artibus_specific, not_applied
     path = ssp_mod.ssp_path(bench)
@@ -324,12 +338,22 @@ def check_bench(bench, out=print):
         from artibus.bench.ssp2 import network_lines
         for line in network_lines(path):
             out(f"  {line}")
+    _print_units(b.units, "  ", out, "  ")
     conv = [(p, k, v) for p, c in b.components.items() for k, v in c.converted.items()]
     if conv:
         out(f"  values converted to the FMU's units ({len(conv)}):")
         for p, k, (raw, unit, x, target) in conv:
             out(f"    {p}.{k} = {raw:g} {unit} -> {x:.10g} {target} (from {b.components[p].origins.get(k, '?')})")
     return 0
+
+
+def _print_units(units, head, out, indent=""):
+    """the table of the units values are given in (artibus.bench.units.unit_table), if any"""
+    if units:
+        from artibus.bench.units import unit_table
+        out(f"{head}units the values are given in ({len(units)}), in the SI base units:")
+        for line in unit_table(units):
+            out(f"{indent}  {line}")
 
 
 def _is_bench(name):
@@ -345,11 +369,12 @@ def main(paths, model=None, out=print):
         if _is_bench(p):
             bad += check_bench(p, out)
             continue
-        converted = {}
-        m, probs = check_file(p, model, converted)
+        converted, units = {}, {}
+        m, probs = check_file(p, model, converted, units)
         name = Path(p)
         for k, (raw, unit, x, target) in converted.items():
             out(f"{name}: {k} = {raw:g} {unit}: converted to {x:.10g} {target}")
+        _print_units(units, f"{name}: ", out)
         for pr in probs:
             out(pr.text(name))
         if probs:

@@ -39,40 +39,39 @@ def read_parameters(ssv, fmu=None, converted=None, keep_units=False):
     an FMU a value with a unit is the number given (``keep_units``: a
     Quantity, converted where the variable is known, as ``artibus run --ssv``)."""
     from lxml import etree
-    from artibus.bench.units import Quantity, declared_unit, fmu_units, ssp_units, to_unit
+    from artibus.bench.units import Quantity, declared_unit, ssp_units, with_unit
     path = find_ssv(ssv)
     try:
         pset = read_ssv(str(path), validate=True)
-        defs = ssp_units(etree.parse(str(path)).getroot(), str(path))
-    except ArtibusError:
-        raise
+        root = etree.parse(str(path)).getroot()
     except Exception as e:  # lxml / XSD errors carry the line
         raise ArtibusError(f"{path}: not a valid SSP parameter-value file: {e}") from None
+    defs = ssp_units(root, str(path))
+    # each value's line, by its name (the last of a name is the one that counts, as in FMPy's list)
+    lines = {q.get("name"): q.sourceline for q in root.iterfind("{*}Parameters/{*}Parameter")}
     values, units = {}, {}
     for p in pset.parameters:
         try:
             values[p.name] = typed(p.type, p.value)
         except ValueError:
-            raise ArtibusError(f"{path}: Parameter '{p.name}': {p.type} value "
+            raise ArtibusError(f"{path}:{lines.get(p.name, '?')}: Parameter '{p.name}': {p.type} value "
                                f"{p.value!r} is not a {p.type}") from None
         if p.type == "Real" and p.unit:
             units[p.name] = p.unit
     if fmu is not None:
         md = fmu if hasattr(fmu, "modelVariables") else _model_description(fmu)
-        variables, fmu_defs = {v.name: v for v in md.modelVariables}, fmu_units(md)
+        variables = {v.name: v for v in md.modelVariables}
         for name, unit in units.items():
             v = variables.get(name)
-            if v is None or v.type != "Real":
-                continue                    # check_against names what is wrong with it
-            x = to_unit(values[name], unit, defs, declared_unit(v), fmu_defs,
-                        f"{path}: Parameter '{name}' = {values[name]!r} {unit}")
+            x = with_unit(values[name], unit, defs, v, md,
+                          f"{path}:{lines.get(name, '?')}: Parameter '{name}' = {values[name]!r} {unit}")
             if converted is not None and x is not values[name]:
                 converted[name] = (values[name], unit, x, declared_unit(v))
             values[name] = x
-        check_against(values, md, str(path))
+        check_against(values, md, str(path), origins={n: f"{path}:{k}" for n, k in lines.items()})
     elif keep_units:
         for name, unit in units.items():
-            values[name] = Quantity(values[name], unit, defs, str(path))
+            values[name] = Quantity(values[name], unit, defs, f"{path}:{lines.get(name, '?')}")
     return values
 
 
@@ -223,15 +222,21 @@ def check_against(values, fmu, source, prefix="", origins=None):
     element the value came from), the parameter (``prefix`` + name, e.g. a
     component path) and the value. The values are replaced by their typed
     form in ``values``."""
+    from artibus.bench.units import Quantity
     md = fmu if hasattr(fmu, "modelVariables") else _model_description(fmu)
     variables = {v.name: v for v in md.modelVariables}
     for name, value in list(values.items()):
         v = variables.get(name)
-        label = f"{(origins or {}).get(name, source)}: Parameter '{prefix}{name}' = {value!r}"
+        quantity = isinstance(value, Quantity)        # its file's line, and "2.0 mm", not the record
+        origin = value.origin if quantity else (origins or {}).get(name, source)
+        label = f"{origin}: Parameter '{prefix}{name}' = {value if quantity else repr(value)}"
         if v is None:
             raise ArtibusError(f"{label}: {no_variable(md, name)}")
         if v.causality not in ("parameter", "input"):
             raise ArtibusError(f"{label}: it is an {v.causality} of {md.modelName} and cannot be set")
+        if quantity:                         # (one on a Real is converted before: artibus.bench.rules)
+            raise ArtibusError(f"{label}: a value with a unit ('{value.unit}') for {md.modelName}.{name}, an "
+                               f"{v.type}: a unit belongs to a Real value (give the value without a unit)")
         try:
             value = values[name] = coerce(v, value)
         except ValueError as e:

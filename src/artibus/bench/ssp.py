@@ -20,7 +20,10 @@ Parameter bindings are applied as SSP 1.0 (5.3.5) says: on components and on
 systems at every level (names hierarchical, ``prefix`` put in front before the
 mapping, a system connector's value to the variables it is connected to), a
 later binding over an earlier one, a higher level over a lower one; a Real
-value with a unit is converted to the FMU variable's unit (artibus.bench.units).
+value with a unit is converted to the FMU variable's unit (artibus.bench.units);
+every value is checked against its FMU and every input has one source, by the
+rule of SSP 1.0 and 2.0 benches alike (artibus.bench.rules), so that `artibus
+check` refuses what `artibus run` refuses.
 
 Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships; an SSP 2.0
 .ssd against the SSP 2.0 XSDs, its FMI-LS-BUS network left out: artibus.bench.ssp2);
@@ -36,11 +39,13 @@ from pathlib import Path
 from lxml import etree
 
 from artibus.base import ROOT, ArtibusError, fmu_dir, parse_real
+from artibus.bench.bindings import Pack, bound_values
 from artibus.bench.fmi import build_of, fmi_choice, pack_file
 from artibus.bench.ssp2 import clocked   # an FMI-LS-BUS component keeps its FMI 3.0 build
 from artibus.bench.ssd import (MAPPINGS, NS, _component_sources, _compose, _depth,  # noqa: F401
                                _number, _sources_inside_components, map_transformation,
                                model_description)
+from artibus.bench.rules import bind_component, one_source
 from artibus.bench.units import declared_unit, fmu_units, ssp_units, to_unit
 
 BENCH_DIR = ROOT / "ssp" / "benches"
@@ -310,14 +315,15 @@ class Bench:
     stop_time: float | None = None
     can: dict | None = None        # the CAN network: {"source" (DBC in the .ssp), "period", "line"}
     version: str = "1.0"           # the .ssd's SSP version: "2.0" may hold an FMI-LS-BUS network (ssp2)
+    units: dict = field(default_factory=dict)   # unit -> its UnitDef (None: unknown), of the values with one
 
 
 def read(ssp):
     """A .ssp as components (with their bound parameters) and connections
-    resolved through nested systems to component variables."""
-    from fmpy.ssp.ssd import Component as SsdComponent, System
+    resolved through nested systems to component variables: the archive
+    checked, the .ssd read (_Reading's steps), each component's values bound
+    and each input's source checked (artibus.bench.rules)."""
     from artibus.bench.ssp2 import read_ssd
-    from artibus.bench.parameters import typed
 
     ssp = str(ssp)
     where = f"{ssp}/SystemStructure.ssd"
@@ -351,124 +357,53 @@ def read(ssp):
     if can is not None:
         bench.can = {"source": can.get("source"), "period": can.get("period"), "line": can.sourceline}
 
-    ssd_units = ssp_units(root, where)
+    r = _Reading(Pack(ssp, where, ssp_units(root, where)), names, bench, xml_systems)
+    r.walk(ssd.system, "")
+    r.collect_edges(ssd.system)
+    r.connect()
+    r.system_bindings(ssd.system.name)
+    for path, c in bench.components.items():
+        bind_component(ssp, c, r.given_units[path], bench.units)
+    one_source((".".join(c.start), ".".join(c.end),
+                f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}")
+               for c in bench.connections)
+    return bench
 
-    def bound_values(element, xml_element, what, origins=None, units=None):
-        """origins: filled with {name: where its value comes from (file, element)};
-        units: with {name: (unit, the file's unit definitions, a mapping's
-        LinearTransformation to apply after the conversion or None, origin)} of
-        the values given with a unit (converted to the FMU's unit at the end)."""
-        values = {}
-        xml_bindings = xml_element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS)
-        for b, xb in zip(element.parameterBindings, xml_bindings):
-            prefix = b.prefix or ""
-            source, given = {}, {}
-            origin = (f"{ssp}/{xb.get('source')}" if xb.get("source") else f"{where}:{xb.sourceline}")
-            if xb.get("source"):
-                with zipfile.ZipFile(ssp) as z:
-                    pset_xml = [etree.fromstring(z.read(xb.get("source")))]
-            else:
-                pset_xml = xb.findall("ssd:ParameterValues/ssv:ParameterSet", NS)
-            if xb.find("ssd:ParameterMapping", NS) is not None:
-                m = xb.find("ssd:ParameterMapping", NS)
-                origin += f" mapped by {ssp}/{m.get('source')}" if m.get("source") else f" mapped at {where}:{m.sourceline}"
-            for pset, px in zip(b.parameterValues, pset_xml):
-                defs = {**ssd_units, **ssp_units(px, origin)}
-                for p in pset.parameters:
-                    try:
-                        source[prefix + p.name] = typed(p.type, p.value)
-                    except ValueError:
-                        raise ArtibusError(f"{where}: {what}: parameter '{p.name}' = {p.value!r} "
-                                           f"is not a {p.type}") from None
-                    if p.type == "Real" and p.unit:
-                        given[prefix + p.name] = (p.unit, defs)
-            mapping = xb.find("ssd:ParameterMapping", NS)
-            got, then = (source, {}) if mapping is None else mapped(source, mapping, what, given)
-            values.update(got)
-            if origins is not None:
-                origins.update(dict.fromkeys(got, origin))
-            if units is not None:
-                for name in got:
-                    src = name if mapping is None else then[name][0]
-                    if src in given and (mapping is None or not then[name][2]):
-                        units[name] = (*given[src], None if mapping is None else then[name][1], origin)
-                    else:
-                        units.pop(name, None)
-        return values
 
-    def mapped(source, mapping, what, given=()):
-        """SSP's parameter mapping (SSP 1.0, ssd:ParameterMapping, SSM): only
-        the mapped values are applied, under their target names, after the
-        entry's linear transformation; the others are not applied. The mapping
-        is inline or a .ssm file in the .ssp. A value with a unit (in
-        ``given``) is converted to the target's unit first and transformed
-        after (SSP 1.0, 7.1.1), unless the entry says suppressUnitConversion:
-        returns ({target: value}, {target: (source, its LinearTransformation
-        (factor, offset) still to apply or None, unit conversion suppressed)})."""
-        ref = mapping.get("source")
-        if ref is None:
-            file, root_m = where, mapping.find("ssm:ParameterMapping", NS)
-            entries = [] if root_m is None else root_m.findall("ssm:MappingEntry", NS)
-        else:
-            file = f"{ssp}/{ref}"    # there: FMPy's reader has read and validated it
-            with zipfile.ZipFile(ssp) as z:
-                entries = etree.fromstring(z.read(ref)).findall("ssm:MappingEntry", NS)
-        out, then = {}, {}
-        for e in entries:
-            src, dst = e.get("source"), e.get("target")
-            head = f"{file}:{e.sourceline}: {what}: MappingEntry source=\"{src}\" target=\"{dst}\""
-            if src not in source:
-                raise ArtibusError(f"{head}: the parameter source has no '{src}'")
-            if dst in out:
-                raise ArtibusError(f"{head}: '{dst}' is mapped to twice")
-            value = source[src]
-            suppress = e.get("suppressUnitConversion") in ("true", "1")
-            later = None
-            for tr in e:
-                kind = etree.QName(tr).localname if isinstance(tr.tag, str) else None
-                if kind == "LinearTransformation":
-                    if not isinstance(value, float):
-                        raise ArtibusError(f"{head}: a LinearTransformation needs a Real, got {value!r}")
-                    factor, offset = _number(tr, "factor", 1.0, file), _number(tr, "offset", 0.0, file)
-                    if src in given and not suppress:
-                        later = (factor, offset)         # after the unit's conversion
-                    else:
-                        value = factor * value + offset
-                elif kind in MAPPINGS:
-                    mkind, table = map_transformation(e, head)
-                    ok = {"Boolean": isinstance(value, bool),
-                          "Integer": isinstance(value, int) and not isinstance(value, bool),
-                          "Enumeration": isinstance(value, (str, int)) and not isinstance(value, bool)}[mkind]
-                    if not ok:
-                        raise ArtibusError(f"{head}: the {kind} does not apply to the value {value!r}")
-                    value = table.get(value, value)
-                elif kind not in (None, "Annotations"):
-                    raise ArtibusError(f"{head}: {kind} is not supported (LinearTransformation and "
-                                       f"the Boolean-, Integer- and EnumerationMappingTransformation are)")
-            out[dst] = value
-            then[dst] = (src, later, suppress)
-        return out, then
+@dataclass
+class _Reading:
+    """read's steps over one .ssp and what they build up: the components with the values
+    bound on them (walk), the connections resolved through the systems' connectors to
+    component variables (collect_edges, connect), the values bound at system level
+    (system_bindings)"""
+    pack: Pack                     # the .ssp (artibus.bench.bindings)
+    names: set                     # the .ssp's members
+    bench: Bench                   # being filled
+    xml_systems: dict              # system path ("" the root, "Sub", "Sub.Inner") -> its lxml element
+    inherited: list = field(default_factory=list)    # (prefix, values, origins, units, xml) of each system
+    given_units: dict = field(default_factory=dict)  # component path -> {var: (unit, defs, then, origin)}
+    edges: list = field(default_factory=list)        # (a, b, factor, offset, line, route, mapping)
+    outgoing: dict = field(default_factory=dict)     # node -> [(b, factor, offset, line, route, mapping)]
 
-    # system-level bindings, with names relative to that system: "Comp.var", "Sub.Comp.var",
-    # or a system connector's ("Sub.connector", "connector"): applied after the components' own
-    inherited = []
-    given_units = {}
-
-    def walk(system, prefix):
-        xml = xml_systems[prefix]
+    def walk(self, system, prefix):
+        """the components of ``system`` (FMPy's) and its sub-systems, with the values bound on
+        them; the system's own bindings kept for system_bindings"""
+        from fmpy.ssp.ssd import Component as SsdComponent, System
+        where, xml = self.pack.where, self.xml_systems[prefix]
         sys_origins, sys_units = {}, {}
-        inherited.append((prefix, bound_values(system, xml, f"System '{system.name}'", sys_origins, sys_units),
-                          sys_origins, sys_units, xml))
+        self.inherited.append((prefix, bound_values(self.pack, system, xml, f"System '{system.name}'", sys_origins,
+                                                    sys_units), sys_origins, sys_units, xml))
         for el in system.elements:
             path = f"{prefix}.{el.name}" if prefix else el.name
             if isinstance(el, SsdComponent):
                 xml_el = xml.find(f"ssd:Elements/ssd:Component[@name='{el.name}']", NS)
-                if el.source not in names:
+                if el.source not in self.names:
                     raise ArtibusError(f"{where}:{xml_el.sourceline}: Component '{path}': source "
                                        f"\"{el.source}\" is not in the .ssp")
                 c = Component(path=path, source=el.source, element=el, line=xml_el.sourceline)
-                given_units[path] = {}
-                c.parameters = bound_values(el, xml_el, f"Component '{path}'", c.origins, given_units[path])
+                self.given_units[path] = {}
+                c.parameters = bound_values(self.pack, el, xml_el, f"Component '{path}'", c.origins,
+                                            self.given_units[path])
                 c.outputs = [k.name for k in el.connectors if k.kind == "output"]
                 c.connectors = [k.name for k in el.connectors]
                 ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
@@ -477,123 +412,102 @@ def read(ssp):
                     if not c.step > 0:
                         raise ArtibusError(f"{where}:{ann.sourceline}: Component '{path}': "
                                            f"stepSize = {ann.get('stepSize')} must be > 0")
-                bench.components[path] = c
+                self.bench.components[path] = c
             elif isinstance(el, System):
-                walk(el, path)
+                self.walk(el, path)
 
-    walk(ssd.system, "")
-
-    # connections: resolve system connectors so each ends at a component variable
-    raw = []  # (system prefix, Connection element, xml line)
-
-    def collect(system, prefix):
-        xml = xml_systems[prefix]
-        xml_conns = xml.findall("ssd:Connections/ssd:Connection", NS)
-        for conn, xc in zip(system.connections, xml_conns):
-            raw.append((prefix, conn, xc))
-        for el in system.elements:
-            if isinstance(el, System):
-                collect(el, f"{prefix}.{el.name}" if prefix else el.name)
-
-    collect(ssd.system, "")
-
-    def node(prefix, element, connector):
+    def _node(self, prefix, element, connector):
         if element is None:            # a connector of the system itself
             return ("sys", prefix, connector)
         path = f"{prefix}.{element}" if prefix else element
-        if path in bench.components:
+        if path in self.bench.components:
             return ("comp", path, connector)
         return ("sys", path, connector)
 
-    edges = []
-    for prefix, conn, xc in raw:
-        line = xc.sourceline
-        a = node(prefix, conn.startElement, conn.startConnector)
-        b = node(prefix, conn.endElement, conn.endConnector)
-        label = (f"{where}:{line}: Connection {conn.startElement}.{conn.startConnector}"
-                 f" -> {conn.endElement}.{conn.endConnector}")
-        for n in (a, b):
-            if n[0] == "sys" and n[1] not in xml_systems:
-                raise ArtibusError(f"{label}: no element '{n[1]}'")
-            declared = (bench.components[n[1]].connectors if n[0] == "comp"
-                        else [k.get("name") for k in xml_systems[n[1]].findall("ssd:Connectors/ssd:Connector", NS)])
-            if n[2] not in declared:
-                raise ArtibusError(f"{label}: '{n[1] or 'the system'}' declares no connector '{n[2]}'")
-        # (FMPy's reader looks for the transformation in the wrong namespace: read it here)
-        lt = xc.find("ssc:LinearTransformation", NS)
-        factor = _number(lt, "factor", 1.0, where) if lt is not None else 1.0
-        offset = _number(lt, "offset", 0.0, where) if lt is not None else 0.0
-        mapping = map_transformation(xc, label)
-        route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
-        if route is not None:
-            route = {"message": route.get("message"), "signal": route.get("signal"), "line": route.sourceline}
-        edges.append((a, b, factor, offset, line, route, mapping))
+    def _raw(self, system, prefix=""):
+        """(system prefix, FMPy's Connection, its lxml element) of every system's connections"""
+        from fmpy.ssp.ssd import System
+        xml_conns = self.xml_systems[prefix].findall("ssd:Connections/ssd:Connection", NS)
+        yield from ((prefix, conn, xc) for conn, xc in zip(system.connections, xml_conns))
+        for el in system.elements:
+            if isinstance(el, System):
+                yield from self._raw(el, f"{prefix}.{el.name}" if prefix else el.name)
 
-    # follow chains through system connectors: comp -> sys ... -> comp
-    outgoing = {}
-    for a, b, f, o, line, route, mp in edges:
-        outgoing.setdefault(a, []).append((b, f, o, line, route, mp))
+    def collect_edges(self, system):
+        """every connection of every system as an edge between nodes (a component's or a
+        system's connector), each end checked to be declared"""
+        where, xml_systems = self.pack.where, self.xml_systems
+        for prefix, conn, xc in self._raw(system):
+            line = xc.sourceline
+            a = self._node(prefix, conn.startElement, conn.startConnector)
+            b = self._node(prefix, conn.endElement, conn.endConnector)
+            label = (f"{where}:{line}: Connection {conn.startElement}.{conn.startConnector}"
+                     f" -> {conn.endElement}.{conn.endConnector}")
+            for n in (a, b):
+                if n[0] == "sys" and n[1] not in xml_systems:
+                    raise ArtibusError(f"{label}: no element '{n[1]}'")
+                declared = (self.bench.components[n[1]].connectors if n[0] == "comp" else
+                            [k.get("name") for k in xml_systems[n[1]].findall("ssd:Connectors/ssd:Connector", NS)])
+                if n[2] not in declared:
+                    raise ArtibusError(f"{label}: '{n[1] or 'the system'}' declares no connector '{n[2]}'")
+            # (FMPy's reader looks for the transformation in the wrong namespace: read it here)
+            lt = xc.find("ssc:LinearTransformation", NS)
+            factor = _number(lt, "factor", 1.0, where) if lt is not None else 1.0
+            offset = _number(lt, "offset", 0.0, where) if lt is not None else 0.0
+            mapping = map_transformation(xc, label)
+            route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
+            if route is not None:
+                route = {"message": route.get("message"), "signal": route.get("signal"), "line": route.sourceline}
+            self.edges.append((a, b, factor, offset, line, route, mapping))
+        for a, b, f, o, line, route, mp in self.edges:
+            self.outgoing.setdefault(a, []).append((b, f, o, line, route, mp))
 
-    def ends(n, f, o, line, route, mp, seen):
+    def ends(self, n, f, o, line, route, mp, seen):
+        """the component variables node n leads to, through system connectors: comp -> sys ... -> comp"""
         if n[0] == "comp":
             yield n, f, o, line, route, mp
             return
         if n in seen:
             return
-        for m, f2, o2, l2, r2, mp2 in outgoing.get(n, []):
-            yield from ends(m, f2 * f, f2 * o + o2, line, route or r2, _compose(mp, mp2, line), seen | {n})
+        for m, f2, o2, l2, r2, mp2 in self.outgoing.get(n, []):
+            yield from self.ends(m, f2 * f, f2 * o + o2, line, route or r2, _compose(mp, mp2, line), seen | {n})
 
-    for a, b, f, o, line, route, mp in edges:
-        if a[0] != "comp":
-            continue
-        for end, f2, o2, l2, r2, mp2 in ends(b, f, o, line, route, mp, frozenset()):
-            bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
-                                                factor=f2, offset=o2, line=l2, can=r2, mapping=mp2))
+    def connect(self):
+        """the bench's connections: each from a component's variable to those it reaches"""
+        for a, b, f, o, line, route, mp in self.edges:
+            if a[0] != "comp":
+                continue
+            for end, f2, o2, l2, r2, mp2 in self.ends(b, f, o, line, route, mp, frozenset()):
+                self.bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
+                                                         factor=f2, offset=o2, line=l2, can=r2, mapping=mp2))
 
-    # system-level bindings (SSP 1.0, 5.3.5): a higher level takes precedence over a lower one
-    # (the deepest sub-system's applied first, the root's last), a later binding over an earlier
-    # one at the same level; a name is a component's variable by its hierarchical name or a
-    # system connector, which applies to the component variables it is connected to
-    for prefix, values, sys_origins, sys_units, xml in sorted(inherited, key=lambda i: -_depth(i[0])):
-        for name, value in values.items():
-            full = f"{prefix}.{name}" if prefix else name
-            targets = [(p, full[len(p) + 1:]) for p in bench.components if full.startswith(p + ".")]
-            sys_path, _, conn = full.rpartition(".")
-            if sys_path in xml_systems and conn in [k.get("name") for k in
-                                                    xml_systems[sys_path].findall("ssd:Connectors/ssd:Connector", NS)]:
-                node_ = ("sys", sys_path, conn)
-                targets += [(n[1], n[2]) for n, *_ in ends(node_, 1.0, 0.0, 0, None, None, frozenset())]
-                targets += [(a[1], a[2]) for a, b, *_ in edges if b == node_ and a[0] == "comp"]
-            if not targets:
-                raise ArtibusError(f"{sys_origins.get(name, where)}: parameter '{name}' = {value!r} bound at "
-                                   f"system '{prefix or ssd.system.name}': no component variable or system "
-                                   f"connector of that name (components: {', '.join(bench.components)})")
-            for comp_path, var in dict.fromkeys(targets):
-                c = bench.components[comp_path]
-                c.parameters[var] = value
-                c.origins[var] = sys_origins.get(name, where)
-                if name in sys_units:
-                    given_units[comp_path][var] = sys_units[name]
-                else:
-                    given_units[comp_path].pop(var, None)
-
-    # values given with a unit, in the unit of the FMU's variable (SSP 1.0: ssv:Real unit=)
-    for path, given in given_units.items():
-        c = bench.components[path]
-        if not given:
-            continue
-        md = model_description(ssp, c.source)
-        fmu_defs = fmu_units(md)
-        variables = {v.name: v for v in md.modelVariables}
-        for var, (unit, defs, then, origin) in given.items():
-            v, raw = variables.get(var), c.parameters[var]
-            if v is None or v.type != "Real" or not isinstance(raw, float):
-                continue                     # the runner's check names what is wrong with it
-            target = declared_unit(v)
-            x = to_unit(raw, unit, defs, target, fmu_defs, f"{origin}: Parameter '{path}.{var}' = {raw!r} {unit}")
-            if x is not raw:
-                c.converted[var] = (raw, unit, x, target)
-            if then is not None:
-                x = then[0] * x + then[1]
-            c.parameters[var] = x
-    return bench
+    def system_bindings(self, root_name):
+        """the values bound on systems (SSP 1.0, 5.3.5): a higher level takes precedence over a
+        lower one (the deepest sub-system's applied first, the root's last), a later binding
+        over an earlier one at the same level; a name ("Comp.var", "Sub.Comp.var", relative to
+        its system) is a component's variable by its hierarchical name or a system connector
+        ("Sub.connector", "connector"), which applies to the component variables it is
+        connected to; applied after the components' own"""
+        where, components = self.pack.where, self.bench.components
+        for prefix, values, sys_origins, sys_units, xml in sorted(self.inherited, key=lambda i: -_depth(i[0])):
+            for name, value in values.items():
+                full = f"{prefix}.{name}" if prefix else name
+                targets = [(p, full[len(p) + 1:]) for p in components if full.startswith(p + ".")]
+                sys_path, _, conn = full.rpartition(".")
+                if sys_path in self.xml_systems and conn in [
+                        k.get("name") for k in self.xml_systems[sys_path].findall("ssd:Connectors/ssd:Connector", NS)]:
+                    node_ = ("sys", sys_path, conn)
+                    targets += [(n[1], n[2]) for n, *_ in self.ends(node_, 1.0, 0.0, 0, None, None, frozenset())]
+                    targets += [(a[1], a[2]) for a, b, *_ in self.edges if b == node_ and a[0] == "comp"]
+                if not targets:
+                    raise ArtibusError(f"{sys_origins.get(name, where)}: parameter '{name}' = {value!r} bound at "
+                                       f"system '{prefix or root_name}': no component variable or system "
+                                       f"connector of that name (components: {', '.join(components)})")
+                for comp_path, var in dict.fromkeys(targets):
+                    c = components[comp_path]
+                    c.parameters[var] = value
+                    c.origins[var] = sys_origins.get(name, where)
+                    if name in sys_units:
+                        self.given_units[comp_path][var] = sys_units[name]
+                    else:
+                        self.given_units[comp_path].pop(var, None)

@@ -23,7 +23,10 @@ What reads what:
   members Tx_Data, Tx_Clock, Rx_Data, Rx_Clock; Tx connected to Rx and vice versa, the variable
   types equal; 2____common_concepts.adoc "Composition with dedicated Bus Simulation FMU").
 
-A bad .ssd is an ArtibusError naming the file, the line, the element and the value.
+The nodes' and the bus's bindings and the inputs' sources follow the rule of every bench,
+SSP 1.0's too (artibus.bench.rules: each value of its variable's type and in its range, a unit
+converted, one source per input); each connector's clock association names its variable's
+clock. A bad .ssd is an ArtibusError naming the file, the line, the element and the value.
 """
 import copy
 import io
@@ -34,8 +37,11 @@ from pathlib import Path
 
 from lxml import etree
 
-from artibus.base import ArtibusError, parse_integer, parse_real
+from artibus.base import ArtibusError, parse_real
+from artibus.bench.fmi import fmi2_view
+from artibus.bench.rules import bind, one_source, ssv_value
 from artibus.bench.ssd import NS
+from artibus.bench.units import ssp_units
 
 SCHEMA_DIR = Path(__file__).parent / "schema" / "ssp2"
 #: the LS-BUS CAN MIME type of Rx_Data/Tx_Data (fmi-ls-bus 1.0, 4_4_1_can.adoc)
@@ -157,10 +163,12 @@ class Fmu3:
     variables: dict                 # name -> its modelDescription.xml element
     terminals: dict                 # network terminal name -> {member: variable name}
     is_bus: bool                    # fmi-ls-manifest.xml: isBusSimulationFMU="true"
+    md: object = None               # FMPy's description, in FMI 2.0's type names (bindings: artibus.bench.rules)
 
 
 def read_fmu(file, where):
     """file: a path or a file object of the FMU"""
+    from fmpy import read_model_description
     try:
         with zipfile.ZipFile(file) as z:
             md = etree.fromstring(z.read("modelDescription.xml"))
@@ -169,15 +177,21 @@ def read_fmu(file, where):
                    if "terminalsAndIcons/terminalsAndIcons.xml" in names else None)
             m = "extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml"
             manifest = etree.fromstring(z.read(m)) if m in names else None
+        if hasattr(file, "seek"):
+            file.seek(0)
+        described = fmi2_view(read_model_description(file, validate=False), strict=False)
     except (zipfile.BadZipFile, KeyError, OSError, etree.XMLSyntaxError) as e:
         raise ArtibusError(f"{where}: not a readable FMU: {e}") from None
+    except Exception as e:            # FMPy's reader: not FMI XML
+        raise ArtibusError(f"{where}: not a readable FMU: {type(e).__name__}: {e}") from None
     variables = {v.get("name"): v for v in md.iterfind("ModelVariables/*")}
     terminals = {}
     for t in [] if tai is None else tai.iter("Terminal"):
         if t.get("terminalKind") == NETWORK_TERMINAL:
             terminals[t.get("name")] = {m.get("memberName"): m.get("variableName")
                                         for m in t.findall("TerminalMemberVariable")}
-    return Fmu3(variables, terminals, manifest is not None and manifest.get("isBusSimulationFMU") == "true")
+    return Fmu3(variables, terminals, manifest is not None and manifest.get("isBusSimulationFMU") == "true",
+                described)
 
 
 @dataclass
@@ -197,40 +211,44 @@ def _label(c):
 
 
 def _value(el, where):
-    """an inline ssv:Parameter's value, typed as its element says"""
-    v = next((c for c in el if isinstance(c.tag, str)), None)
-    kind, text = (etree.QName(v).localname, v.get("value")) if v is not None else (None, None)
-    try:
-        if kind in ("Real", "Float64", "Float32"):
-            return parse_real(text)
-        if kind in ("Integer", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"):
-            return parse_integer(text)
-        if kind == "Boolean" and text in ("true", "false", "1", "0"):
-            return text in ("true", "1")
-    except (TypeError, ValueError):
-        pass
-    raise ArtibusError(f"{where}:{el.sourceline}: <Parameter name=\"{el.get('name')}\"> <{kind} value=\"{text}\">: "
-                       "an LS-BUS FMU's parameter must be a Real, an integer or a Boolean")
+    """an inline ssv:Parameter's (value as its element types it, the unit given with it or None):
+    a number or a Boolean (artibus.bench.rules.ssv_value)"""
+    value, unit, kind = ssv_value(el, f"{where}:{el.sourceline}")
+    if kind in ("Enumeration", "String", "Binary"):
+        raise ArtibusError(f"{where}:{el.sourceline}: <Parameter name=\"{el.get('name')}\"> <{kind} value="
+                           f"\"{value}\">: an LS-BUS FMU's parameter must be a Real, an integer or a Boolean")
+    return value, unit
 
 
-def _parameters(comp, where, fmu=None):
-    """the component's inline parameter values; with fmu (read_fmu's), each checked to be a
-    parameter or an input of the FMU"""
-    out = {}
+def _parameters(comp, where, fmu=None, units=None):
+    """the component's inline parameter values; with fmu (read_fmu's), each bound by the rule
+    of every bench (artibus.bench.rules.bind: a parameter or an input of the FMU, of its type,
+    in its range, a unit converted; ``units``: the .ssd's own unit definitions)"""
+    out, origins, given = {}, {}, {}
     for b in comp.iterfind("ssd:ParameterBindings/ssd:ParameterBinding", NS):
         if b.get("source") is not None or b.find("ssd:ParameterMapping", NS) is not None:
             raise ArtibusError(f"{where}:{b.sourceline}: <ParameterBinding source=\"{b.get('source')}\"> of the "
                                f"FMI-LS-BUS component {comp.get('name')}: only inline parameter values (without "
                                "a mapping) are applied to LS-BUS FMUs")
-        for p in b.iterfind("ssd:ParameterValues/ssv:ParameterSet/ssv:Parameters/ssv:Parameter", NS):
-            v = fmu.variables.get(p.get("name")) if fmu is not None else None
-            if fmu is not None and (v is None or v.get("causality") not in ("parameter", "input")):
-                what = "no such variable" if v is None else f"a variable of causality {v.get('causality')}"
-                raise ArtibusError(f"{where}:{p.sourceline}: <Parameter name=\"{p.get('name')}\"> of the FMI-LS-BUS "
-                                   f"component {comp.get('name')}: {what} in {comp.get('source')} (a parameter "
-                                   "or an input is set)")
-            out[p.get("name")] = _value(p, where)
-    return out
+        for pset in b.iterfind("ssd:ParameterValues/ssv:ParameterSet", NS):
+            defs = {**(units or {}), **ssp_units(pset, where)}
+            for p in pset.iterfind("ssv:Parameters/ssv:Parameter", NS):
+                v = fmu.variables.get(p.get("name")) if fmu is not None else None
+                if fmu is not None and (v is None or v.get("causality") not in ("parameter", "input")):
+                    what = "no such variable" if v is None else f"a variable of causality {v.get('causality')}"
+                    raise ArtibusError(f"{where}:{p.sourceline}: <Parameter name=\"{p.get('name')}\"> of the "
+                                       f"FMI-LS-BUS component {comp.get('name')}: {what} in {comp.get('source')} "
+                                       "(a parameter or an input is set)")
+                name = p.get("name")
+                out[name], unit = _value(p, where)
+                origins[name] = f"{where}:{p.sourceline}"
+                if unit:
+                    given[name] = (unit, defs)
+                else:
+                    given.pop(name, None)
+    if fmu is None:
+        return out
+    return bind(out, fmu.md, origins, prefix=f"{comp.get('name')}.", units=given)
 
 
 def _check_connector(comp, conn, var, where):
@@ -261,6 +279,37 @@ def _check_connector(comp, conn, var, where):
     return kind, t
 
 
+def _check_clocks(comp, fmu, kinds, where):
+    """each connector's clock associations (SSP 2.0 5.3.2, ssd:Connector's ssd:Clock name=: a
+    clock of the same element) against the clocks of its FMU variable (FMI 3.0, a clocked
+    variable's clocks=, the value references of its Clock variables): a clocked variable's
+    connector names each of its clocks, each an ssc:Clock connector of the component; no
+    other association (kinds: _connectors', this component's connectors already in it)"""
+    name = comp.get("name")
+    for k in comp.iterfind("ssd:Connectors/ssd:Connector", NS):
+        var = fmu.variables[k.get("name")]           # (_check_connector: every connector has its variable)
+        head = f"{where}:{k.sourceline}: <Connector name=\"{k.get('name')}\"> of {name}"
+        vrs = (var.get("clocks") or "").split()
+        want = [n for n, v in fmu.variables.items() if v.tag == "Clock" and v.get("valueReference") in vrs]
+        by = f"clocked by {', '.join(want)}" if want else "not clocked"
+        given = [c.get("name") for c in k.iterfind("ssd:Clock", NS)]
+        for g in given:
+            if (name, g) not in kinds:
+                raise ArtibusError(f"{head}: <Clock name=\"{g}\">: {name} has no connector {g!r} (a clock "
+                                   "association names an ssc:Clock connector of its component)")
+            if kinds[(name, g)][0] != "Clock":
+                raise ArtibusError(f"{head}: <Clock name=\"{g}\">: {g} is {_kind_name(kinds[(name, g)][0])} "
+                                   "connector, not an ssc:Clock (a clock association names a clock)")
+            if g not in want:
+                raise ArtibusError(f"{head}: <Clock name=\"{g}\">: the FMU's {k.get('name')} is {by} "
+                                   "(its clocks= in modelDescription.xml)")
+        for w in want:
+            if w not in given:
+                raise ArtibusError(f"{head}: no clock association <Clock name=\"{w}\">: the FMU's "
+                                   f"{k.get('name')} is {by} (its clocks= in modelDescription.xml); its "
+                                   "connector names the clock it ticks with")
+
+
 def _kind_name(kind):
     return f"an ssc:{kind}" if kind else "a connector without a type"
 
@@ -275,6 +324,7 @@ def _connectors(comps, fmus, where):
         name, f = c.get("name"), fmus[c.get("name")]
         for k in c.iterfind("ssd:Connectors/ssd:Connector", NS):
             kinds[(name, k.get("name"))] = _check_connector(c, k, f.variables.get(k.get("name")), where)
+        _check_clocks(c, f, kinds, where)
         for term, members in f.terminals.items():
             if f.is_bus and not any((name, members.get(m)) in kinds for m in MEMBERS):
                 continue                     # a terminal of the bus no node is connected to
@@ -361,6 +411,22 @@ def _connections(system, by_name, fmus, kinds, member, bus, where):
     return links, inputs, outputs
 
 
+def _one_source(system, by_name, kinds, where):
+    """every input of a top-level component with one source (artibus.bench.rules.one_source),
+    the plant's and the network's connections together: a plant input fed by a node and by
+    another component, a node's input fed twice (the terminals' members: _connections)"""
+    def ends():
+        for c in system.iterfind("ssd:Connections/ssd:Connection", NS):
+            a, b = (c.get("startElement"), c.get("startConnector")), (c.get("endElement"), c.get("endConnector"))
+            el = by_name.get(b[0])
+            if (el is None or etree.QName(el).localname != "Component"
+                    or kinds.get(b, (None,))[0] in ("Binary", "Clock")):
+                continue
+            frm, to = f"{a[0]}.{a[1]}", f"{b[0]}.{b[1]}"
+            yield frm, to, f"{where}:{c.sourceline}: Connection {frm} -> {to}"
+    one_source(ends())
+
+
 def _placement(comps, fmus, links, member, bus, where):
     """[(node, its terminal, the bus terminal)] in the bus's terminal order: each node's one
     terminal as its four connections to one terminal of the bus, the nodes on the bus's first
@@ -441,15 +507,17 @@ def read_network(root, where, fmu):
                            f"fmi-ls-manifest.xml) among the FMI-LS-BUS components "
                            f"{', '.join(c.get('name') for c in comps)}; the runner connects the nodes through one")
     (bus,) = buses
+    units = ssp_units(root, where)
     kinds, member = _connectors(comps, fmus, where)
     _plant_kinds(system, by_name, kinds)
     links, inputs, outputs = _connections(system, by_name, fmus, kinds, member, bus, where)
+    _one_source(system, by_name, kinds, where)
     comp = {c.get("name"): c for c in comps}
     net = Network(period=None, bus=None, nodes={}, inputs=inputs, outputs=outputs)
     for name, term, bus_term in _placement(comps, fmus, links, member, bus, where):
-        net.nodes[name] = (comp[name].get("source"), _parameters(comp[name], where, fmus[name]))
+        net.nodes[name] = (comp[name].get("source"), _parameters(comp[name], where, fmus[name], units))
         net.terminals[name] = (term, bus_term)
-    params = _parameters(comp[bus], where, fmus[bus])
+    params = _parameters(comp[bus], where, fmus[bus], units)
     head = f"{where}:{comp[bus].sourceline}: <Component name=\"{bus}\">"
     extra = set(params) - BUS_PARAMETERS
     if extra:

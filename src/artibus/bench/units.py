@@ -3,7 +3,7 @@ declaredType's) and the factor and offset from one variable's unit to
 another's, by the model descriptions' unit definitions (base units, factor and
 offset). The runner converts connected values with them; the CAN path
 (artibus.can) has its own table of the units a signal may carry."""
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from artibus.base import ArtibusError
 
@@ -58,14 +58,60 @@ class UnitDef:
     exponents: tuple
     factor: float = 1.0
     offset: float = 0.0
+    origin: str = field(default="", compare=False)    # file:line of its definition ("": the FMU's)
 
     def dimension(self):
         return ".".join(f"{d}^{e}" if e != 1 else d for d, e in zip(DIMS, self.exponents) if e) or "1"
 
+    def text(self):
+        """the unit in the base units, e.g. 0.001 m (mm), 1 K + 273.15 (degC)"""
+        return f"{self.factor:g} {self.dimension()}" + (f" + {self.offset:g}" if self.offset else "")
+
+
+def _exponents(**e):
+    return tuple(e.get(d, 0) for d in DIMS)
+
+
+#: the SI units a parameter file may not give another meaning: the base units and the derived
+#: units with special names (SI Brochure, 9th ed., 2.3.3 and 2.3.4, Tables 2 and 4), each
+#: factor 1 and offset 0 in the base units (FMI 2.0 2.2.2, SSP 1.0 5.5.1 "Units": a value in
+#: the unit is factor * value + offset in the base units); rad also as a plain 1 (the SI
+#: Brochure's radian is m/m: FMI lets a tool count it or not)
+SI_UNITS = {
+    "kg": (_exponents(kg=1),), "m": (_exponents(m=1),), "s": (_exponents(s=1),), "A": (_exponents(A=1),),
+    "K": (_exponents(K=1),), "mol": (_exponents(mol=1),), "cd": (_exponents(cd=1),),
+    "rad": (_exponents(rad=1), _exponents()),
+    "N": (_exponents(kg=1, m=1, s=-2),), "Pa": (_exponents(kg=1, m=-1, s=-2),),
+    "J": (_exponents(kg=1, m=2, s=-2),), "W": (_exponents(kg=1, m=2, s=-3),), "Hz": (_exponents(s=-1),),
+    "C": (_exponents(s=1, A=1),), "V": (_exponents(kg=1, m=2, s=-3, A=-1),),
+}
+
+
+def _unit_def(u, where):
+    """the UnitDef of one ssc:Unit element, checked against SI_UNITS for an SI unit's name"""
+    bu = next((b for b in u if isinstance(b.tag, str) and b.tag.rpartition("}")[2] == "BaseUnit"), None)
+    a = {} if bu is None else bu.attrib
+    head = f"{where}:{u.sourceline}: <Unit name=\"{u.get('name')}\">"
+    try:
+        d = UnitDef(u.get("name"), tuple(int(a.get(k, 0)) for k in DIMS),
+                    float(a.get("factor", 1.0)), float(a.get("offset", 0.0)), f"{where}:{u.sourceline}")
+    except ValueError:
+        raise ArtibusError(f"{head}: its BaseUnit's exponents, factor and offset must be numbers") from None
+    si = SI_UNITS.get(d.name)
+    if si is not None and (d.exponents not in si or (d.factor, d.offset) != (1.0, 0.0)):
+        want = UnitDef(d.name, si[0])
+        raise ArtibusError(f"{head}: defined as {d.text()}, but {d.name} is the SI unit {want.text()}; "
+                           f"a file may not redefine an SI unit (give the value in {d.name}, or define the "
+                           "unit under a name of its own)")
+    return d
+
 
 def ssp_units(element, where=""):
     """{name: UnitDef} of the ssc:Unit elements in ``element``'s Units child
-    (an ssv:ParameterSet or the ssd:SystemStructureDescription)."""
+    (an ssv:ParameterSet or the ssd:SystemStructureDescription). A name defined
+    twice in the one Units (the last would win: 6100 mm read as 6100 m) or an
+    SI unit's name given another meaning (SI_UNITS) is an error naming the file
+    and the line."""
     out = {}
     for child in element:
         if not isinstance(child.tag, str) or child.tag.rpartition("}")[2] != "Units":
@@ -73,15 +119,28 @@ def ssp_units(element, where=""):
         for u in child:
             if not isinstance(u.tag, str) or u.tag.rpartition("}")[2] != "Unit":
                 continue
-            bu = next((b for b in u if isinstance(b.tag, str) and b.tag.rpartition("}")[2] == "BaseUnit"), None)
-            a = {} if bu is None else bu.attrib
-            try:
-                out[u.get("name")] = UnitDef(u.get("name"), tuple(int(a.get(d, 0)) for d in DIMS),
-                                             float(a.get("factor", 1.0)), float(a.get("offset", 0.0)))
-            except ValueError:
-                raise ArtibusError(f"{where}:{u.sourceline}: <Unit name=\"{u.get('name')}\">: "
-                                   f"its BaseUnit's exponents, factor and offset must be numbers") from None
+            d = _unit_def(u, where)
+            if d.name in out:
+                raise ArtibusError(f"{where}:{u.sourceline}: <Unit name=\"{d.name}\">: defined twice in one "
+                                   f"<Units> (first at line {out[d.name].origin.rpartition(':')[2]} as "
+                                   f"{out[d.name].text()}, here as {d.text()}); a unit has one definition")
+            out[d.name] = d
     return out
+
+
+def unit_table(used, fmu_defs=None):
+    """the lines of a short table of the units a file uses: ``used`` {unit name: its
+    UnitDef or None}, each with its factor and offset to the SI base units and where it is
+    defined (its file and line, the FMU, or nowhere)"""
+    rows = [("unit", "factor", "offset", "base units", "defined")]
+    for name in sorted(used):
+        d = used[name] or (fmu_defs or {}).get(name)
+        if d is None:
+            rows.append((name, "?", "?", "?", "nowhere (an unknown unit)"))
+            continue
+        rows.append((name, f"{d.factor:.10g}", f"{d.offset:.10g}", d.dimension(), d.origin or "the FMU"))
+    widths = [max(len(r[k]) for r in rows) for k in range(4)]
+    return ["  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + "  " + r[4] for r in rows]
 
 
 def fmu_units(md):
@@ -129,6 +188,21 @@ def to_unit(value, unit, definitions, target, target_definitions, label):
         raise ArtibusError(f"{label}: unit '{unit}' ({src.dimension()}) cannot be converted to the variable's "
                            f"unit '{target}' ({dst.dimension()}): another dimension")
     return (src.factor * value + src.offset - dst.offset) / dst.factor
+
+
+def with_unit(raw, unit, definitions, var, md, label):
+    """``raw`` given in ``unit`` (``definitions``: the file's own units) as a value in the unit
+    of the model variable ``var`` of ``md``; ``label`` names the file, the line and the
+    parameter. A unit on a variable that is not a Real is an error; an unknown variable is
+    left to the binding's check (artibus.bench.parameters.check_against names it)."""
+    if var is None:
+        return raw
+    if var.type not in ("Real", "Float32"):
+        raise ArtibusError(f"{label}: a value with a unit ('{unit}') for {md.modelName}.{var.name}, an {var.type}: "
+                           "a unit belongs to a Real value (give the value without a unit)")
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+        return raw                        # check_against says what it is
+    return to_unit(float(raw), unit, definitions, declared_unit(var), fmu_units(md), label)
 
 
 @dataclass(frozen=True)

@@ -45,20 +45,41 @@ def read_log(path):
     return frames
 
 
-_ASC_FRAME = re.compile(r"\s*(\S+)\s+(\d+|CANFD)\s+[0-9A-Fa-f]+x?\s+(Rx|Tx)\b")
-_ASC_STAMP = re.compile(r"[0-9]+(\.[0-9]*)?")
+_ASC_FRAME = re.compile(r"\s*(\S+)\s+(\d+|CANFD)\s+([0-9A-Fa-f]+)x?\s+(Rx|Tx)\b")
+_ASC_ERROR = re.compile(r"\s*(\S+)\s+\d+\s+ErrorFrame\b")
+_ASC_STAMP = re.compile(r"-?[0-9]+(\.[0-9]*)?")
 
 
 def _check_asc_stamps(path):
     """python-can's ASC reader skips, without a word, a frame line whose time
-    stamp is not a plain number (nan, inf, -1.0): refused here, naming the line"""
+    stamp is not a plain unsigned number (nan, inf, -0.5): refused here,
+    naming the line. Time that goes back is named as read_log names it (the
+    frame, both times), here already, as a stamp below 0 is one python-can
+    skips; a first frame below 0 is before the log's start (its Begin
+    Triggerblock). Frames are counted as read_log counts them (error frames
+    too)."""
     try:
         with open(path, encoding="utf-8", errors="replace") as f:
+            k, last = 0, None
             for n, line in enumerate(f, start=1):
-                m = _ASC_FRAME.match(line)
-                if m and not _ASC_STAMP.fullmatch(m.group(1)):
-                    raise ArtibusError(f"{path}, line {n}: time stamp {m.group(1)!r} is not a finite "
+                m = _ASC_FRAME.match(line) or _ASC_ERROR.match(line)
+                if not m:
+                    continue
+                k += 1
+                text = m.group(1)
+                if not _ASC_STAMP.fullmatch(text):
+                    raise ArtibusError(f"{path}, line {n}: time stamp {text!r} is not a finite "
                                        f"number of seconds (a frame line)")
+                t = float(text)
+                if last is not None and t < last:
+                    ident = m.group(3) if m.re is _ASC_FRAME and m.group(2) != "CANFD" else None
+                    what = f"frame {k}" + (f" (ID 0x{int(ident, 16):03X})" if ident else "")
+                    raise ArtibusError(f"{path}: {what}: time {t:.6f} s is before the previous frame's "
+                                       f"{last:.6f} s (the log's time goes backwards; line {n})")
+                if t < 0:
+                    raise ArtibusError(f"{path}, line {n}: frame {k}: time {t:.6f} s is before the log's "
+                                       f"start (0 s)")
+                last = t
     except OSError as e:
         raise ArtibusError(f"{path}: cannot read the log: {e.strerror or e}") from None
 

@@ -198,7 +198,7 @@ class Network(_FaultInjection):
         self.frames = 0
         self.error_frames = 0
         self.ticks = 0
-        self.wall = 0.0        # s inside its ticks, timed by the stepping core (not by the Python loop)
+        self.wall = 0.0        # s inside its ticks, timed by the stepping core (not when it ticks in Python)
         self.observed = {}     # identifier -> longest time from queuing to the end of the frame, s
         self._seq = 0          # production order of frames
         self._at_tick = {}     # tick -> delayed frames queued exactly at it: [(seq, _Message, data, burst)]
@@ -228,6 +228,7 @@ class Network(_FaultInjection):
         except Exception as e:
             raise ArtibusError(f"--can {self.interface}: cannot open the interface: {e}") from None
         self.writer = None
+        self.log_error = None  # why the log could not be written (_log_failed); the run goes on without it
         if self.log_path is not None:
             self._part = self.log_path.with_name(self.log_path.name + ".part")
             try:
@@ -236,7 +237,8 @@ class Network(_FaultInjection):
                 self.writer = cls(str(self._part))
             except OSError as e:
                 self.bus.shutdown()
-                raise ArtibusError(f"--can-log {log}: {e}") from None
+                self._part.unlink(missing_ok=True)
+                raise ArtibusError(f"--can-log {log}: cannot write the log: {e.strerror or e}") from None
 
     # --- one tick ------------------------------------------------------------------
 
@@ -344,9 +346,33 @@ class Network(_FaultInjection):
         if self.writer is None:
             return
         for stamp, can_id, data in frames:
-            self.writer.on_message_received(can.Message(
+            if self.writer is None:     # (it failed: _log_failed)
+                return
+            self._log(can.Message(
                 timestamp=stamp, arbitration_id=can_id, is_extended_id=False, dlc=len(data), data=data,
                 channel=self.bus.channel_id, is_rx=False))
+
+    def _log(self, msg):
+        """One frame into the log; a write that fails (a full disk) ends the log, not the run."""
+        try:
+            self.writer.on_message_received(msg)
+        except OSError as e:
+            self._log_failed(e)
+
+    def _log_failed(self, e):
+        """The log cannot be written (ENOSPC, EDQUOT, EIO...): its writer
+        dropped, its file closed and removed (nothing half-written is left),
+        the reason kept in ``log_error`` for the end of the run (the runner
+        says it after the results are saved: artibus.runner.Simulation)."""
+        import contextlib
+        writer, self.writer = self.writer, None
+        if writer is not None:
+            with contextlib.suppress(Exception):
+                writer.file.close()
+        self._part.unlink(missing_ok=True)
+        if self.log_error is None:
+            self.log_error = (f"--can-log {self.log_path}: cannot write the log: {e.strerror or e}; "
+                              f"no log written (the run's other outputs are complete)")
 
     def settle(self):
         """Initialisation: the receivers get the senders' values through the
@@ -363,7 +389,10 @@ class Network(_FaultInjection):
         """Before the first tick: the writers' time origin is the run's start."""
         self.t0 = t0
         if self.writer is not None:
-            self.writer.log_event(f"artibus: simulated time in s from t = {t0:g} s (the run's start)", t0)
+            try:
+                self.writer.log_event(f"artibus: simulated time in s from t = {t0:g} s (the run's start)", t0)
+            except OSError as e:
+                self._log_failed(e)
 
     def _transmit(self, m, data, stamp, bits):
         """One frame on the bus at simulated time `stamp` (end of its EOF),
@@ -385,7 +414,7 @@ class Network(_FaultInjection):
         self.frames += 1
         self._mailbox.setdefault(rx.arbitration_id, []).append(rx)
         if self.writer is not None:
-            self.writer.on_message_received(rx)
+            self._log(rx)
 
     def tick(self, k, t):
         """The network's k-th tick at simulated time t: the frames queued at t
@@ -489,22 +518,31 @@ class Network(_FaultInjection):
                              f"{m['suppressed']:6d} {m['delayed']:5d} {m['corrupted']:7d} {m['overwritten']:6d} "
                              f"{m['rejected']:8d} {why:>13s}  {gap}")
         if self.log_path is not None:
-            lines.append(f"    log: {self.log_path}")
+            lines.append(f"    log: {self.log_path}" + (" (not written: a write failed)" if self.log_error else ""))
         return "\n".join(lines)
 
     def finish(self):
         """The run finished: the log is complete, put in place under its name."""
-        writer, self.writer = self.writer, None
+        writer = self.writer
         if writer is not None:
-            writer.stop()
-            self._part.replace(self.log_path)
+            try:
+                writer.stop()           # (the last frames written, the header completed)
+                self._part.replace(self.log_path)
+            except OSError as e:
+                self._log_failed(e)
+            self.writer = None
 
     def close(self):
         """Shut the bus; a log still open (the run did not finish) is removed:
         a failed run leaves no log."""
         writer, self.writer = getattr(self, "writer", None), None
         if writer is not None:
-            writer.stop()
+            try:
+                writer.stop()
+            except OSError:             # (a full disk: the log is removed all the same)
+                import contextlib
+                with contextlib.suppress(Exception):
+                    writer.file.close()
             self._part.unlink(missing_ok=True)
         bus, self.bus = getattr(self, "bus", None), None
         if bus is not None:

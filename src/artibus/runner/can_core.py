@@ -1,46 +1,18 @@
 """The CAN network of a run (artibus.can.Network) as the stepping core's
 ac_can (core.h): ``can_signal`` (a cantools Signal as core.h's ac_can_signal)
 and ``_CanCore``."""
-from ctypes import (Structure, addressof, c_double, c_int, c_long, c_longlong, c_ubyte, c_uint, c_ulonglong,
-                    c_void_p, sizeof)
+from ctypes import addressof, c_double, sizeof
 
 import numpy as np
 
 from artibus.base import ArtibusError
-
-
-class _AcCanReceiver(Structure):
-    _fields_ = [("dst", c_void_p), ("factor", c_double)]
-
-
-class _AcCanSignal(Structure):
-    _fields_ = [("src", c_void_p), ("factor", c_double), ("minimum", c_double), ("maximum", c_double),
-                ("scale", c_double), ("offset", c_double), ("integer", c_int), ("iscale", c_longlong),
-                ("ioffset", c_longlong), ("start", c_int), ("length", c_int), ("big_endian", c_int),
-                ("is_signed", c_int), ("n_receivers", c_int), ("receivers", c_void_p)]
-
-
-class _AcCanMessage(Structure):
-    _fields_ = [("id", c_uint), ("dlc", c_int), ("ratio", c_int), ("data_id", c_uint),
-                ("fixed", c_ubyte * 8), ("n_signals", c_int), ("signals", c_void_p),
-                ("counter", c_int), ("last_counter", c_int), ("good_tick", c_long),
-                ("produced", c_long), ("sent", c_long), ("rejected", c_long), ("rejected_crc", c_long),
-                ("rejected_repeated", c_long), ("rejected_sequence", c_long), ("bits", c_longlong),
-                ("end_bits", c_longlong), ("since", c_void_p), ("head_crc", c_uint), ("head_state", c_int),
-                ("head_stuffed", c_int), ("seen", c_ulonglong * 16), ("seen_bits", c_int * 16),
-                ("seen_crc", c_ubyte * 16)]
-
-
-class _AcCan(Structure):
-    _fields_ = [("n_messages", c_int), ("messages", c_void_p), ("ratio", c_int), ("tau", c_double),
-                ("ticks", c_long), ("frames", c_long), ("frame_cap", c_long), ("frame_tick", c_void_p),
-                ("frame_stamp", c_void_p), ("frame_data", c_void_p), ("stamps", c_ulonglong), ("wall", c_double)]
+from artibus.runner.corelib import struct
 
 
 def can_signal(s, q=None):
     """core.h's ac_can_signal of a cantools Signal (its range, conversion and
     place; no source, no receivers): q filled, or a new one."""
-    q = _AcCanSignal() if q is None else q
+    q = struct("ac_can_signal")() if q is None else q
     conv = getattr(s.conversion, "_conversion", s.conversion)   # NamedSignalConversion's own
     q.minimum, q.maximum = s.minimum, s.maximum
     q.scale, q.offset = conv.scale, conv.offset
@@ -58,19 +30,19 @@ class _CanCore:
     the frame, pointing into the senders' output and the receivers' input
     buffers; the network's state goes in before the run and comes back after
     (counters, the receivers' E2E state, counts, bits, the since series), so
-    Network.report, summary and since_series read as after the Python loop."""
+    Network.report, summary and since_series read as after the network's Python ticks."""
 
     def __init__(self, sim, lib):
         from artibus.can import COUNTER_SIGNAL
         net = self.net = sim.can
         double = sizeof(c_double)
         self._keep = []
-        self.messages = (_AcCanMessage * len(net.messages))()
+        self.messages = (struct("ac_can_message") * len(net.messages))()
         for a, m in zip(self.messages, net.messages):
-            sigs = (_AcCanSignal * max(1, len(m.routes)))()
+            sigs = (struct("ac_can_signal") * max(1, len(m.routes)))()
             for q, r in zip(sigs, m.routes):
                 s = r.signal
-                rcs = (_AcCanReceiver * max(1, len(r.receivers)))(
+                rcs = (struct("ac_can_receiver") * max(1, len(r.receivers)))(
                     *((addressof(rc.unit.raw.inp) + double * rc.index, rc.factor) for rc in r.receivers))
                 self._keep.append(rcs)
                 can_signal(s, q)
@@ -81,7 +53,7 @@ class _CanCore:
             a.id, a.dlc, a.ratio, a.data_id = m.msg.frame_id, m.msg.length, m.ratio, m.data_id
             a.fixed[:m.msg.length] = net.fixed_frame(m)
             a.n_signals, a.signals = len(m.routes), addressof(sigs)
-        self.c = _AcCan(n_messages=len(net.messages), messages=addressof(self.messages), ratio=sim.can_ratio,
+        self.c = struct("ac_can")(n_messages=len(net.messages), messages=addressof(self.messages), ratio=sim.can_ratio,
                         tau=1.0 / net.bitrate)
         self.ratio = sim.can_ratio
         self.lib = lib

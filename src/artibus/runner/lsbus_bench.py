@@ -1,8 +1,8 @@
 """A bench whose steering network runs as FMI-LS-BUS 1.0 FMUs (issue 24): the plant stays
 the runner's FMI 2.0 components, the network is an artibus.runner.lsbus.Network ticked once
 per network period by the runner, through the interface of artibus.can.network.Network
-(start, tick, finish, settle, since_series, close): in the Python loop of Simulation._run, or in
-the C stepping core (below);
+(start, tick, finish, settle, since_series, close): by the one stepping loop, in Python
+(its callback, artibus.runner.core._Hooks) or in C (below);
 Simulation attaches it to every SSP 2.0 bench with FMI-LS-BUS components, as below.
 
 The bench is an SSP 2.0 system structure (artibus.bench.ssp2): the LS-BUS FMUs are its
@@ -30,7 +30,7 @@ before, delivered before the receivers step):
    their start values) for its steps from t, as the Real-wired actuators' outputs reach
    the plant in the same macro step (Gauss-Seidel, the actuators before the plant).
 
-The C stepping core ticks the network where the Python loop calls tick, the same calls in
+The C stepping core ticks the network in C where the Python master would tick, the same calls in
 the same order (artibus.runner.lsbus_core, src/runner_core/lsbus.c), unless the core is
 switched off (ARTIBUS_CORE=0).
 """
@@ -82,6 +82,7 @@ class LsBusSteering:
         self.base = {}
         self.net = None
         self.log = None        # a .blf or .asc file for the frames on the wire (Simulation's can_log)
+        self.log_error = None  # why it could not be written (finish)
         self.ticks = 0
         self.wall = 0.0        # s of the network in the C core's ticks (artibus.runner.lsbus_core)
         self.fmu_wall = 0.0    # of which inside its FMUs' calls
@@ -117,7 +118,7 @@ class LsBusSteering:
                                f"{sim.base_step} s")
         if sim.can is not None:
             raise ArtibusError(f"{self.ssd}: a bench with both an org.artibus.can and an FMI-LS-BUS network")
-        sim.can, sim.can_ratio = self, int(round(r))
+        sim.lsbus, sim.lsbus_ratio = self, int(round(r))
         # the network's FMUs instantiated now, as the bench's other FMUs are in the Simulation's
         # set-up, for a run from the bench's start time (start takes it; another start time: anew)
         self._ready = self._network(sim.bench.start_time)
@@ -184,8 +185,14 @@ class LsBusSteering:
             self.value[to] = self.net.by_name[node].get(var)
 
     def finish(self):
+        """The frames into the --can-log; a write that fails (a full disk) is kept in
+        ``log_error``, said after the run's results are saved (artibus.runner.Simulation)."""
         if self.log is not None:
-            write_can_log(self.net.wire_frames(), self.log)
+            try:
+                write_can_log(self.net.wire_frames(), self.log)
+            except OSError as e:
+                self.log_error = (f"--can-log {self.log}: cannot write the log: {e.strerror or e}; "
+                                  f"no log written (the run's other outputs are complete)")
 
     def summary(self, duration):
         """what the run's log prints of the network (artibus.report.runs), as the CAN network's summary"""
@@ -196,9 +203,11 @@ class LsBusSteering:
             ids[can_id] = ids.get(can_id, 0) + 1
         per_id = ", ".join(f"0x{i:03X} {n}" for i, n in sorted(ids.items()))
         events = ", ".join(f"{f.name} {f.n_events}" for f in net.nodes + [net.bus])
+        log = "" if self.log is None else \
+            f"\n    log: {self.log}" + (" (not written: a write failed)" if self.log_error else "")
         return (f"FMI-LS-BUS ({self.bus_path.name}, wireTime {'on' if self.wire_time else 'off'}): {len(frames)} frames "
                 f"in {duration:g} s, bus load {100 * net.bus.get('busLoad'):.1f} % ({per_id}); Event Mode entries: {events}"
-                + (f"\n    log: {self.log}" if self.log is not None else ""))
+                + log)
 
     def since_series(self):
         return {}

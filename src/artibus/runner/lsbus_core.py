@@ -1,6 +1,6 @@
 """The FMI-LS-BUS network of a bench (artibus.runner.lsbus_bench.LsBusSteering) as the
-stepping core's ac_lsbus (src/runner_core/lsbus.h), ticked by the core where the Python loop
-calls LsBusSteering.tick: ``_LsBusCore``.
+stepping core's ac_lsbus (src/runner_core/lsbus.h), ticked by the core where the Python master
+would tick (LsBusSteering.tick): ``_LsBusCore``.
 
 The FMUs stay FMPy's FMU3Slave instances of the steering's lsbus.Network (instantiated and
 initialised in Python); the core calls their FMI 3.0 functions through the pointers of the
@@ -8,16 +8,16 @@ libraries FMPy loaded. The network's state (each FMU's mode, pending iteration, 
 time and Event Mode entries; the bus's announced countdown ticks; the time) goes into the
 struct before the run and comes back after it, and the frames on the wire become the
 Network's frames, so Network.wire_frames, LsBusSteering.summary and finish read as after the
-Python loop. The core does exactly what lsbus.Network.advance does, in the same order
+Python master. The core does exactly what lsbus.Network.advance does, in the same order
 (tests/test_lsbus_core.py: bit for bit).
 """
 import math
-from ctypes import (Structure, addressof, c_char, c_double, c_int, c_long, c_size_t, c_ubyte, c_uint, c_ulonglong,
-                    c_void_p, cast, sizeof)
+from ctypes import addressof, c_double, c_ubyte, c_void_p, cast, sizeof
 
 import numpy as np
 
 from artibus.base import ArtibusError
+from artibus.runner.corelib import struct
 
 _MODES = {"event": 0, "updated": 1, "step": 2}
 _NAMES = {v: k for k, v in _MODES.items()}
@@ -31,50 +31,11 @@ FRAMES_PER_TICK = 64           # the record of the frames on the wire: per tick 
 TIME_FMU_CALLS = False
 
 
-class _AcLsTerminal(Structure):
-    _fields_ = [("rx_data", c_uint), ("tx_data", c_uint), ("rx_clock", c_uint), ("tx_clock", c_uint),
-                ("period", c_double), ("shift", c_double), ("countdown", c_int), ("peer", c_int),
-                ("tick", c_double), ("tick_seq", c_long), ("buf", c_void_p), ("len", c_size_t), ("cap", c_size_t),
-                ("seq", c_long)]
-
-
-class _AcLsFmu(Structure):
-    _fields_ = ([("instance", c_void_p)] + [(f, c_void_p) for f in _FUNCTIONS]
-                + [("n_terms", c_int), ("terms", c_void_p), ("mode", c_int), ("need", c_int),
-                   ("next_event", c_double), ("n_events", c_long)])
-
-
-class _AcLsInput(Structure):
-    _fields_ = [("node", c_int), ("vr", c_uint), ("src", c_void_p), ("src_node", c_int), ("src_vr", c_uint),
-                ("value", c_double)]
-
-
-class _AcLsOutput(Structure):
-    _fields_ = [("node", c_int), ("vr", c_uint), ("dst", c_void_p)]
-
-
-class _AcLsBus(Structure):
-    _fields_ = [("n_nodes", c_int), ("fmus", c_void_p), ("ratio", c_int), ("period", c_double), ("t0", c_double),
-                ("t", c_double), ("n_inputs", c_int), ("n_outputs", c_int), ("inputs", c_void_p),
-                ("outputs", c_void_p), ("bus_flagged", c_int), ("seq", c_long), ("ticks", c_long),
-                ("instants", c_long), ("frame_cap", c_long), ("frames", c_long), ("frame_t", c_void_p),
-                ("frame_id", c_void_p), ("frame_ide", c_void_p), ("frame_dl", c_void_p), ("frame_at", c_void_p),
-                ("pool", c_void_p), ("pool_cap", c_long), ("pool_used", c_long), ("fail_fmu", c_int),
-                ("fail_status", c_int), ("fail_function", c_char * 48), ("message", c_char * 512),
-                ("stamps", c_ulonglong), ("wall", c_double), ("timed", c_int), ("fmu_stamps", c_ulonglong),
-                ("fmu_wall", c_double)]
-
-
-class _AcStimulus(Structure):
-    _fields_ = [("dst", c_void_p), ("value", c_void_p), ("base", c_double), ("minus", c_double),
-                ("has_base", c_int)]
-
-
 def core_stimuli(steering, sim):
-    """{unit index: [_AcStimulus]} of the steering's stimuli on the plant's inputs
+    """{unit index: [struct("ac_stimulus")]} of the steering's stimuli on the plant's inputs
     (Simulation._propagate: inp[i] = (inp[i] if base is None else base) + f(t), f(t) =
     value - steering.base.get(to, 0.0)), reading the steering's value buffer; None if a unit
-    has a stimulus of another origin (the Python loop runs it)."""
+    has a stimulus of another origin (then the network ticks in Python, called back by the core)."""
     values, slots = steering.core_values()
     own = steering.stimulus_functions
     out = {}
@@ -83,7 +44,7 @@ def core_stimuli(steering, sim):
             key = f"{u.path}.{u.in_names[i]}"
             if own.get(key) is not f:
                 return None
-            out.setdefault(j, []).append(_AcStimulus(
+            out.setdefault(j, []).append(struct("ac_stimulus")(
                 dst=addressof(u.raw.inp) + sizeof(c_double) * i,
                 value=addressof(values) + sizeof(c_double) * slots[key],
                 base=0.0 if base is None else base, minus=steering.base.get(key, 0.0), has_base=base is not None))
@@ -117,8 +78,8 @@ class _LsBusCore:
     lsbus = True
 
     def __init__(self, sim, lib):
-        self.steering, self.sim, self.lib = sim.can, sim, lib
-        self.ratio = sim.can_ratio
+        self.steering, self.sim, self.lib = sim.lsbus, sim, lib
+        self.ratio = sim.lsbus_ratio
         self.c = None
 
     def begin(self, n):
@@ -127,7 +88,7 @@ class _LsBusCore:
         net = st.net
         everyone = net.nodes + [net.bus]
         self._keep = []
-        self.fmus = (_AcLsFmu * len(everyone))()
+        self.fmus = (struct("ac_ls_fmu") * len(everyone))()
         index = {f.name: i for i, f in enumerate(net.nodes)}
         bus_terms = list(net.bus.terminals.values())
         for k, (a, f) in enumerate(zip(self.fmus, everyone)):
@@ -135,7 +96,7 @@ class _LsBusCore:
             if len(terms) > MAX_TERMS:
                 raise ArtibusError(f"{f.path}: {len(terms)} network terminals; the stepping core takes at most "
                                    f"{MAX_TERMS} (run with ARTIBUS_CORE=0)")
-            arr = (_AcLsTerminal * len(terms))()
+            arr = (struct("ac_ls_terminal") * len(terms))()
             for j, (q, t) in enumerate(zip(arr, terms)):
                 buf = (c_ubyte * BUFFER)()
                 self._keep.append(buf)
@@ -147,21 +108,21 @@ class _LsBusCore:
             self._keep.append(arr)
             a.instance = f.fmu.component
             for name in _FUNCTIONS:
-                setattr(a, name, cast(getattr(f.fmu.dll, f"fmi3{name}"), c_void_p).value)
+                setattr(a, name[0].lower() + name[1:], cast(getattr(f.fmu.dll, f"fmi3{name}"), c_void_p).value)
             a.n_terms, a.terms = len(terms), addressof(arr)
             a.mode, a.need = _MODES[f.mode], int(bool(f.need))
             a.next_event, a.n_events = f.next_event, f.n_events
         self._bus_terms = bus_terms
         # the inputs (LsBusSteering.src, its order) and the outputs onto the steering's values
         values, slots = st.core_values()
-        ins = (_AcLsInput * max(1, len(st.src)))()
+        ins = (struct("ac_ls_input") * max(1, len(st.src)))()
         for q, (node, var, out, j) in zip(ins, st.src):
             q.node, q.vr = index[node], self._float64(net.by_name[node], var)
             if isinstance(out, str):         # another node's output, read at the tick
                 q.src, q.src_node, q.src_vr = None, index[out], self._float64(net.by_name[out], j)
             else:
                 q.src = addressof(out) + sizeof(c_double) * j
-        outs = (_AcLsOutput * max(1, len(st.outputs)))()
+        outs = (struct("ac_ls_output") * max(1, len(st.outputs)))()
         for q, (node, var, to) in zip(outs, st.outputs):
             q.node, q.vr = index[node], self._float64(net.by_name[node], var)
             q.dst = addressof(values) + sizeof(c_double) * slots[to]
@@ -172,7 +133,7 @@ class _LsBusCore:
         self.frame_t, self.frame_id = np.zeros(cap), np.zeros(cap, dtype=np.uint32)
         self.frame_ide, self.frame_dl = np.zeros(cap, dtype=np.int32), np.zeros(cap, dtype=np.int32)
         self.frame_at, self.pool = np.zeros(cap, dtype=np.int64), np.zeros(cap * 8, dtype=np.uint8)
-        self.c = c = _AcLsBus(n_nodes=len(net.nodes), fmus=addressof(self.fmus), ratio=self.ratio, period=st.period,
+        self.c = c = struct("ac_lsbus")(n_nodes=len(net.nodes), fmus=addressof(self.fmus), ratio=self.ratio, period=st.period,
                               t0=net.t0, t=net.t, n_inputs=len(st.src), n_outputs=len(st.outputs),
                               inputs=addressof(ins), outputs=addressof(outs), bus_flagged=int(net.bus_flagged),
                               timed=int(TIME_FMU_CALLS),
@@ -182,7 +143,7 @@ class _LsBusCore:
         # the bus's announced countdown ticks, in the dict's order
         seq = 0
         bus = self.fmus[len(net.nodes)]
-        barr = (_AcLsTerminal * bus.n_terms).from_address(bus.terms)
+        barr = (struct("ac_ls_terminal") * bus.n_terms).from_address(bus.terms)
         for term, tt in net.bus_ticks.items():
             seq += 1
             q = barr[bus_terms.index(term)]

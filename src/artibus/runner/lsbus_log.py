@@ -32,10 +32,18 @@ def write_can_log(frames, path):
     if path.suffix.lower() not in (".blf", ".asc"):
         raise ArtibusError(f"{path}: the CAN log is written as .blf or .asc (by its suffix)")
     path.parent.mkdir(parents=True, exist_ok=True)
-    writer = can.BLFWriter(str(path)) if path.suffix.lower() == ".blf" else can.ASCWriter(str(path))
+    part = path.with_name(path.name + ".part")    # renamed when complete: a failed write leaves nothing
+    writer = can.BLFWriter(str(part)) if path.suffix.lower() == ".blf" else can.ASCWriter(str(part))
     try:
         for t, can_id, ide, data in frames:
             writer.on_message_received(can.Message(timestamp=t, arbitration_id=can_id, is_extended_id=bool(ide),
                                                    dlc=len(data), data=data, channel=0))
-    finally:
         writer.stop()
+        part.replace(path)
+    except BaseException:               # (a full disk: OSError, for the caller to say)
+        try:
+            writer.file.close()
+        except Exception:
+            pass
+        part.unlink(missing_ok=True)
+        raise

@@ -52,8 +52,10 @@ def save(result, path):
     unit; a signal whose safe name is ``units`` is saved as ``units_``.
     Returns ``path``."""
     from artibus.files import signals_held
+    from artibus.runner.markers import mark
     path = Path(path)
     with signals_held(written=path):     # a Ctrl-C or SIGTERM now is taken after the write
+        mark(f"saving {path}")           # (for the tests: artibus.runner.markers)
         _save(result, path)
     return path
 
@@ -123,3 +125,15 @@ def save_partial(e, out):
         return
     e.partial = partial
     e.partial_time = result.time[-1]
+
+
+def check_results_file(path, what, inputs):
+    """A results file's place checked before the run (artibus.files.check_output),
+    and neither ``path`` nor the files written beside it (its units, its partial
+    results and theirs) one of the run's ``inputs`` [(path, what it is)]
+    (artibus.files.check_not_input: by identity). Returns ``path``."""
+    from artibus.files import check_not_input, check_output
+    path = check_not_input(check_output(path, what), what, inputs)
+    for f in (units_path(path), partial_path(path), units_path(partial_path(path))):
+        check_not_input(f, what, inputs, beside=path)
+    return path

@@ -37,6 +37,22 @@ class _Setup:
 
     def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None, can_faults=None,
                cut=frozenset()):
+        """The set-up, part by part: units and steps, parameters, connections (and the CAN
+        network), the order, the recording, the stimuli, the value buffers, the columns."""
+        units = self._units(step, where)
+        self._parameters(units, overrides, where)
+        self._check_cut(units, cut, where)
+        routed_before = any(c.can is not None for c in self.bench.connections)
+        self._connections(units, cut, where)
+        self._setup_can(where, can_interface, can_log, can_faults, routed_before)
+        self._feedthrough_order(where)
+        self._recording(units, record, where)
+        self._stimuli(units, stimuli, where)
+        self._buffers()
+        self._columns()
+
+    def _units(self, step, where):
+        """{path: Unit} of the bench's components, each with its step and its ratio to the base step."""
         units = {}
         for path, c in self.bench.components.items():
             try:
@@ -49,9 +65,24 @@ class _Setup:
                            float(de.stepSize) if de is not None and de.stepSize else None)
             units[path] = Unit(path=path, fmu=fmu, step=h)
             self.units = list(units.values())     # (closed by close() if a later one fails)
-        # a component without a step (its FMU's default experiment has no stepSize, FMI 2.0
-        # allows it; no annotation, no --step): the others' shortest, else the bench's
-        # span / DEFAULT_STEPS
+        self._default_steps(units, where)
+        self.units = list(units.values())
+        self.base_step = step if step is not None else min(u.step for u in self.units)
+        if getattr(self, "single_rate", False):      # every component at the one step
+            for u in self.units:
+                u.step = self.base_step
+        for u in self.units:
+            r = u.step / self.base_step
+            if abs(r - round(r)) > 1e-9 or round(r) < 1:
+                raise ArtibusError(f"{where}: Component '{u.path}': step {u.step} s is not a "
+                                   f"multiple of the base step {self.base_step} s")
+            u.ratio = int(round(r))
+        return units
+
+    def _default_steps(self, units, where):
+        """A component without a step (its FMU's default experiment has no stepSize, FMI 2.0
+        allows it; no annotation, no --step): the others' shortest, else the bench's
+        span / DEFAULT_STEPS."""
         from artibus.fmu import DEFAULT_STEPS
         known = [u.step for u in units.values() if u.step is not None]
         for u in units.values():
@@ -64,19 +95,10 @@ class _Setup:
                     c = self.bench.components[u.path]
                     raise ArtibusError(f"{where}:{c.line}: Component '{u.path}': no communication step "
                                        f"(give --step or a stepSize annotation)")
-        self.units = list(units.values())
-        self.base_step = step if step is not None else min(u.step for u in self.units)
-        if getattr(self, "single_rate", False):      # every component at the one step
-            for u in self.units:
-                u.step = self.base_step
-        for u in self.units:
-            r = u.step / self.base_step
-            if abs(r - round(r)) > 1e-9 or round(r) < 1:
-                raise ArtibusError(f"{where}: Component '{u.path}': step {u.step} s is not a "
-                                   f"multiple of the base step {self.base_step} s")
-            u.ratio = int(round(r))
 
-        # parameters: bindings, then the user's overrides ("comp.var" -> value)
+    def _parameters(self, units, overrides, where):
+        """self.parameters: the bench's bindings, then the user's overrides ("comp.var" -> value),
+        resources resolved, quantities converted, each checked against its variable."""
         self.parameters = {p: dict(c.parameters) for p, c in self.bench.components.items()}
         origins = {p: dict(c.origins) for p, c in self.bench.components.items()}
         from artibus.bench.names import expand_all      # Bus.mu[*], Bus.mu[1:6]: each element
@@ -101,7 +123,8 @@ class _Setup:
         for path, values in self.parameters.items():
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
 
-        # connections (those into a cut input left out)
+    def _check_cut(self, units, cut, where):
+        """self.cut: the inputs whose connection the run leaves out, each a connected input."""
         connected = {f"{c.end[0]}.{c.end[1]}" for c in self.bench.connections}
         for name in sorted(cut):
             comp, _, var = name.rpartition(".")
@@ -111,25 +134,17 @@ class _Setup:
             if name not in connected:
                 raise ArtibusError(f"cut {name}: the input is not connected in {where}")
         self.cut = sorted(cut)
-        routed_before = any(c.can is not None for c in self.bench.connections)
+
+    def _connections(self, units, cut, where):
+        """self.links: the bench's connections (those into a cut input left out), checked and
+        resolved to value references; typed ones through _typed_link."""
         self.links = []
         for c in self.bench.connections:
             if f"{c.end[0]}.{c.end[1]}" in cut:
                 continue
             label = f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}"
             a, b = units[c.start[0]], units[c.end[0]]
-            va, vb = a.fmu.vars.get(c.start[1]), b.fmu.vars.get(c.end[1])
-            if va is None or vb is None:
-                from artibus.bench.parameters import no_variable
-                u, var = (a, c.start[1]) if va is None else (b, c.end[1])
-                raise ArtibusError(f"{label}: no variable '{u.path}.{var}' ({no_variable(u.fmu.md, var)})")
-            if va.type != vb.type:
-                raise ArtibusError(f"{label}: types {va.type} -> {vb.type} ({c.start[0]}.{c.start[1]} is "
-                                   f"{va.type}, {c.end[0]}.{c.end[1]} is {vb.type}): a connection joins "
-                                   f"variables of one type")
-            if va.causality not in ("output", "parameter", "calculatedParameter") or vb.causality != "input":
-                raise ArtibusError(f"{label}: connects a {va.causality} to a {vb.causality} "
-                                   f"(expected output -> input)")
+            va, vb = self._connection_ends(c, label, a, b)
             if va.type != "Real" or vb.type != "Real":
                 self._typed_link(c, label, a, va, b, vb)
                 continue
@@ -151,8 +166,27 @@ class _Setup:
                                    f, o, f"{c.end[0]}.{c.end[1]}", c))
             if c.can is None:                 # a connection routed over CAN goes through self.can
                 b.links_in.append(self.links[-1])
-        self._setup_can(where, can_interface, can_log, can_faults, routed_before)
-        # direct feedthrough from the model descriptions
+
+    @staticmethod
+    def _connection_ends(c, label, a, b):
+        """The two variables a connection joins: both there, of one type, output -> input."""
+        va, vb = a.fmu.vars.get(c.start[1]), b.fmu.vars.get(c.end[1])
+        if va is None or vb is None:
+            from artibus.bench.parameters import no_variable
+            u, var = (a, c.start[1]) if va is None else (b, c.end[1])
+            raise ArtibusError(f"{label}: no variable '{u.path}.{var}' ({no_variable(u.fmu.md, var)})")
+        if va.type != vb.type:
+            raise ArtibusError(f"{label}: types {va.type} -> {vb.type} ({c.start[0]}.{c.start[1]} is "
+                               f"{va.type}, {c.end[0]}.{c.end[1]} is {vb.type}): a connection joins "
+                               f"variables of one type")
+        if va.causality not in ("output", "parameter", "calculatedParameter") or vb.causality != "input":
+            raise ArtibusError(f"{label}: connects a {va.causality} to a {vb.causality} "
+                               f"(expected output -> input)")
+        return va, vb
+
+    def _feedthrough_order(self, where):
+        """Each unit's direct feedthrough from its model description, then self.order
+        (artibus.runner.plan._order: Gauss-Seidel's order, an algebraic loop an error)."""
         for u in self.units:
             inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
             for o in u.fmu.md.outputs:
@@ -165,7 +199,10 @@ class _Setup:
                             + [(src, src.tout[j][0], u, u.tin[i][0])
                                for u in self.units for i, src, j, _ in u.typed_sources], where)
 
-        # recording: every connection's source, plus what was asked for
+    def _recording(self, units, record, where):
+        """self.record: (unit, variable) of every column: what was asked for, else every
+        output connector the bench declares and every connected output; each unit's
+        outputs to read (Real ones in out_names, the others in tout)."""
         self.record = []
         for name in record or []:
             comp, _, var = name.rpartition(".")
@@ -176,7 +213,7 @@ class _Setup:
                 from artibus.bench.parameters import no_variable
                 raise ArtibusError(f"--record {name}: {comp}: {no_variable(units[comp].fmu.md, var)}")
             self.record.append((units[comp], var))
-        if not record:   # every output connector the bench declares, and every connected output
+        if not record:
             for u in self.units:
                 for n in dict.fromkeys(self.bench.components[u.path].outputs + u.out_names
                                        + [n for n, _, _ in u.tout]):
@@ -192,7 +229,11 @@ class _Setup:
             elif n not in u.out_names:
                 u.out_names.append(n)
                 u.out_vrs.append(v.valueReference)
-        for name, f in stimuli.items():       # added to the input: f(t) + its connection or base value
+
+    def _stimuli(self, units, stimuli, where):
+        """Each stimulus {"comp.input": f(t)} on its unit: added to the input's connection,
+        or to its base value (its parameter or start) when it is not connected."""
+        for name, f in stimuli.items():
             comp, _, var = name.rpartition(".")
             v = units[comp].fmu.vars.get(var) if comp in units else None
             if v is None or v.causality != "input" or v.type != "Real":
@@ -207,6 +248,10 @@ class _Setup:
                 u.in_vrs.append(v.valueReference)
                 base = float(self.parameters[comp].get(var, v.start))
                 u.stimuli.append((len(u.in_names) - 1, f, base))
+
+    def _buffers(self):
+        """Each unit's calls and value buffers (_RawCalls, _TypedCalls), its sources into
+        them, the CAN network bound to them."""
         for u in self.units:
             u.raw = (_TypedCalls if u.tout or u.tin else _RawCalls)(u)
             u.out_values = u.raw.out      # read and written in place
@@ -215,17 +260,19 @@ class _Setup:
             u.sources = [(l.dst_index, l.src.raw.out, l.src_index, l.factor, l.offset) for l in u.links_in]
         if self.can is not None:
             self.can.bind()
+
+    def _columns(self):
+        """The result's column names and units; per unit, which outputs go to which columns
+        (self._rec); the String columns (self._text_cols: their texts, _with_texts)."""
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
         self._col_units = {"time": "s", **{f"{u.path}.{n}": declared_unit(u.fmu.vars[n]) or ""
                                            for u, n in self.record}}
-        # recording: per component, which of its outputs go to which columns
         self._rec = []
         for u in self.units:
             cols = [k + 1 for k, (v, _) in enumerate(self.record) if v is u]
             idx = [u.column(n) for v, n in self.record if v is u]
             if cols:
                 self._rec.append((u, np.array(idx), np.array(cols)))
-        # String columns: the recorded numbers turned into their texts (_with_texts)
         self._text_cols = {f"{u.path}.{n}": u for u, n in self.record if u.fmu.vars[n].type == "String"}
 
     def _typed_link(self, c, label, a, va, b, vb):

@@ -12,8 +12,9 @@ artibus.bench.fmi).
   type, exactly, with SSP's mapping transformations (_TypedCalls, _typed_convert);
 - initialisation: every FMU in initialization mode, connected inputs set from
   the outputs they are connected to, repeated to a fixed point (bounded);
-- stepping: Gauss-Seidel in an order derived from the connection graph (an
-  algebraic loop of direct feedthrough is an error naming it), or Jacobi;
+- stepping in the one loop, the C core (artibus.runner.core): Gauss-Seidel in an
+  order derived from the connection graph (an algebraic loop of direct feedthrough
+  is an error naming it), or Jacobi;
   multi-rate: each component has its own communication step, a multiple of the
   base step; slower components hold their inputs;
 - one batched getReal/setReal per component per step;
@@ -26,9 +27,7 @@ artibus.bench.fmi).
   finished by the others, recorded, and the run returns its Result with
   ``terminated`` (artibus.fmu.Termination: which component, when).
 """
-import math
 import shutil
-import sys
 import time as _time
 from pathlib import Path
 
@@ -38,7 +37,7 @@ from fmpy.fmi1 import FMICallException
 from artibus import cache
 from artibus.base import ArtibusError
 from artibus.bench import ssp as ssp_mod
-from artibus.fmu import Result, SimulationError, Termination
+from artibus.fmu import Result, SimulationError
 from artibus.runner.core import _core_stepper
 from artibus.runner.plan import _Plan
 from artibus.runner.results import check_room
@@ -46,15 +45,6 @@ from artibus.runner.setup import _Setup
 from artibus.runner.unit import _last_message
 
 MAX_INIT_ITERATIONS = 50
-_DO_STEP = ("fmi2DoStep", "fmi3DoStep")     # a failure that may be the FMU's own end (_end_of)
-
-
-def _settled(before, now, tol=1e-12):
-    """np.allclose(before, now, rtol=tol, atol=tol), without NumPy's cost on a few
-    values: |b - x| <= tol + tol * |x| for each pair, NaN never settled, an infinity
-    settled only on itself."""
-    return len(before) == len(now) and all(
-        b == x or (math.isfinite(x) and abs(b - x) <= tol + tol * abs(x)) for b, x in zip(before, now))
 
 
 def _read_bench(path):
@@ -113,7 +103,7 @@ class Simulation(_Setup):
         An SSP 2.0 bench with FMI-LS-BUS components runs their network
         (artibus.runner.lsbus_bench) in place of a CAN network; lsbus_wire_time:
         its bus's wireTime (None: the bench's binding)."""
-        self.can = None
+        self.can = self.lsbus = None     # the bench's network: a CAN one, or an FMI-LS-BUS one (network)
         self.single_rate = single_rate
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
@@ -167,102 +157,21 @@ class Simulation(_Setup):
             table[:, j] = np.nan
         return result
 
-    def _step(self, u, t0):
-        w = _time.perf_counter()
-        raw = u.raw
-        raw.step(t0, u.step)
-        raw.read()
-        u.wall += _time.perf_counter() - w
-
-    def _propagate(self, to=None, t=0.0):
-        if to is None:
-            for u in self.units:
-                self._propagate(u, t)
-            return
-        inp = to.in_values
-        for i, out, j, factor, offset in to.sources:
-            inp[i] = factor * out[j] + offset
-        for i, src, j, convert in to.typed_sources:
-            x = src.raw.tout_values[j]
-            to.raw.tin_values[i] = x if convert is None else convert(x)
-        for i, f, base in to.stimuli:
-            inp[i] = (inp[i] if base is None else base) + f(t)
-
-    def _initialize(self, start):
+    def _initialize(self, start, stepper):
+        """Every FMU in Initialization Mode with its parameters, the rounds to the fixed point
+        of the connected inputs and the exits (the core's: _CoreStepper.settle; the exits
+        here when FMPy logs the calls). A failure's unit is self._busy."""
         for u in self.units:
             self._busy = u            # the unit being called: a failure names it
             u.fmu.enter_initialization_mode(start)
             u.fmu.set_values(self.parameters[u.path])
             u.raw.written = None      # every connected input is set at least once
-        settle, self._settle_core = getattr(self, "_settle_core", None), None   # (no cycle: it refers to self)
-        if settle is not None:           # the C core does the rounds, the same, bit for bit (_CoreStepper.settle),
-            exited = settle.settle(MAX_INIT_ITERATIONS)      # and the exits below unless FMPy logs the calls
-        else:
-            self._settle(start)
-            exited = False
+        exited = stepper.settle(MAX_INIT_ITERATIONS)
         for u in () if exited else self.units:
             self._busy = u
             u.fmu.slave.exitInitializationMode()
             u.raw.read()
         self._busy = None
-
-    def _settle(self, start):
-        """The initialisation's rounds to the fixed point of the connected inputs:
-        the inputs of the units that have some (the others are settled as they are);
-        _propagate leaves a unit without sources or stimuli as it is."""
-        watched = [u for u in self.units if len(u.in_values) or getattr(u.raw, "tin_values", None)]
-        fed = [(u, bool(u.sources or u.typed_sources or u.stimuli), bool(u.raw.n_in or u.tin))
-               for u in self.order]
-        gauss_seidel = self.algorithm == "gauss-seidel"
-        for _ in range(MAX_INIT_ITERATIONS):
-            before = [(list(u.in_values), list(getattr(u.raw, "tin_values", ()))) for u in watched]
-            for u, f, _ in fed:
-                self._busy = u
-                u.raw.read()
-                if not gauss_seidel:
-                    self._propagate(None, start)
-                elif f:
-                    self._propagate(u, start)
-            if self.can is not None:     # the core's codec when the core ticks the network (_CanCore.settle)
-                (getattr(self, "_core_can", None) or self.can).settle()
-            for u, f, w in fed:
-                self._busy = u
-                if f:
-                    self._propagate(u, start)
-                if w:                    # (without inputs, write sets nothing)
-                    u.raw.write()
-            for u in self.units:
-                self._busy = u
-                u.raw.read()
-            if all(_settled(b, u.in_values)
-                   and tb == list(getattr(u.raw, "tin_values", ()))
-                   for (b, tb), u in zip(before, watched)):
-                return
-        raise ArtibusError(f"{self.bench.file}: initialisation did not settle in "
-                           f"{MAX_INIT_ITERATIONS} iterations of the connected inputs")
-
-    class _Recorder:
-        """At every base step a copy of each recorded component's output buffer
-        (one memcpy), sorted into the result's columns when it is asked for."""
-
-        def __init__(self, names, rec):
-            self.names, self.rec, self.times = names, rec, []
-            self.buffers = [(u.raw.out, []) for u, _, _ in rec]
-
-        def take(self, t):
-            self.times.append(t)
-            for out, copies in self.buffers:
-                copies.append(bytes(out))
-
-        def result(self):
-            # rows taken whole (an interrupt may have stopped take() midway)
-            n = min([len(self.times)] + [len(copies) for _, copies in self.buffers])
-            table = np.empty((n, len(self.names)))
-            table[:, 0] = self.times[:n]
-            for (u, idx, cols), (_, copies) in zip(self.rec, self.buffers):
-                values = np.frombuffer(b"".join(copies[:n]), dtype=np.float64).reshape(n, u.raw.n_out)
-                table[:, cols] = values[:, idx]
-            return Result.from_array(self.names, table)
 
     def run(self, stop_time=None, start_time=None, progress=False, core=None):
         """Run from the start to the stop time (the bench's DefaultExperiment's
@@ -283,148 +192,40 @@ class Simulation(_Setup):
             raise
 
     def _run(self, stop_time=None, start_time=None, progress=False, core=None):
-        """core: the stepping core in C where it applies (None, the default, unless
-        ARTIBUS_CORE=0), True (it must), False (the Python loop below); see
-        _core_stepper. self.stepping says which ran."""
+        """The run in the one stepping loop (artibus.runner.core); core: None or True (the
+        networks in C where C has them), False (every network in Python, its reference
+        implementation). self.stepping says what ran where."""
         start = self.bench.start_time if start_time is None else start_time
         stop = stop_time if stop_time is not None else self.bench.stop_time
         if stop is None:
             raise ArtibusError(f"{self.bench.file}: no DefaultExperiment stopTime; give --stop-time")
         if not stop > start:
             raise ArtibusError(f"stop time {stop} must be after the start time {start}")
-        rec = self._Recorder(self.names, self._rec)
         h = self.base_step
         n = int(round((stop - start) / h))
         check_room(n + 1, len(self.names), self.bench.file)
-        t = start
-        current = stepping = None
-        plan = _Plan(self.order, n)
-        stepper = _core_stepper(self, plan, None, core)
-        if stepper is not None:
-            stepper.allocate(n)      # (the recorder's, as rec above)
-        self._core_can = stepper.can if stepper is not None else None
-        self._settle_core = stepper
+        stepper = _core_stepper(self, _Plan(self.order, n), core)
+        stepper.allocate(n)
         wall0 = _time.perf_counter()
         try:
-            self._initialize(start)
-            if self.can is not None:
-                self.can.start(start)
-            if stepper is not None:      # the C core does the loop below, the same, bit for bit
-                result = stepper.run(start, h, n, progress)
-                self.wall = _time.perf_counter() - wall0
-                if self.can is not None:
-                    self.can.finish()
-                    end = result.terminated
-                    result = self._with_can_columns(result, stepper.table)
-                    result.terminated = end
-                return result
-            rec.take(t)
-            for k in range(n):
-                stepping = k
-                t = start + k * h
-                if self.can is not None and k % self.can_ratio == 0:
-                    self.can.tick(k // self.can_ratio, t)
-                starting, ending, gs = plan[k]
-                if self.algorithm == "jacobi":
-                    for u in starting:
-                        self._propagate(u, t)
-                    for u in starting:
-                        current = u
-                        u.raw.write()
-                    for u in ending:
-                        current = u
-                        self._step(u, t + h - u.step)
-                else:
-                    for u, starts, ends in gs:
-                        if starts:
-                            self._propagate(u, t)
-                            current = u
-                            u.raw.write()
-                        if ends:
-                            current = u
-                            self._step(u, t + h - u.step)
-                current = None
-                t = start + (k + 1) * h
-                rec.take(t)
-                if progress and k % max(1, n // 50) == 0:
-                    sys.stderr.write(f"\r{self.bench.name}: t = {t:8.2f} s  [{'#' * (50 * (k + 1) // n):50s}]")
-            if progress:
-                sys.stderr.write("\n")
-        except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the results so far go with it
-            if progress:
-                sys.stderr.write("\n")
-            if stepper is None:          # (the core attached its own)
-                e.result = rec.result()
-            raise
-        except FMICallException as e:
-            current = current or getattr(self, "_busy", None)    # (in the initialisation)
-            end = None
-            if stepping is not None and current is not None and e.function in _DO_STEP:
-                end = self._end_of(current, e.status, plan, stepping, t, h)
-            if end is not None:          # the FMU ended the run: a normal end at the end of this step
-                if progress:
-                    sys.stderr.write("\n")
-                rec.take(t + h)
-                self.wall = _time.perf_counter() - wall0
-                result = rec.result()
-                if self.can is not None:
-                    self.can.finish()
-                    result = self._with_can_columns(result)
-                result.terminated = end
-                return result
-            who = current.path if current else "?"
-            log = current.fmu.log if current else [m for u in self.units for m in u.fmu.log]
-            raise SimulationError(f"{self.ssp}: component '{who}' failed at t = {t:g} s: "
-                                  f"{_last_message(log)}", rec.result(), list(log)) from None
+            self._initialize(start, stepper)
+        except FMICallException:
+            who = getattr(self, "_busy", None)
+            log = who.fmu.log if who else [m for u in self.units for m in u.fmu.log]
+            raise SimulationError(f"{self.ssp}: component '{who.path if who else '?'}' failed at t = {start:g} s: "
+                                  f"{_last_message(log)}", Result.from_array(self.names, np.empty((0, len(self.names)))),
+                                  list(log)) from None
+        if self.network is not None:
+            self.network.start(start)
+        result = stepper.run(start, h, n, progress)
         self.wall = _time.perf_counter() - wall0
+        if self.network is not None:
+            self.network.finish()
         if self.can is not None:
-            self.can.finish()
-            return self._with_can_columns(rec.result())
-        return rec.result()
-
-    def _end_of(self, u, status, plan, k, t, h):
-        """After unit u's fmi2DoStep/fmi3DoStep returned ``status`` in base step k
-        (from t, step h): a Termination if it ended the simulation (_RawCalls.ended),
-        with the base step finished (_finish_step), else None (a failure)."""
-        t_end = u.raw.ended(status)
-        if t_end is None:
-            return None
-        self._finish_step(u, plan, k, t, h)
-        return Termination(u.path, t_end if t_end == t_end else t + h,
-                           "terminateSimulation" if u.raw.fmi == 3 else "fmi2Terminated")
-
-    def _finish_step(self, ended, plan, k, t, h):
-        """The rest of base step k after ``ended`` ended the simulation in its
-        fmi2DoStep, in Python for either loop (the C core stops at the call that
-        returned fmi2Discard; its buffers are these): ``ended``'s outputs read
-        (getters are allowed after fmi2Discard: its values at its last successful
-        time), then the propagations, writes and steps the plan has after it in
-        this base step, so that every unit ends the step at t + h as in the other
-        steps. A unit that ends the simulation there too is read as well; one that
-        fails is a SimulationError naming it."""
-        ended.raw.read()
-        starting, ending, gs = plan[k]
-        if self.algorithm == "jacobi":       # (every input was set before the steps)
-            rest = [(u, False, True) for u in ending[ending.index(ended) + 1:]]
-        else:
-            i = next(i for i, (u, _, _) in enumerate(gs) if u is ended)
-            rest = gs[i + 1:]
-        for u, starts, ends in rest:
-            try:
-                if starts:
-                    self._propagate(u, t)
-                    u.raw.write()
-                if ends:
-                    try:
-                        self._step(u, t + h - u.step)
-                    except FMICallException as e:
-                        if e.function not in _DO_STEP or u.raw.ended(e.status) is None:
-                            raise
-                    u.raw.read()
-            except FMICallException:
-                raise SimulationError(f"{self.ssp}: component '{u.path}' failed at t = {t:g} s "
-                                      f"(after '{ended.path}' ended the simulation): "
-                                      f"{_last_message(u.fmu.log)}", None, list(u.fmu.log)) from None
+            end = result.terminated
+            result = self._with_can_columns(result, stepper.table)
+            result.terminated = end
+        return result
 
     def _with_can_columns(self, result, wide=None):
         """can.<message>.sinceGood: row i > 0 holds the value after the last tick
@@ -447,9 +248,20 @@ class Simulation(_Setup):
             return Result.from_array(result.names + names, wide)
         return Result.from_array(result.names + names, np.column_stack([table] + cols))
 
+    @property
+    def network(self):
+        """The bench's network, CAN (self.can: artibus.can.Network) or FMI-LS-BUS
+        (self.lsbus: artibus.runner.lsbus_bench.LsBusSteering), or None."""
+        return self.can if getattr(self, "can", None) is not None else getattr(self, "lsbus", None)
+
+    @property
+    def network_ratio(self):
+        """Base steps per tick of the bench's network."""
+        return self.can_ratio if self.can is not None else self.lsbus_ratio
+
     def close(self):
-        if getattr(self, "can", None) is not None:
-            self.can.close()
+        if self.network is not None:
+            self.network.close()
         for u in getattr(self, "units", []):
             u.fmu.close()
         if getattr(self, "_tmp_owned", False):     # (a cache entry stays: artibus.cache)
@@ -458,8 +270,11 @@ class Simulation(_Setup):
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type, *exc):
         self.close()
+        failed = getattr(self.network, "log_error", None)
+        if exc_type is None and failed:     # the --can-log that failed (a full disk): said after the results
+            raise ArtibusError(failed)
 
 
 def run(ssp, stop_time=None, step=None, overrides=None, record=None,

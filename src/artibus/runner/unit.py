@@ -145,8 +145,8 @@ class _TypedCalls(_RawCalls):
     in ``out``: a Boolean as 0/1, an Integer or Enumeration as its value, a
     String as the number of its text in ``texts`` (the order in which each
     text was first seen). The inputs to set are in ``tin_values``; unchanged
-    ones are not set again. The C stepping core does not run such a bench
-    (Simulation.stepping says so)."""
+    ones are not set again. The C stepping core sets and gets the Real ones and calls
+    back for the others (read_typed, write_typed: artibus.runner.core._Hooks)."""
 
     def __init__(self, unit):
         super().__init__(unit)
@@ -180,6 +180,11 @@ class _TypedCalls(_RawCalls):
             if status > 1:  # fmi2Discard or worse
                 raise FMICallException(function="fmi3GetFloat64" if self.fmi == 3 else "fmi2GetReal",
                                        status=status)
+        self.read_typed()
+
+    def read_typed(self):
+        """The typed outputs (FMPy's calls), after the Real ones (the stepping core's
+        AC_HOOK_READ: the core reads the Real ones)."""
         for t, idx, vrs in self._get_groups:
             values = getattr(self.slave, f"get{t}")(vrs)
             for i, x in zip(idx, values):
@@ -193,6 +198,11 @@ class _TypedCalls(_RawCalls):
 
     def write(self):
         super().write()
+        self.write_typed()
+
+    def write_typed(self):
+        """The typed inputs that changed (FMPy's calls), after the Real ones (the
+        stepping core's AC_HOOK_WRITE)."""
         if self.tin_values and self.tin_values != self.tin_written:
             for t, idx, vrs in self._set_groups:
                 getattr(self.slave, f"set{t}")(vrs, [self.tin_values[i] for i in idx])

@@ -14,4 +14,8 @@ typedef struct {
     unsigned fault;         /* fault bits of the last sample (a message when a bit turns on) */
 } ModelState;
 
+/* it samples every Ts (parameter, > 0): a step of more than MAX_SAMPLES_PER_STEP
+   samples is refused by the layer (fmu.h) */
+#define MODEL_SAMPLE_PERIOD(d) ((d)->Ts)
+
 #endif

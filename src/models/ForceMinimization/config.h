@@ -14,6 +14,10 @@ typedef struct {
     double gamma4, gamma6;  /* the gamma4, gamma6 inputs held at the last sample (law = likeGuided) */
 } ModelState;
 
+/* it samples every Ts (parameter, > 0): a step of more than MAX_SAMPLES_PER_STEP
+   samples is refused by the layer (fmu.h) */
+#define MODEL_SAMPLE_PERIOD(d) ((d)->Ts)
+
 /* the values of the parameter law (modelDescription/ForceMinimization.xml) */
 enum { LAW_STRAIGHT = 0, LAW_FORCE_MINIMIZATION = 1, LAW_LIKE_GUIDED = 2 };
 

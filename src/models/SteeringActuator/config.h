@@ -20,4 +20,8 @@ typedef struct {
 #endif
 } ModelState;
 
+/* it samples every Ts (parameter, > 0): a step of more than MAX_SAMPLES_PER_STEP
+   samples is refused by the layer (fmu.h) */
+#define MODEL_SAMPLE_PERIOD(d) ((d)->Ts)
+
 #endif

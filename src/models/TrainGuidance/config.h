@@ -15,4 +15,8 @@ typedef struct {
     int backwards;          /* driving direction of the last sample */
 } ModelState;
 
+/* it samples every Ts (parameter, > 0): a step of more than MAX_SAMPLES_PER_STEP
+   samples is refused by the layer (fmu.h) */
+#define MODEL_SAMPLE_PERIOD(d) ((d)->Ts)
+
 #endif

@@ -8,6 +8,7 @@ import os
 import sys
 import time
 import weakref
+from pathlib import Path
 
 import numpy as np
 
@@ -31,9 +32,34 @@ def _scatter(client, info, again=False):
     return got[1]
 
 
+def scheduler_lost(client, wait_s=30.0):
+    """True when ``client`` has lost its scheduler (killed, its machine gone):
+    Dask's client tries to reconnect for distributed.comm.timeouts.connect
+    (status "connecting"), waited for here (up to ``wait_s``), then closes
+    itself. False while it is running (a worker died: the sweep sends its
+    cases again)."""
+    t0 = time.monotonic()
+    while getattr(client, "status", "running") == "connecting" and time.monotonic() - t0 < wait_s:
+        time.sleep(0.05)
+    return getattr(client, "status", "running") != "running"
+
+
+def lost_message(client, scheduler, out, done, e):
+    """The one line a sweep says when its scheduler is lost: which, why, what
+    is kept (``done`` cases of this run, each in out/cases, written as it came
+    back) and how to go on (the same command: finished cases are skipped)."""
+    where = scheduler or getattr(getattr(client, "scheduler", None), "address", None) or "of the sweep"
+    why = " ".join(str(e).split())          # (Dask's text has lines: one line here)
+    return (f"the Dask scheduler {where} was lost mid-sweep ({type(e).__name__}: {why}); the {done} case(s) "
+            f"finished in this run are kept in {Path(out) / 'cases'}; run the same command again to resume "
+            f"(finished cases are skipped)")
+
+
 def _client(scheduler, workers):
     from dask.distributed import Client, LocalCluster
     if scheduler:
+        # a lost scheduler is said by the sweep in one line (lost_message), not by Dask's client log too
+        logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
         try:
             return Client(scheduler, timeout="5s"), None
         except (OSError, TimeoutError) as e:

@@ -9,11 +9,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from artibus.base import ArtibusError
-from artibus.study.sweep.cluster import _Chunks, _client, _Progress, _scatter
+from artibus.study.sweep.cluster import _Chunks, _client, _Progress, _scatter, lost_message, scheduler_lost
 from artibus.study.sweep.designs import (Design, _product_lists, bench_info, build_cases, case_key, parse_values,
                                          read_design, typed_value)
 from artibus.study.sweep.plots import study
-from artibus.study.sweep.store import (CASES_DIR, MANIFEST, SERIES_DIR, STATUS_FAILED, FolderLock, _case_row,
+from artibus.study.sweep.store import (CASES_DIR, MANIFEST, PLOT, SERIES_DIR, STATUS_FAILED, TABLE, WORST,
+                                       FolderLock, _case_row,
                                        _parquet_bytes, _table, _write_bytes, _write_text, assemble, read_case)
 from artibus.study.sweep.worker import release, run_cases
 
@@ -30,6 +31,17 @@ class SweepResult:
     @property
     def rate(self):
         return 60 * self.ran / self.wall if self.wall > 0 else math.nan
+
+
+def _refuse_inputs(out, bench, design):
+    """The output folder and the files a sweep writes in it, none of them an
+    input of the sweep (its design file, the bench, the runner's packs and FMUs,
+    ssp/: artibus.files.bench_inputs), checked by identity before anything runs."""
+    from artibus.files import bench_inputs, check_not_input
+    inputs = ([(Path(design), "the design file")] if design else []) + bench_inputs(bench)
+    check_not_input(out, "-o", inputs)
+    for name in (TABLE, MANIFEST, WORST, PLOT):
+        check_not_input(out / name, "-o", inputs)
 
 
 def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep", stop_time=None, step=None,
@@ -80,6 +92,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
     settings = {"stop_time": stop_time, "step": step, "fixed": fixed}
     keys = [case_key(info, c, settings) for c in all_cases]
     out = Path(out)
+    _refuse_inputs(out, bench, design)
     (out / CASES_DIR).mkdir(parents=True, exist_ok=True)
     if keep_series:
         (out / SERIES_DIR).mkdir(exist_ok=True)
@@ -141,12 +154,15 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                     return f
 
                 from dask.distributed import as_completed
+                from artibus.runner.markers import mark
                 done = as_completed([submit() for _ in range(min(chunks.in_flight(), len(unique)))])
                 for f in done:
                     items = running.pop(f)
                     try:
                         results = f.result()
                     except Exception as e:       # the worker died (not an error of a case)
+                        if scheduler_lost(client):   # (or the scheduler: said below)
+                            raise
                         if data.status != "finished":        # the bench's copies died with the workers
                             data = _scatter(client, info, again=True)
                         # a task of several: which case killed it? each again alone. A case alone:
@@ -174,9 +190,14 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                             _write_bytes(series_file, os.path.join(series_dir, f"{keys[i]}.parquet"))
                         _write_bytes(case_file if case_file is not None else _parquet_bytes(_table([row])),
                                      os.path.join(cases_dir, f"{keys[i]}.parquet"))
+                        mark(f"case {keys[i]}")            # for the tests (artibus.runner.markers)
                         rows[keys[i]] = row
                         if bar:
                             bar.update(bad)
+            except Exception as e:                # the scheduler lost (killed): each case done is on disk
+                if not scheduler_lost(client):
+                    raise
+                raise ArtibusError(lost_message(client, scheduler, out, len(rows), e)) from None
             finally:
                 if own:
                     try:

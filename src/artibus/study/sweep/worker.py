@@ -143,7 +143,7 @@ def _simulate(ssp, overrides, stop_time, step, content=None):
         ok = True
         return r
     finally:
-        if ok and REUSE and sim.can is None:
+        if ok and REUSE and sim.network is None:
             with _LOCK:
                 _SIMS[key] = (sim, content)
         else:
