@@ -71,7 +71,7 @@ static int hook(ac_sim *sim, int what, int j, long k, double t) {
 /* Simulation._propagate(u, t): the sources and C stimuli, then what Python adds */
 static int propagate_unit(ac_sim *sim, int j, long k, double t) {
     propagate(&sim->units[j]);
-    return hook(sim, AC_HOOK_PROPAGATE, j, k, t);
+    return sim->units[j].hooks & AC_HOOK_PROPAGATE ? hook(sim, AC_HOOK_PROPAGATE, j, k, t) : AC_OK;
 }
 
 static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the FMU holds them already */
@@ -804,7 +804,7 @@ static int do_op(ac_sim *sim, int i, int end, long k, double t, fmi2Status *st, 
         failed = call_unit(u, 0, 1, t + h - u->step, st);
         break;
     }
-    if (!failed && (step || sim->op_kind[i] == AC_STEP))
+    if ((u->hooks & AC_HOOK_READ) && !failed && (step || sim->op_kind[i] == AC_STEP))
         failed = hook(sim, AC_HOOK_READ, j, k, t);   /* its typed outputs */
     return failed;
 }

@@ -97,14 +97,6 @@ def _lsbus_stimuli(sim):
     return core_stimuli(sim.lsbus, sim)
 
 
-def _function(u, name):
-    """The address of an FMI function of unit u's library, None when it lacks it."""
-    try:
-        return cast(getattr(u.fmu.slave.dll, name), c_void_p).value
-    except AttributeError:
-        return None
-
-
 class _Hooks:
     """core.h's ac_hook: the parts of the one loop the core calls back for (see the module's
     docstring), the same Python code the units' and networks' own methods are. An exception
@@ -205,7 +197,7 @@ class _CoreStepper:
                 s.doStep3, s.getFloat64, s.setFloat64 = calls
             else:
                 s.doStep, s.getReal, s.setReal = calls
-                s.getBooleanStatus, s.getRealStatus = (_function(u, f"fmi2Get{w}Status") for w in ("Boolean", "Real"))
+                s.getBooleanStatus, s.getRealStatus = raw.status_functions
             s.step, s.n_out, s.n_in = u.step, getattr(raw, "n_real", raw.n_out), raw.n_in
             s.out_vrs, s.out = addressof(raw.out_vrs), addressof(raw.out)
             s.in_vrs, s.inp = addressof(raw.in_vrs), addressof(raw.inp)
@@ -248,7 +240,8 @@ class _CoreStepper:
         if self.plan.table is not None:
             s.period, s.op_start = self.period, addressof(self.op_start)
             s.op_kind, s.op_unit = addressof(self.op_kind), addressof(self.op_unit)
-        s.hook = cast(self.hooks.c, c_void_p).value
+        needed = python_net or any(a.hooks for a in self.units)
+        s.hook = cast(self.hooks.c, c_void_p).value if needed else None     # (no call into Python)
         s.hook_ratio = sim.network_ratio if python_net else 0
         self._struct_ref = byref(s)
 

@@ -28,11 +28,23 @@ def core_library_path():
 def load():
     """(the loaded core library, None) or (None, why not): not built, not loadable,
     or a layout table ctypes cannot reproduce (artibus.runner.layout)."""
-    path = core_library_path()
-    if path not in _loaded:
-        _loaded[path] = _load(path)
-    got = _loaded[path]
+    got = _entry()
     return (got[0], None) if got[0] is not None else got
+
+
+_current = [None, None]         # (the environment it was for, _loaded's entry of its library)
+
+
+def _entry():
+    """_loaded's entry of the library in use, looked up again only when the environment that
+    chooses it ($ARTIBUS_CORE_LIB, $ARTIBUS_FMU_DIR) changed: no path built or stat made per call."""
+    key = (os.environ.get("ARTIBUS_CORE_LIB"), os.environ.get("ARTIBUS_FMU_DIR"))
+    if _current[0] != key:
+        path = core_library_path()
+        if path not in _loaded:
+            _loaded[path] = _load(path)
+        _current[:] = [key, _loaded[path]]
+    return _current[1]
 
 
 def _load(path):
@@ -60,7 +72,7 @@ def _load(path):
 def struct(name):
     """The ctypes class of core.h's or lsbus.h's struct ``name`` (e.g. "ac_unit"), as
     the library in use lays it out; ArtibusError when the library is not there."""
-    lib, why = load()
+    lib, structs = _entry()
     if lib is None:
-        raise ArtibusError(f"the C stepping core: {why}")
-    return _loaded[core_library_path()][1][name]
+        raise ArtibusError(f"the C stepping core: {structs}")
+    return structs[name]

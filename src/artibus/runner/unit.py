@@ -58,6 +58,15 @@ class Unit:
         return len(self.out_names) + [n for n, _, _ in self.tout].index(name)
 
 
+def _address(dll, name):
+    """The address of the function ``name`` of a library, None when it lacks it."""
+    from ctypes import cast
+    try:
+        return cast(getattr(dll, name), c_void_p).value
+    except AttributeError:
+        return None
+
+
 class _RawCalls:
     """fmi2GetReal/SetReal/DoStep called through ctypes directly, with the value
     references and value buffers allocated once: one call per component and
@@ -95,6 +104,10 @@ class _RawCalls:
         self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
         self.inp = (c_double * self.n_in)()
         self.written = None       # the input values last set (bytes): unchanged ones are not set again
+        # FMI 2.0: fmi2GetBooleanStatus/fmi2GetRealStatus, whose fmi2Terminated says the FMU ended
+        # the run (the stepping core asks them: core.h's ac_unit), None where the library lacks them
+        self.status_functions = (None, None) if self.fmi == 3 else tuple(
+            _address(dll, f"fmi2Get{w}Status") for w in ("Boolean", "Real"))
         self._true = c_int(1)     # noSetFMUStatePriorToCurrentPoint
 
     def read(self):
