@@ -1,7 +1,7 @@
-/* The runner's stepping core: see core.h. Each block below names the line of
- * Simulation.run (src/artibus/runner/simulation.py) it does the same as. Compiled with
- * -ffp-contract=off: factor * out + offset must stay a multiply and an add,
- * as in Python, never a fused multiply-add. */
+/* The runner's stepping core, the one stepping loop: see core.h and
+ * docs/developer/stepping-core.md. Compiled with -ffp-contract=off: factor * out +
+ * offset stays a multiply and an add, as SSP 1.0's LinearTransformation is written
+ * (and as Python computes it, in the tests' closed forms), never a fused multiply-add. */
 #define _POSIX_C_SOURCE 200809L
 #include "core.h"
 
@@ -40,7 +40,7 @@ unsigned long long artibus_stamp(void) {      /* lsbus.c's timing of the network
     return stamp();
 }
 
-static void record(ac_sim *sim, long row, double t) {   /* _Recorder.take */
+static void record(ac_sim *sim, long row, double t) {   /* row `row` of the result table at t */
     double *r = sim->table + (size_t)row * (size_t)sim->n_cols;
     r[0] = t;
     for (int i = 0; i < sim->n_runs; i++) {  /* runs of consecutive outputs: a copy each */
@@ -50,7 +50,7 @@ static void record(ac_sim *sim, long row, double t) {   /* _Recorder.take */
     }
 }
 
-static void propagate(ac_unit *u) {           /* Simulation._propagate(u, t): its sources, its C stimuli */
+static void propagate(ac_unit *u) {           /* the unit's inputs from its sources, then its C stimuli */
     for (int s = 0; s < u->n_sources; s++) {
         const ac_source *q = &u->sources[s];
         *q->dst = q->factor * *q->src + q->offset;
@@ -68,13 +68,13 @@ static int hook(ac_sim *sim, int what, int j, long k, double t) {
     return sim->hook(what, j, k, t) < 0 ? AC_HOOK : AC_OK;
 }
 
-/* Simulation._propagate(u, t): the sources and C stimuli, then what Python adds */
+/* the unit's inputs: the sources and C stimuli, then what Python adds (AC_HOOK_PROPAGATE) */
 static int propagate_unit(ac_sim *sim, int j, long k, double t) {
     propagate(&sim->units[j]);
     return sim->units[j].hooks & AC_HOOK_PROPAGATE ? hook(sim, AC_HOOK_PROPAGATE, j, k, t) : AC_OK;
 }
 
-static int inputs_changed(const ac_unit *u) { /* _RawCalls.write: not when the FMU holds them already */
+static int inputs_changed(const ac_unit *u) { /* set them only when the FMU does not hold them already */
     if (!u->n_in)
         return 0;
     if (!u->has_written)
@@ -140,7 +140,7 @@ static int unit_ended(ac_unit *u, fmi2Status st) {
     return 1;
 }
 
-/* _RawCalls.write (write: its inputs changed), then Simulation._step(u, t)
+/* its inputs set (write: they changed), then its step from t and its outputs read
  * (step: the plan steps it right after, as Gauss-Seidel's propagate, write,
  * step of one unit does): the FMU's calls within one pair of stamps, its
  * time. Returns AC_OK or the function that failed, its status in *st. */
@@ -557,7 +557,7 @@ AC_EXPORT int artibus_core_can_settle(ac_can *c) {
 
 AC_EXPORT void artibus_core_record_start(ac_sim *sim) { record(sim, 0, sim->start); }
 
-/* _RawCalls.read: fmi2GetReal of its outputs, its time in ticks; then its typed outputs (Python) */
+/* fmi2GetReal of its outputs, its time in ticks; then its typed outputs (Python) */
 static int read_unit(ac_sim *sim, int j, long k, double t, fmi2Status *st) {
     ac_unit *u = &sim->units[j];
     if (u->n_out) {
@@ -570,7 +570,7 @@ static int read_unit(ac_sim *sim, int j, long k, double t, fmi2Status *st) {
     return hook(sim, AC_HOOK_READ, j, k, t);
 }
 
-/* _RawCalls.write: its Real inputs when they changed, then its typed ones (Python) */
+/* its Real inputs when they changed, then its typed ones (Python) */
 static int write_unit(ac_sim *sim, int j, long k, double t, fmi2Status *st) {
     ac_unit *u = &sim->units[j];
     int failed = AC_OK;
@@ -579,7 +579,7 @@ static int write_unit(ac_sim *sim, int j, long k, double t, fmi2Status *st) {
     return hook(sim, AC_HOOK_WRITE, j, k, t);
 }
 
-static int settled(double b, double x) {     /* runner._settled, one pair (tol 1e-12) */
+static int settled(double b, double x) {     /* |b - x| <= 1e-12 + 1e-12 |x|, NaN never, inf only on itself */
     const double tol = 1e-12;
     return b == x || (isfinite(x) && fabs(b - x) <= tol + tol * fabs(x));
 }
@@ -630,7 +630,7 @@ static int settle_reads(ac_sim *sim, ac_settle *z, double t0) {
 static int settle_writes(ac_sim *sim, ac_settle *z, double t0) {
     fmi2Status st = fmi2OK;
     int failed;
-    if (z->can) {                            /* _CanCore.settle */
+    if (z->can) {                            /* the C CAN network's settle */
         const int bad = artibus_core_can_settle(z->can);
         if (bad >= 0)
             return fail(sim, bad, AC_CAN, fmi2OK, -1);
@@ -679,7 +679,7 @@ static int settle_rounds(ac_sim *sim, ac_settle *z) {
     return AC_UNSETTLED;
 }
 
-/* Simulation._initialize's end: each unit fmi2/fmi3ExitInitializationMode, then read */
+/* the initialisation's end: each unit fmi2/fmi3ExitInitializationMode, then read */
 static int exit_initialization(ac_sim *sim, ac_settle *z) {
     fmi2Status st = fmi2OK;
     int failed;
@@ -787,7 +787,7 @@ static int do_op(ac_sim *sim, int i, int end, long k, double t, fmi2Status *st, 
     switch (sim->op_kind[i]) {
     case AC_PROPAGATE:
         return propagate_unit(sim, j, k, t);
-    case AC_WRITE:                                   /* _RawCalls.write, and its step if next */
+    case AC_WRITE:                                   /* its inputs set, and its step if next */
         if (u->hooks & AC_HOOK_WRITE) {              /* (its typed inputs between the two) */
             if ((failed = write_unit(sim, j, k, t, st)) || !step)
                 return failed;
@@ -800,7 +800,7 @@ static int do_op(ac_sim *sim, int i, int end, long k, double t, fmi2Status *st, 
                 failed = call_unit(u, write, step, t + h - u->step, st);
         }
         break;
-    default:                                         /* Simulation._step(u, t + h - u.step) */
+    default:                                         /* its step from t + h - u.step */
         failed = call_unit(u, 0, 1, t + h - u->step, st);
         break;
     }
@@ -809,7 +809,7 @@ static int do_op(ac_sim *sim, int i, int end, long k, double t, fmi2Status *st, 
     return failed;
 }
 
-/* The rest of base step k after the unit of op i ended the simulation (Simulation._finish_step):
+/* The rest of base step k after the unit of op i ended the simulation:
  * its outputs read (getters are allowed after fmi2Discard: its values at its last successful
  * time), then the ops the plan has after it, so that every unit ends the step at t + h; a unit
  * that ends the simulation there too is read as well. AC_OK, or a failure (ended_unit set). */

@@ -1,13 +1,13 @@
-/* The runner's stepping core (issue 13): the per-step loop of
- * artibus.runner.Simulation.run in C, called with ctypes.
+/* The runner's stepping core (issues 13, 37): the one stepping loop of every
+ * bench (artibus.runner.Simulation.run), in C, called with ctypes.
  *
- * Python sets the bench up, initialises it, builds the plan below and calls
- * artibus_core_run() for a range of base steps; the core calls the FMUs'
- * fmi2SetReal/fmi2DoStep/fmi2GetReal through their function pointers, on the
- * same value buffers the Python loop uses, with the same floating-point
- * operations in the same order, so the results are bit for bit those of the
- * Python loop. Plain C11, no Python headers, no heap use: every array is
- * Python's (see src/artibus/runner/core.py, _CoreStepper).
+ * Python sets the bench up, puts its FMUs into Initialization Mode, builds the
+ * plan below and calls artibus_core_settle() (the initialisation's fixed point)
+ * and artibus_core_run() for a range of base steps; the core calls the FMUs'
+ * fmi2SetReal/fmi2DoStep/fmi2GetReal through their function pointers, on value
+ * buffers Python allocated, and calls back into Python (ac_hook) for what runs
+ * there. Plain C11, no Python headers, no heap use: every array is Python's (see
+ * src/artibus/runner/core.py, _CoreStepper).
  *
  * A unit is an FMI 2.0 or an FMI 3.0 instance (ac_unit.fmi): FMI 3.0's
  * fmi3SetFloat64/fmi3DoStep/fmi3GetFloat64 take the same values in the same
@@ -39,8 +39,8 @@ typedef struct {
     double factor, offset;
 } ac_source;
 
-/* an FMI-LS-BUS network's output onto a unit's input (Simulation._propagate's stimulus
- * of artibus.runner.lsbus_bench: f(t) = *value - minus, added to base or, has_base 0,
+/* an FMI-LS-BUS network's output onto a unit's input (the stimulus of
+ * artibus.runner.lsbus_bench: f(t) = *value - minus, added to base or, has_base 0,
  * to the input's connection): *dst = (has_base ? base : *dst) + (*value - minus) */
 typedef struct {
     double *dst;
@@ -93,7 +93,7 @@ typedef struct {
     unsigned long long ticks;       /* the same in the processor's time-stamp counter, within one call */
     int terminate;                  /* FMI 3.0: its last fmi3DoStep's terminateSimulation */
     double last_successful_time;    /* FMI 3.0: its last fmi3DoStep's lastSuccessfulTime */
-    int n_stimuli;                  /* applied after its sources (Simulation._propagate's order) */
+    int n_stimuli;                  /* applied after its sources */
     const ac_stimulus *stimuli;
     int hooks;                      /* AC_HOOK_PROPAGATE | _READ | _WRITE | _SNAPSHOT: what ac_sim.hook does for it */
     /* FMI 2.0: fmi2DoStep's fmi2Discard ends the run when fmi2Terminated is true (FMI 2.0 4.2.3) */
@@ -232,7 +232,7 @@ unsigned artibus_can_e2e_crc(const unsigned char *data, int dlc, unsigned data_i
  * encoded (Python's encoder says why); the messages before it are done. */
 int artibus_core_can_settle(ac_can *c);
 
-/* Simulation._initialize's fixed point of the connected inputs (between
+/* The initialisation's fixed point of the connected inputs (between
  * the parameters and fmi2ExitInitializationMode), on the units' buffers:
  * up to max_iter rounds of: each unit of order[0..n_order-1] read
  * (fmi2GetReal) and its inputs propagated (Gauss-Seidel: its own, if it has
@@ -248,7 +248,7 @@ typedef union {                     /* a unit's exit, as its fmi */
 } ac_exit_init;
 
 typedef struct {
-    const int *order;               /* n_order unit indices: Simulation.order */
+    const int *order;               /* n_order unit indices: Gauss-Seidel's order (Simulation.order) */
     int n_order;
     int gauss_seidel;               /* 0: Jacobi */
     int max_iter;                   /* MAX_INIT_ITERATIONS */
@@ -274,7 +274,7 @@ void artibus_core_record_start(ac_sim *sim);
 
 /* Base steps k0 .. k1 - 1, each recorded into row k + 1. Returns 0, or the
  * failing function (AC_DO_STEP, ...) with fail_unit/fail_status/fail_k set:
- * rows 0 .. fail_k are then filled, as the Python loop keeps them. */
+ * rows 0 .. fail_k are then filled; AC_ENDED: rows 0 .. fail_k + 1. */
 int artibus_core_run(ac_sim *sim, long k0, long k1);
 
 #endif

@@ -37,7 +37,6 @@ from artibus.runner.markers import mark
 from artibus.runner.unit import _last_message
 
 CORE_PIECE = 5000                  # base steps per call into the core (without the progress bar)
-_AC_PROPAGATE, _AC_WRITE, _AC_STEP = 0, 1, 2
 # core.h's failures: the function that failed, or what stopped the core
 _AC_DO_STEP, _AC_GET_REAL, _AC_SET_REAL, _AC_CAN, _AC_UNSETTLED, _AC_EXIT_INIT = 1, 2, 3, 4, 5, 6
 _AC_LSBUS, _AC_HOOK, _AC_ENDED = 7, 8, 9
@@ -308,20 +307,10 @@ class _CoreStepper:
     def _ops(self, steps, period):
         """op_start/op_kind/op_unit for the core: entry p (0 <= p < period) does base
         step steps[p]'s operations (the core does those of entry k % period at step k)."""
-        sim, index = self.sim, self._index
+        index, jacobi = self._index, self.sim.algorithm == "jacobi"
         kinds, who, start = [], [], [0]
         for k in steps:
-            starting, ending, gs = self.plan[k] if k is not None else ((), (), ())
-            if sim.algorithm == "jacobi":
-                ops = ([(_AC_PROPAGATE, u) for u in starting] + [(_AC_WRITE, u) for u in starting]
-                       + [(_AC_STEP, u) for u in ending])
-            else:
-                ops = []
-                for u, starts, ends in gs:
-                    if starts:
-                        ops += [(_AC_PROPAGATE, u), (_AC_WRITE, u)]
-                    if ends:
-                        ops.append((_AC_STEP, u))
+            ops = self.plan.ops(k, jacobi) if k is not None else []
             kinds += [k for k, _ in ops]
             who += [index[id(u)] for _, u in ops]
             start.append(len(kinds))

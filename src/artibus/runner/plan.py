@@ -54,6 +54,7 @@ def _order(units, links, where):
     return ordered
 
 
+AC_PROPAGATE, AC_WRITE, AC_STEP = 0, 1, 2     # core.h's operations (the plan as data: _Plan.ops)
 PLAN_TABLE = 4096       # base steps of the plan's period tabulated at most (see _Plan)
 
 
@@ -81,6 +82,24 @@ class _Plan:
         gs = [(u, k % u.ratio == 0, (k + 1) % u.ratio == 0) for u in self.order
               if k % u.ratio == 0 or (k + 1) % u.ratio == 0]
         return starting, ending, gs
+
+    def ops(self, k, jacobi=False):
+        """Base step k's operations in the order the stepping core does them, as data:
+        [(kind, unit)], kind core.h's AC_PROPAGATE (the unit's inputs from its sources),
+        AC_WRITE (set them), AC_STEP (its step, then its outputs read). Gauss-Seidel: per
+        unit of the order, propagate and write when its step starts, step when it ends;
+        Jacobi: every starting unit propagated, then written, then every ending unit stepped."""
+        starting, ending, gs = self[k]
+        if jacobi:
+            return ([(AC_PROPAGATE, u) for u in starting] + [(AC_WRITE, u) for u in starting]
+                    + [(AC_STEP, u) for u in ending])
+        ops = []
+        for u, starts, ends in gs:
+            if starts:
+                ops += [(AC_PROPAGATE, u), (AC_WRITE, u)]
+            if ends:
+                ops.append((AC_STEP, u))
+        return ops
 
     def __getitem__(self, k):
         return self.table[k % self.period] if self.table is not None else self.entry(k)

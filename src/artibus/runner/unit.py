@@ -4,13 +4,13 @@ fmi3GetFloat64/SetFloat64/DoStep) through ctypes on buffers allocated once
 (``_RawCalls``), Integer, Boolean, String and Enumeration variables through
 FMPy's calls (``_TypedCalls``, the conversion of such a connection:
 ``_typed_convert``)."""
-from ctypes import CDLL, byref, c_bool, c_double, c_int, c_size_t, c_uint, c_void_p
+from ctypes import CDLL, c_double, c_int, c_size_t, c_uint, c_void_p
 from dataclasses import dataclass, field
 
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
-from artibus.fmu import Fmu, terminated
+from artibus.fmu import Fmu
 
 
 @dataclass
@@ -68,18 +68,15 @@ def _address(dll, name):
 
 
 class _RawCalls:
-    """fmi2GetReal/SetReal/DoStep called through ctypes directly, with the value
-    references and value buffers allocated once: one call per component and
-    step, without FMPy's per-call wrapper (it logs and converts lists). The
-    functions come from a handle of our own on the FMU's library (FMPy's are
-    left as they are) and get ctypes objects made once, not Python values to
-    convert at every call.
-
-    An FMI 3.0 FMU (``fmi`` 3) is called through fmi3GetFloat64/SetFloat64,
-    whose nValues is nValueReferences (scalar Float64 variables, FMI 3.0
-    2.2.6.2), and fmi3DoStep, whose terminateSimulation (FMI 3.0 4.2.1) says
-    what FMI 2.0's fmi2Discard with fmi2Terminated says: the FMU ended the run
-    (``ended``)."""
+    """A unit's fmi2GetReal/SetReal/DoStep (FMI 3.0: fmi3GetFloat64/SetFloat64, whose
+    nValues is nValueReferences for scalar Float64 variables, FMI 3.0 2.2.6.2;
+    fmi3DoStep), from a handle of our own on the FMU's library (FMPy's are left as
+    they are), with the value references and value buffers allocated once: the
+    stepping core calls them through their addresses on these buffers
+    (artibus.runner.core), Python's read and write only in the initialisation's
+    exits. Whether a step ended the run is the core's to decide (core.c's
+    unit_ended: FMI 3.0's terminateSimulation, FMI 2.0's fmi2Discard with
+    fmi2Terminated, through status_functions)."""
 
     def __init__(self, unit):
         slave = unit.fmu.slave
@@ -96,9 +93,7 @@ class _RawCalls:
         self._n_out, self._n_in = c_size_t(self.n_out), c_size_t(self.n_in)
         # FMI 3.0: nValues after the values; fmi3DoStep's out-arguments
         self._nv_out, self._nv_in = ((self._n_out,), (self._n_in,)) if self.fmi == 3 else ((), ())
-        self._event, self._terminate, self._early, self._last = c_bool(), c_bool(), c_bool(), c_double()
-        self._outs = tuple(byref(x) for x in (self._event, self._terminate, self._early, self._last))
-        self.terminate, self.last_successful_time = False, None
+        self.terminate, self.last_successful_time = False, None     # (after the core's run: AC_ENDED)
         self.out_vrs = (c_uint * self.n_out)(*unit.out_vrs)
         self.out = (c_double * self.n_out)()
         self.in_vrs = (c_uint * self.n_in)(*unit.in_vrs)
@@ -108,7 +103,6 @@ class _RawCalls:
         # the run (the stepping core asks them: core.h's ac_unit), None where the library lacks them
         self.status_functions = (None, None) if self.fmi == 3 else tuple(
             _address(dll, f"fmi2Get{w}Status") for w in ("Boolean", "Real"))
-        self._true = c_int(1)     # noSetFMUStatePriorToCurrentPoint
 
     def read(self):
         if self.n_out:
@@ -127,27 +121,6 @@ class _RawCalls:
                 raise FMICallException(function="fmi3SetFloat64" if self.fmi == 3 else "fmi2SetReal",
                                        status=status)
             self.written = values
-
-    def step(self, t, h):
-        if self.fmi == 3:
-            status = self._do(self.comp, c_double(t), c_double(h), self._true, *self._outs)
-            self.terminate, self.last_successful_time = self._terminate.value, self._last.value
-            if status > 1 or self.terminate:  # fmi3Discard or worse, or the FMU ends the run
-                raise FMICallException(function="fmi3DoStep", status=status)
-            return
-        status = self._do(self.comp, c_double(t), c_double(h), self._true)
-        if status > 1:  # fmi2Discard or worse
-            raise FMICallException(function="fmi2DoStep", status=status)
-
-    def ended(self, status):
-        """After its DoStep raised with ``status``: the time at which the FMU
-        ended the simulation (FMI 2.0: fmi2Discard with fmi2Terminated, its
-        fmi2LastSuccessfulTime, artibus.fmu.terminated; FMI 3.0: its
-        terminateSimulation and lastSuccessfulTime), NaN where it gives no
-        time, else None (a failure)."""
-        if self.fmi == 3:
-            return float(self.last_successful_time) if self.terminate else None
-        return terminated(self.slave, status)
 
 
 class _TypedCalls(_RawCalls):
