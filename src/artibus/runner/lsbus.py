@@ -183,7 +183,7 @@ class Fmu:
         if not self.path.is_file():
             raise LsBusError(f"{self.path}: no such FMU (FMU {name})")
         # unpacked once per content and kept between runs, shared by the instances of one FMU,
-        # its model description read once (artibus.cache, as the runner's FMI 2.0 units)
+        # its model description read once (artibus.cache, as the runner's units)
         self.dir, self._own_dir = cache.unpacked(self.path)
         self.fmu = None
         try:

@@ -1,5 +1,5 @@
 """A bench whose steering network runs as FMI-LS-BUS 1.0 FMUs (issue 24): the plant stays
-the runner's FMI 2.0 components, the network is an artibus.runner.lsbus.Network ticked once
+the runner's FMI 2.0 or 3.0 components, the network is an artibus.runner.lsbus.Network ticked once
 per network period by the runner, through the interface of artibus.can.network.Network
 (start, tick, finish, settle, since_series, close): by the one stepping loop, in Python
 (its callback, artibus.runner.core._Hooks) or in C (below);
