@@ -4,6 +4,7 @@ parameter checks and the runner's set-up (written in FMI 2.0's words) take
 an FMI 3.0 FMU as they take its FMI 2.0 build; and which build of its FMUs a
 bench runs with (``FMI_VERSIONS``, ``fmi_choice``)."""
 import copy
+import re
 
 from artibus.base import ArtibusError
 
@@ -29,6 +30,19 @@ _VIEWS = {}                            # (id(description), strict) -> (it, its v
 _VIEWS_KEPT = 256
 
 
+#: the fmiVersion values the FMI 3.0 schema allows (fmi3ModelDescription.xsd, the attribute
+#: fmiVersion: 3.0, 3.0.1, 3.0.2, 3.1, 3.0-rc.2, ...): Dymola writes "3.0.1", the standard's 3.0.2
+_FMI3_VERSION = re.compile(r"3[.](0|[1-9][0-9]*)([.](0|[1-9][0-9]*))?(-.+)?")
+
+
+def fmi_major(version):
+    """2 for fmiVersion "2.0", 3 for every fmiVersion the FMI 3.0 schema allows, else None
+    (FMI 1.0, a later major version: artibus refuses them by name)."""
+    if version == "2.0":
+        return 2
+    return 3 if version and _FMI3_VERSION.fullmatch(version) else None
+
+
 def fmi2_view(md, strict=True):
     """An FMI 3.0 model description as FMI 2.0 names its types (``FMI2_TYPE``:
     Float64 -> Real, Int32 -> Integer, ...), the rest as FMPy read it: the
@@ -40,7 +54,7 @@ def fmi2_view(md, strict=True):
     type artibus does not read in a bench (Binary, Clock, the other widths) is an
     error naming the variable, unless not ``strict`` (an FMU on its own): then it is
     kept under its own type name (``OTHER_WIDTHS``)."""
-    if md.fmiVersion != "3.0":
+    if fmi_major(md.fmiVersion) != 3:
         return md
     kept = _VIEWS.get((id(md), strict))
     if kept is not None and kept[0] is md:

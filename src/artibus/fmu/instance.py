@@ -8,7 +8,22 @@ from fmpy.fmi2 import FMU2Slave
 
 from artibus import cache
 from artibus.base import ArtibusError
-from artibus.bench.fmi import FMI2_TYPE, fmi2_view  # noqa: F401
+from artibus.bench.fmi import FMI2_TYPE, fmi2_view, fmi_major  # noqa: F401
+
+
+def _declared_version(path):
+    """The fmiVersion attribute of an FMU's modelDescription.xml, read without validating
+    anything else (an FMI 1.0 or 4.0 FMU fails FMPy's reading for other reasons first);
+    None where it cannot be read."""
+    import zipfile
+
+    from lxml import etree
+    try:
+        with zipfile.ZipFile(path) as z, z.open("modelDescription.xml") as f:
+            for _, el in etree.iterparse(f, events=("start",), resolve_entities=False, no_network=True):
+                return el.get("fmiVersion")
+    except Exception:
+        return None
 
 
 def _callbacks(log):
@@ -148,15 +163,19 @@ class Fmu:
             raise ArtibusError(f"{self.path}: no such FMU file")
         try:
             self.md = _model_description(self.path)
-        except Exception as e:   # not a zip, no or a broken modelDescription.xml
+        except Exception as e:   # not a zip, no or a broken modelDescription.xml, another FMI version
+            version = _declared_version(self.path)
+            if version is not None and fmi_major(version) is None:
+                raise ArtibusError(f"{self.path}: says fmiVersion=\"{version}\": artibus runs FMI 2.0 and 3.0 "
+                                   "FMUs (any 3.x the FMI 3.0 schema allows)") from None
             raise ArtibusError(f"{self.path}: not a readable FMI 2.0 or 3.0 FMU: {e}") from None
-        if self.md.fmiVersion not in ("2.0", "3.0"):
+        self.fmi = fmi_major(self.md.fmiVersion)
+        if self.fmi is None:
             raise ArtibusError(f"{self.path}: {self.md.modelName} says fmiVersion=\"{self.md.fmiVersion}\": "
-                               "artibus runs FMI 2.0 and 3.0 FMUs")
+                               "artibus runs FMI 2.0 and 3.0 FMUs (any 3.x the FMI 3.0 schema allows)")
         if self.md.coSimulation is None:
             raise ArtibusError(f"{self.path}: {self.md.modelName} has no Co-Simulation interface "
                                "(artibus runs FMUs in Co-Simulation)")
-        self.fmi = int(self.md.fmiVersion[0])
         #: FMI 3.0: each variable's own type (Float32, UInt16, ...), whose get/set it is read with
         self.fmi3_type = {}
         if self.fmi == 3:    # as FMI 2.0 names the types (the same variables: tests/test_fmi3.py)

@@ -198,7 +198,8 @@ class Fmu:
         name = self.name
         self.md = cache.stored(self.dir, f"modelDescription-fmpy-{fmpy.__version__}",
                                lambda: read_model_description(str(self.path)))
-        if self.md.fmiVersion != "3.0" or not self.md.coSimulation or not self.md.coSimulation.hasEventMode:
+        from artibus.bench.fmi import fmi_major
+        if fmi_major(self.md.fmiVersion) != 3 or not self.md.coSimulation or not self.md.coSimulation.hasEventMode:
             raise LsBusError(f"{self.path}: FMU {name} is no FMI 3.0 Co-Simulation FMU with hasEventMode")
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.terminals = read_terminals(self.path, self.md, name)
