@@ -512,15 +512,16 @@ def test_fmi3_win64_cosimulation_equals_x86_64_linux(name, fmi3_run, tmp_path):
     outs = [f"{v.valueReference}={v.name}" for v in m.modelVariables
             if v.causality == "output" and v.type == "Float64"]
 
-    def run(cmd, binary, resources, env=None):
-        p = subprocess.run(cmd + [str(binary), m.instantiationToken, resources, repr(h), str(n), *outs],
-                           capture_output=True, text=True, env=env, timeout=300)
+    def run(cmd, binary, resources, under_wine=False):
+        full = cmd + [str(binary), m.instantiationToken, resources, repr(h), str(n), *outs]
+        p = (test_win64._wine_run(full) if under_wine  # (Wine's own hiccups made again: _wine_run)
+             else subprocess.run(full, capture_output=True, text=True, timeout=300))
         assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
         return {k: float(x) for k, x in (line.split() for line in p.stdout.splitlines())}
 
     lin = run([str(linux_exe)], tmp_path / f"binaries/x86_64-linux/{name}.so", str(tmp_path / "resources") + "/")
     win = run([wine, str(win_exe)], tmp_path / f"binaries/x86_64-windows/{name}.dll",
-              str(tmp_path / "resources") + "\\", env=test_win64._wine_env())
+              str(tmp_path / "resources") + "\\", under_wine=True)
     assert set(win) == set(lin) == {o.split("=", 1)[1] for o in outs}
     for k, a in lin.items():
         assert abs(win[k] - a) <= 1e-12 * max(abs(a), abs(win[k])), f"{name}.{k}: {a!r} (linux) vs {win[k]!r} (win64)"
