@@ -18,7 +18,7 @@
 """
 from artibus.fmu import Result, SimulationError                                     # noqa: F401 (a run's)
 from artibus.runner.can_core import can_signal                                      # noqa: F401
-from artibus.runner.core import core_library_path                                   # noqa: F401
+from artibus.runner.corelib import core_library_path                                  # noqa: F401
 from artibus.runner.results import partial_path, read_units, save, save_partial, units_path   # noqa: F401
 from artibus.runner.setup import resolve_resources                                  # noqa: F401
 from artibus.runner.simulation import Simulation, run                               # noqa: F401

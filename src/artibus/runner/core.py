@@ -32,7 +32,7 @@ from artibus.base import ArtibusError
 from artibus.fmu import Result, SimulationError, Termination
 from artibus.runner import corelib, tables
 from artibus.runner.can_core import _CanCore
-from artibus.runner.corelib import core_library_path, struct  # noqa: F401 (core_library_path: artibus.runner's)
+from artibus.runner.corelib import struct
 from artibus.runner.markers import mark
 from artibus.runner.unit import _last_message
 
@@ -46,11 +46,6 @@ _HOOK_PROPAGATE, _HOOK_READ, _HOOK_WRITE, _HOOK_TICK, _HOOK_SETTLE, _HOOK_SNAPSH
 _HOOK_TYPE = CFUNCTYPE(c_int, c_int, c_int, c_long, c_double)
 
 
-def _core_library():
-    """(the loaded core library, None) or (None, why not): artibus.runner.corelib.load."""
-    return corelib.load()
-
-
 def _core_stepper(sim, plan, core=None):
     """The C core set up for this run of ``sim``; sim.stepping says what runs in C and
     what in Python, and why. core: None (the networks in C where C has them, unless
@@ -61,7 +56,7 @@ def _core_stepper(sim, plan, core=None):
         off = None if core else "switched off (ARTIBUS_CORE=0)"
     else:
         off = None if core else "switched off (core=False)"
-    lib, why = _core_library()
+    lib, why = corelib.load()
     if lib is None:
         raise ArtibusError(f"{sim.bench.file}: the C stepping core: {why} (scripts/setup.sh builds it)")
     python_net = _python_network(sim, off)
