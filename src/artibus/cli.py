@@ -32,6 +32,7 @@ from pathlib import Path
 
 from artibus.console import path_error, quiet_exit, stdout_gone
 from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds, fmu_path
+from artibus import files
 from artibus.files import atomic_dir, bench_inputs, check_output, given as _given, make_dir, report_said
 from artibus.inventory import cmd_info, cmd_list
 
@@ -466,6 +467,7 @@ def build_parser():
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    files.REPORTS_DONE.clear()
     import threading
     previous = previous_int = None
     if threading.current_thread() is threading.main_thread():

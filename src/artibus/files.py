@@ -335,11 +335,18 @@ def _exchange(a, b):
     return renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0
 
 
+#: the report folders this process has put in place, complete (atomic_dir),
+#: for the message of a signal that comes after one; the command line empties it
+REPORTS_DONE = []
+
+
 def report_said(e, what):
     """The command line's message after an interrupt (``what``: what it says of
     the results) with what became of the report folder (``e.report``, set by
     atomic_dir): the earlier one kept, none written, or the new one complete."""
     report = getattr(e, "report", None)
+    if report is None and REPORTS_DONE:             # the signal came after the report was in place
+        report = (REPORTS_DONE[-1], "complete")
     if report is None:
         return what
     said = {"kept": f"the earlier report in {report[0]} is kept as it was",
@@ -390,6 +397,7 @@ def atomic_dir(path, what="--report"):
             swapping = True
             swap_dir(tmp, final)
             state = "complete"
+            REPORTS_DONE.append(path)
     except BaseException as e:
         if state != "complete":
             shutil.rmtree(tmp, ignore_errors=True)
