@@ -26,7 +26,6 @@
 usage: .venv/bin/python benchmarks/runner.py
 """
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -36,8 +35,7 @@ from fmpy.ssp.simulation import simulate_ssp
 from artibus import runner
 from artibus.bench import ssp
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_runner import component, connection, make_ssp  # noqa: E402
+from artibus.testing import component, connection, make_ssp
 
 
 REPEAT = 5   # runs per bench: this machine is shared, so the best and the median are printed

@@ -74,7 +74,6 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-sys.path.insert(0, str(ROOT / "tests"))
 
 from artibus import fmu_dir, runner
 from artibus.bench import ssp  # noqa: E402
@@ -239,7 +238,7 @@ def against_fmpy(path, label, stop, h, overrides=None, pset=None):
 
 
 def two_buskinematics(tmp, steer):
-    from test_runner import component, connection, make_ssp
+    from artibus.testing import component, connection, make_ssp
     outs = [(f"{n}[{i}]", "output") for n in ("theta", "x", "y", "omega", "vel", "kappa", "beta")
             for i in (0, 1) if (n, i) != ("beta", 0)]
     # the leader's built-in S-curve (testSteerAmp, off by default) set here, in both
@@ -298,6 +297,11 @@ def fmi3_section():
 
 def masters_section():
     load = os.getloadavg()[0]
+    missing = [m for m in ("ecospy", "libcosimpy") if importlib.util.find_spec(m) is None]
+    if missing:         # the other SSP masters, and their tolerances in tests/test_masters.py, are the tests'
+        line(f"\n5. Against ecos and libcosim: not run ({' and '.join(missing)} not installed: the test "
+             "extras, which scripts/setup_test.sh installs)")
+        return
     line(f"\n5. Against ecos and libcosim on the portable packs (benchmarks/masters.py; load average {load:.1f}): "
          f"in-process set-up + run in ms, best of {MASTERS_REPEAT}, each master in a process of its own, ours "
          "stepped as each master steps; KPIs: our KPI code on their results, the largest difference from ours")

@@ -19,12 +19,12 @@
 # Environment: ARTIBUS_AARCH64_JOBS (default 2) parallel compile jobs.
 set -euo pipefail
 . "$(dirname "$0")/build_common.sh"     # ROOT (the working directory), work_dir, quiet
-APT_PACKAGES="gcc-aarch64-linux-gnu g++-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user"
+APT_PACKAGES="gcc-aarch64-linux-gnu g++-aarch64-linux-gnu libc6-dev-arm64-cross"   # (qemu-user: the tests', setup_test.sh)
 B="$(work_dir "${1:-build-aarch64}")"
 JOBS="${ARTIBUS_AARCH64_JOBS:-2}"
 QUIET_LOG="$B/last-step.log" QUIET_TAG=aarch64
 
-# 0. the cross compilers and qemu-user, when missing
+# 0. the cross compilers, when missing
 missing=""
 for p in $APT_PACKAGES; do
   dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"

@@ -25,7 +25,9 @@
 #                   SUNDIALS for it (scripts/build_sundials.sh, cached; CC names its
 #                   compiler for the cache key), then every FMU's binary and its importer
 #                   fmu_check_<Name> (and the FMI 3.0 binaries unless ARTIBUS_FMI3=OFF),
-#                   from the same CMakeLists.txt (scripts/build_win64.sh, build_aarch64.sh).
+#                   from the same CMakeLists.txt (scripts/build_win64.sh, build_aarch64.sh);
+#                   with ARTIBUS_CROSS_IMPORTERS=0 the FMUs' binaries alone, not the
+#                   importers the tests run under Wine and qemu-user (./run.sh).
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT="$PWD"
 CACHE="${ARTIBUS_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/artibus}"
@@ -104,9 +106,12 @@ cross_build() {
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_FIND_ROOT_PATH="$inst" \
     -DSUNDIALS_DIR="$inst/lib/cmake/sundials" \
     -DEIGEN3_INCLUDE_DIR=/usr/include/eigen3   # Debian's libeigen3-dev (header-only)
-  # only the FMUs and their importers (each fmu_check_<Name> needs its <Name>)
+  # only the FMUs and their importers (each fmu_check_<Name> needs its <Name>), or
+  # with ARTIBUS_CROSS_IMPORTERS=0 the FMUs alone
   # (an FMI-LS-BUS node, add_fmu(<Name> LSBUS ...), is FMI 3.0 only: no fmu_check_<Name>)
-  targets="$(grep -v '^add_fmu([A-Za-z0-9_]* LSBUS' CMakeLists.txt | sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/fmu_check_\1/p')"
+  local check="fmu_check_"
+  [ "${ARTIBUS_CROSS_IMPORTERS:-1}" = 0 ] && check=""
+  targets="$(grep -v '^add_fmu([A-Za-z0-9_]* LSBUS' CMakeLists.txt | sed -n "s/^add_fmu(\([A-Za-z0-9_]*\).*/$check\1/p")"
   if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$dir/CMakeCache.txt"; then   # and the FMI 3.0 builds: <platform>/fmi3/
     targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
     targets="$targets CanBus_fmi3"   # FMI 3.0 only, not an add_fmu (CMakeLists.txt, issue 24)

@@ -4,7 +4,8 @@
 # Feedthrough, Resource, Stair, VanDerPol as FMI 2.0 FMUs (each both Model
 # Exchange and Co-Simulation; the tests use Co-Simulation), linux64, and the same
 # six as FMI 3.0 (FMI_VERSION=3, x86_64-linux) in fmi3/: Feedthrough has every FMI 3.0
-# variable type, Stair ends the run through fmi3DoStep's terminateSimulation.
+# variable type, Stair ends the run through fmi3DoStep's terminateSimulation; and the FMI
+# 3.0-only LinearTransform (arrays) and Clocks (clocks, Event Mode) in fmi3/.
 #
 # Their sources come from crates.io: the crate fmi-sys carries the FMI 3.0
 # standard's sources, whose docs/Reference-FMUs is the Reference-FMUs' own
@@ -20,12 +21,17 @@ set -euo pipefail
 
 FMI_SYS_VERSION=0.5.0
 MODELS="BouncingBall Dahlquist Feedthrough Resource Stair VanDerPol"
-out="$CACHE/reference-fmus-fmi-sys-$FMI_SYS_VERSION-fmi23b"
+# FMI 3.0 only: LinearTransform (array variables whose dimensions are structural
+# parameters, FMI 3.0 2.4.7.6) and Clocks (input, output and countdown clocks, Event Mode)
+MODELS3="LinearTransform Clocks"
+out="$CACHE/reference-fmus-fmi-sys-$FMI_SYS_VERSION-fmi23c"
 link="$ROOT/.tools/reference-fmus"
 
 have_all() {
   local m
   for m in $MODELS; do [ -f "$out/$m.fmu" ] && [ -f "$out/fmi3/$m.fmu" ] || return 1; done
+  for m in $MODELS3; do [ -f "$out/fmi3/$m.fmu" ] || return 1; done
+  [ -f "$out/ref/Dahlquist_ref.csv" ] || return 1
 }
 
 if ! have_all; then
@@ -50,11 +56,15 @@ if ! have_all; then
     # variable is made "discrete" in the model descriptions (FMI2.xml), as later
     # Reference-FMUs releases declare it
     cp -r "$src_dir" "$out.src"
-    python3 - "$out.src" $MODELS <<'PY'
+    python3 - "$out.src" $MODELS $MODELS3 <<'PY'
 import re, sys
 from pathlib import Path
 for m in sys.argv[2:]:
     f = Path(sys.argv[1]) / m / "FMI2.xml"
+    if not f.is_file():           # (an FMI 3.0-only model)
+        f3 = Path(sys.argv[1]) / m / "FMI3.xml"
+        f3.write_text(f3.read_text(encoding="utf-8").replace('fmiVersion="3.0-rc.2"', 'fmiVersion="3.0"'), encoding="utf-8")
+        continue
     text = f.read_text(encoding="utf-8")
     def fix(v):
         head, body = v.group(1), v.group(2)
@@ -82,9 +92,17 @@ PY
       -DCMAKE_C_FLAGS=-Wno-error=stringop-truncation    # Resource's strncpy warning is an error with -Werror in their FMI 3.0 build
     # shellcheck disable=SC2086
     QUIET_LOG="$out.log" QUIET_TAG=reference-fmus quiet \
-      cmake --build "$out.build3" -j2 --target $MODELS
-    for m in $MODELS; do cp "$out.build3/dist/$m.fmu" "$out/fmi3/$m.fmu"; done
+      cmake --build "$out.build3" -j2 --target $MODELS $MODELS3
+    for m in $MODELS $MODELS3; do cp "$out.build3/dist/$m.fmu" "$out/fmi3/$m.fmu"; done
     cp "$src_dir/LICENSE.txt" "$out/LICENSE.txt"
+    # the reference results their sources carry, in the FMI cross-check's layout: <Model>_ref.csv
+    # (the results), <Model>_ref.opt (start, stop, step, relative tolerance), <Model>_in.csv (inputs)
+    mkdir -p "$out/ref"
+    for m in $MODELS $MODELS3; do
+      for f in "$src_dir/$m/${m}_ref.csv" "$src_dir/$m/${m}_ref.opt" "$src_dir/$m/${m}_in.csv"; do
+        if [ -f "$f" ]; then cp "$f" "$out/ref/"; fi
+      done
+    done
     echo "fmi-sys $FMI_SYS_VERSION (crates.io): fmi-standard3/docs/Reference-FMUs, FMI_VERSION=2," \
       "Integer/Boolean/String variables without a variability declared discrete; fmi3/: FMI_VERSION=3, fmiVersion 3.0-rc.2 declared 3.0" >"$out/SOURCE.txt"
     rm -rf "$out.build" "$out.build3" "$out.src"

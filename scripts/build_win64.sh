@@ -13,7 +13,7 @@
 #   fmu_check_<Name>.exe  the C importer (tests/c/fmu_check.c) for Wine
 #   wineprefix/           the Wine prefix tests/test_win64.py runs it in: a link to
 #                         $ARTIBUS_CACHE/wineprefix-<Wine version>, made once per machine
-# Needs the apt packages mingw-w64, dpkg-dev and wine64 and a deb-src entry
+# Needs the apt packages g++-mingw-w64-x86-64-win32, dpkg-dev (and wine64 for the tests) and a deb-src entry
 # (setup.sh installs them). Safe to run again: it does only what is missing or out of date.
 # Usage: scripts/build_win64.sh [BUILD_DIR]   (default build-win64)
 set -euo pipefail
@@ -30,6 +30,8 @@ echo "win64: $(ls "$B"/win64/*.dll | wc -l) DLLs in $B/win64"
 
 # 3. a Wine prefix for tests/test_win64.py (Debian's wine64 package), made once
 # per machine and Wine version in the cache, linked from the build directory
+# (not with ARTIBUS_CROSS_IMPORTERS=0: no importer for Wine to run)
+[ "${ARTIBUS_CROSS_IMPORTERS:-1}" = 0 ] && exit 0
 wine="$(command -v wine64 || command -v wine || true)"
 [ -z "$wine" ] && [ -x /usr/lib/wine/wine64 ] && wine=/usr/lib/wine/wine64
 if [ -n "$wine" ]; then

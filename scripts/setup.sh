@@ -6,7 +6,14 @@
 #   every FMU built into fmus/ with its linux64 binary, the benches packed.
 # With --all-platforms also the cross-built binaries, packed into every FMU:
 #   win64 (mingw-w64, scripts/build_win64.sh), aarch64-linux (Debian's aarch64 cross
-#   compilers, scripts/build_aarch64.sh, tested under qemu-user).
+#   compilers, scripts/build_aarch64.sh, tested under qemu-user); an FMU packed
+#   already is packed again only when a binary of it changed.
+# With --toolchains only the cross compilers' apt packages besides: ./run.sh builds the
+#   cross binaries beside the rest, then packs them with --all-platforms.
+# With --packages-only: the apt packages and the deb-src entry, nothing else (./run.sh,
+#   before it starts the cross builds).
+# With --platforms-built: --all-platforms packing the cross builds as they are, without
+#   running them again (./run.sh, which has just run them).
 # The test tools (Wine, fmi-sim, Chromium, the test extras) come from
 # scripts/setup_test.sh, which ./test.sh runs (and which runs this with --all-platforms).
 # Each step prints what it builds and roughly how long it takes; safe to run
@@ -16,10 +23,16 @@ cd "$(dirname "$0")/.."
 . scripts/build_common.sh        # CACHE, step
 
 ALL_PLATFORMS=0
+TOOLCHAINS=0
+PACKAGES_ONLY=0
+CROSS_BUILD=1
 for a in "$@"; do
   case "$a" in
-    --all-platforms) ALL_PLATFORMS=1 ;;
-    *) echo "usage: scripts/setup.sh [--all-platforms]" >&2; exit 2 ;;
+    --all-platforms) ALL_PLATFORMS=1 TOOLCHAINS=1 ;;
+    --toolchains) TOOLCHAINS=1 ;;
+    --packages-only) PACKAGES_ONLY=1 ;;
+    --platforms-built) ALL_PLATFORMS=1 TOOLCHAINS=1 CROSS_BUILD=0 ;;
+    *) echo "usage: scripts/setup.sh [--all-platforms | --toolchains | --platforms-built] [--packages-only]" >&2; exit 2 ;;
   esac
 done
 
@@ -27,8 +40,11 @@ done
 # libsundials-dev: SUNDIALS is built from Debian's source (scripts/build_sundials.sh),
 # and the binary package pulls in MPI, PETSc and hypre (some 450 MB of downloads)
 APT_PACKAGES="cmake make g++ libeigen3-dev python3 python3-venv python3-pip dpkg-dev"
-PLATFORM_APT_PACKAGES="mingw-w64 gcc-aarch64-linux-gnu g++-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user"
-[ "$ALL_PLATFORMS" = 1 ] && APT_PACKAGES="$APT_PACKAGES $PLATFORM_APT_PACKAGES"
+# the cross compilers: mingw-w64's x86_64 C/C++ (win32 threads, as the alternatives pick when
+# both are there; not the metapackage mingw-w64, whose i686 and posix compilers are some 175 MB
+# more) and Debian's aarch64 ones (qemu-user, which runs them in the tests: setup_test.sh)
+PLATFORM_APT_PACKAGES="g++-mingw-w64-x86-64-win32 gcc-aarch64-linux-gnu g++-aarch64-linux-gnu libc6-dev-arm64-cross"
+[ "$TOOLCHAINS" = 1 ] && APT_PACKAGES="$APT_PACKAGES $PLATFORM_APT_PACKAGES"
 apt_install $APT_PACKAGES
 
 # Debian's source packages, for SUNDIALS built optimised (scripts/build_sundials.sh):
@@ -40,6 +56,7 @@ if ! grep -rqsE '^(deb-src|Types:.*deb-src)' /etc/apt/sources.list /etc/apt/sour
     | $SUDO tee /etc/apt/sources.list.d/artibus-deb-src.sources >/dev/null
   $SUDO apt-get update -qq
 fi
+[ "$PACKAGES_ONLY" = 1 ] && exit 0
 
 # SUNDIALS built optimised (Debian's static libraries are compiled without
 # optimisation), once per machine into the cache, linked as build-sundials/;
@@ -59,8 +76,9 @@ if [ ! -x .venv/bin/python ]; then
 fi
 stamp=".venv/.artibus-installed"
 if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+  # with the docs extra: the README's `mkdocs build` and the notebook under `jupyter nbconvert`
   step "installing the artibus package and its Python dependencies into .venv (about 1 min)" \
-    .venv/bin/python -m pip install -q -e .
+    .venv/bin/python -m pip install -q -e '.[docs]'
   touch "$stamp"
 fi
 
@@ -73,11 +91,13 @@ rm -f "$sundials_log"
 # the cross-built binaries first, for the linux build to pack (binaries/win64)
 platform_flags=()
 if [ "$ALL_PLATFORMS" = 1 ]; then
-  step "building the win64 DLLs of every FMU with mingw-w64 (about 3 min the first time, SUNDIALS for win64 included)" \
-    bash scripts/build_win64.sh build-win64
+  if [ "$CROSS_BUILD" = 1 ]; then
+    step "building the win64 DLLs of every FMU with mingw-w64 (about 3 min the first time, SUNDIALS for win64 included)" \
+      bash scripts/build_win64.sh build-win64
+    step "building the aarch64-linux binaries of every FMU (about 3 min the first time, SUNDIALS for aarch64 included)" \
+      bash scripts/build_aarch64.sh build-aarch64
+  fi
   platform_flags+=(-DARTIBUS_WIN64_DIR="$PWD/build-win64/win64")
-  step "building the aarch64-linux binaries of every FMU (about 3 min the first time, SUNDIALS for aarch64 included)" \
-    bash scripts/build_aarch64.sh build-aarch64
   platform_flags+=(-DARTIBUS_AARCH64_DIR="$PWD/build-aarch64/aarch64-linux")
 fi
 # (without --all-platforms the configured folders stay as they are: an FMU keeps

@@ -16,7 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/build_common.sh        # CACHE, step, apt_install, SUDO
 
-TEST_APT_PACKAGES="wine64 chromium libtbb12"     # libtbb12: ecos (ecospy), another SSP master in the tests
+TEST_APT_PACKAGES="wine64 chromium libtbb12 qemu-user"     # libtbb12: ecos (ecospy), another SSP master in the tests; qemu-user: the aarch64 binaries
 apt_install $TEST_APT_PACKAGES
 
 # the Wine prefix is made by build_win64.sh now that Wine is installed

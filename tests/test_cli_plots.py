@@ -62,8 +62,9 @@ def test_plot_draws_the_signals_a_panel_per_unit(results, tmp_path):
     assert p.returncode == 0, p.stderr
     assert "3 signals (Bus.r[1], Bus.r[2], Bus.artAngle[1])" in p.stdout
     with Image.open(out) as im:
-        # two units (rad/s, rad): two panels of 2.4 in at 110 dpi, a figure 9 in wide
-        assert im.width == round(9 * 110) and abs(im.height - 2 * 2.4 * 110) < 3
+        # two units (rad/s, rad): two panels of 2.4 in (and 0.3 in for the title) at 110 dpi, a figure
+        # 11 in wide (the legends beside the panels: artibus.report.plots.signals)
+        assert im.width == round(11 * 110) and abs(im.height - (2 * 2.4 + 0.3) * 110) < 3
     from artibus.report import quick
     names, cols, units = quick.read_results_csv(csv)
     assert units["Bus.r[1]"] == r.units["Bus.r[1]"] == "rad/s" and units["Bus.artAngle[1]"] == "rad"

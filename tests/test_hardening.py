@@ -32,7 +32,7 @@ def test_default_experiment_alone_is_finite_and_not_trivial(name):
 def test_bad_resource_location_is_refused():
     """'%4' at the end of the location once decoded past the end of the buffer"""
     from ctypes import byref
-    from artibus.fmu.instance import _callbacks
+    from artibus.fmu.fmi2 import _callbacks
     f = Fmu(fmu_file("RoadFollowDriver"))
     try:
         log = []

@@ -258,7 +258,7 @@ DESIGN_CSV = b"Bus.L0,Bus.k,variant\n5.9,1,a\n6.1,0,\n"
 def _info():
     """a bench's variables as bench_info gives them (without packing one)"""
     def var(t):
-        return types.SimpleNamespace(type=t, declaredType=None, min=None, max=None)
+        return types.SimpleNamespace(type=t, kind=t, declaredType=None, min=None, max=None)   # (FMI 2.0 types: kind = type)
     return types.SimpleNamespace(name="Fuzz", components=["Bus"], variants={"a": "h"},
                                  variables={"Bus.L0": var("Real"), "Bus.N": var("Real"), "Bus.k": var("Integer"),
                                             "Bus.steerable[1]": var("Boolean")})

@@ -5,7 +5,6 @@ multi-rate, and bad benches reported by file, element and value."""
 import math
 import subprocess
 import sys
-import zipfile
 
 import numpy as np
 import pytest
@@ -13,39 +12,8 @@ from fmpy.ssp.simulation import simulate_ssp
 
 from artibus import ArtibusError, fmu_path
 from artibus.runner import Simulation, run, save
-
-NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
-      'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
-      'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" '
-      'xmlns:ssm="http://ssp-standard.org/SSP1/SystemStructureParameterMapping"')
-
-
-def component(name, connectors, extra=""):
-    conns = "".join(f'<ssd:Connector name="{n}" kind="{k}"><ssc:Real/></ssd:Connector>' for n, k in connectors)
-    return (f'<ssd:Component name="{name}" source="resources/BusKinematics.fmu" type="application/x-fmu-sharedlibrary">'
-            f'<ssd:Connectors>{conns}</ssd:Connectors>{extra}</ssd:Component>')
-
-
-def connection(a, ca, b, cb, tr=""):
-    sa = f'startElement="{a}" ' if a else ""
-    eb = f'endElement="{b}" ' if b else ""
-    body = f'<ssc:LinearTransformation {tr}/>' if tr else ""
-    return f'<ssd:Connection {sa}startConnector="{ca}" {eb}endConnector="{cb}">{body}</ssd:Connection>'
-
-
-def make_ssp(tmp_path, elements, connections, stop=10.0, ssv=None, name="bench", fmu=True):
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
-           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements>'
-           f'<ssd:Connections>{connections}</ssd:Connections></ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="{stop}"/></ssd:SystemStructureDescription>')
-    path = tmp_path / f"{name}.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        if fmu:
-            z.write(fmu_path("BusKinematics"), "resources/BusKinematics.fmu")
-        for fname, text in (ssv or {}).items():
-            z.writestr(f"resources/{fname}", text)
-    return path
+# the small benches' parts, shared with the benchmarks (the other tests import them from here)
+from artibus.testing import NS, component, connection, make_ssp  # noqa: F401
 
 
 LEAD_FOLLOW = dict(

@@ -11,8 +11,26 @@ from pathlib import Path
 
 __version__ = "0.1.0"
 
-#: the repository this package was installed from (editable install)
-ROOT = Path(__file__).resolve().parents[2]
+#: what a wheel carries besides the code (setup.py's build_py): the clone's run-time
+#: files in the clone's layout, so that every path below ROOT is the same in both
+#: (``fmus/*.fmu``, ``fmus/fmi3/*.fmu``, ``ssp/``, ``build/lib/*.so``)
+PACKAGE_DATA = Path(__file__).resolve().parent / "data"
+
+
+def _root():
+    """Where artibus's files are: the clone this package runs from (an editable
+    install, or ``src/`` on the path: the clone's ``pyproject.toml`` and
+    ``ssp/benches/`` beside ``src/``), else the files an installed wheel carries
+    (PACKAGE_DATA). The FMUs' folder can be overridden ($ARTIBUS_FMU_DIR, fmu_dir);
+    a bench's or an FMU's path on the command line is used as given."""
+    clone = Path(__file__).resolve().parents[2]
+    if (clone / "pyproject.toml").is_file() and (clone / "ssp" / "benches").is_dir():
+        return clone
+    return PACKAGE_DATA
+
+
+#: the clone this package runs from, or the installed wheel's data (_root)
+ROOT = _root()
 
 
 class ArtibusError(Exception):
@@ -20,8 +38,9 @@ class ArtibusError(Exception):
 
 
 def fmu_dir():
-    """Where the built FMUs are: ``fmus/``, or $ARTIBUS_FMU_DIR (the test suite
-    points it at the sanitizer build to run the same tests under ASan)."""
+    """Where the built FMUs are: ``fmus/`` (the clone's, or the installed wheel's),
+    or $ARTIBUS_FMU_DIR (the test suite points it at the sanitizer build to run
+    the same tests under ASan; a user at FMUs of their own build)."""
     return Path(os.environ.get("ARTIBUS_FMU_DIR", ROOT / "fmus"))
 
 

@@ -18,11 +18,12 @@
                                        [--variant V]: a pack other SSP masters run as we do
   artibus demo [--report DIR]          the kinematic demo: the Urbino 18 pusher on an S-curve
 
-Throughout: -o/--output FILE is the results file a command writes (.csv, or
-.mat for run), --report DIR a directory of plots and HTML. Files are written
+Throughout: -o/--output FILE is the results file a command writes (run,
+simulate, replay: .csv, .parquet, .mf4 or .mat by the extension), --report DIR
+a directory of plots and HTML. Files are written
 under a temporary name and renamed, so a file under its final name is always
 complete. Ctrl-C (SIGINT) or SIGTERM during a run saves the results up to then
-as OUT.partial.csv (OUT.partial.mat) and exits with 130 (143).
+as OUT.partial.EXT (OUT.partial.csv, OUT.partial.mf4, ...) and exits with 130 (143).
 """
 import argparse
 import math
@@ -35,6 +36,7 @@ from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_s
 from artibus import files
 from artibus.files import atomic_dir, bench_inputs, check_output, given as _given, make_dir, report_said
 from artibus.inventory import cmd_info, cmd_list
+from artibus.options import Parser
 
 
 class Terminated(KeyboardInterrupt):
@@ -47,14 +49,34 @@ def _on_sigterm(signum, frame):
     raise Terminated()
 
 
-def _check_output(path, inputs=(), what="-o"):
+def _check_output(path, inputs=(), what="-o", results=False):
+    """``path`` a place to write (none of the run's inputs: issue 41); ``results``:
+    a run's results, in a format of its extension (artibus.runner.formats)."""
     from artibus.runner.results import check_results_file
-    return check_results_file(path, what, inputs)     # (none of the run's inputs: issue 41)
+    return check_results_file(path, what, inputs, results)
 
 
 def _fmu_arg(text):
     p = Path(text)
+    _wrong_kind("simulate", text)
     return p if p.suffix == ".fmu" else fmu_path(text)
+
+
+def _wrong_kind(verb, text):
+    """A bench (a name of ssp/benches, an .ssp) given to ``simulate`` or an FMU (an
+    .fmu, the name of a built FMU that is no bench) given to ``run``: an error
+    saying which verb takes it, before any look-up says "not built" or "no such bench"."""
+    from artibus.base import fmu_dir
+    from artibus.bench import ssp
+    p = Path(text)
+    benches = ssp.bench_names()
+    if verb == "simulate" and (p.suffix.lower() == ".ssp" or (p.suffix == "" and text in benches)):
+        raise ArtibusError(f"simulate {text}: a bench (an SSP system of FMUs), not an FMU: run it with "
+                           f"`artibus run {text}`; simulate runs one FMU alone (`artibus list` shows both)")
+    if verb == "run" and (p.suffix.lower() == ".fmu" or (text not in benches and p.suffix == ""
+                                                       and (fmu_dir() / f"{text}.fmu").is_file())):
+        raise ArtibusError(f"run {text}: an FMU, not a bench: simulate it alone with "
+                           f"`artibus simulate {text}`; run runs a bench (`artibus list` shows both)")
 
 
 def cmd_pack(args):
@@ -93,6 +115,8 @@ def cmd_run(args):
     from artibus.report.runs import run_benches
     if args.all == bool(args.bench):
         raise ArtibusError("give one BENCH or --all")
+    if args.bench:
+        _wrong_kind("run", args.bench)
     if args.all and args.variant:
         raise ArtibusError("--variant selects a variant of one BENCH, not of --all")
     if args.all and args.output:
@@ -114,7 +138,7 @@ def cmd_replay(args):
     from artibus import runner
     from artibus.bench.parameters import parse_set
     from artibus.can import replay
-    out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"), _given([args.log, args.dbc, args.steering_map], "a file replay reads") + bench_inputs(args.bench))
+    out = args._out = _check_output(Path(args.output or f"{Path(args.log).stem}_replay.csv"), _given([args.log, args.dbc, args.steering_map], "a file replay reads") + bench_inputs(args.bench), results=True)
     rep = replay.replay(args.log, args.bench, maps=args.map, dbc=args.dbc, stop_time=args.stop_time,
                         overrides=parse_set(args.set), steering_map_name=args.steering_map,
                         variants=args.variant, fmi=args.fmi)
@@ -235,21 +259,33 @@ def cmd_simulate(args):
     from artibus.bench.fmi import simulated_fmu
     fmu = _fmu_arg(args.fmu)
     run = simulated_fmu(fmu, args.fmu, args.fmi)     # --fmi 3: its FMI 3.0 build, checked as FMI 2.0's
-    out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"), _given([fmu, args.ssv], "a file simulate reads") + bench_inputs(fmu))
+    out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"), _given([fmu, args.ssv], "a file simulate reads") + bench_inputs(fmu), results=True)
+    from artibus.options import check_interface, input_file, start_values
+    from artibus.fmu.instance import read_model
+    model = read_model(run)
+    check_interface(args, model, run)
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
-    extra = parse_set(args.set)
+    extra = {**start_values(args), **parse_set(args.set)}
     if any("[" in k for k in extra):          # mu[*], mu[1:6]: each element
-        from fmpy import read_model_description
         from artibus.bench.names import expand_all
-        names = [v.name for v in read_model_description(str(fmu)).modelVariables]
+        names = [v.name for v in model.modelVariables]
         extra = expand_all(extra, lambda full: ("", names))
     check_against(extra, fmu, "--set")
     params.update(extra)
+    table = input_file(args.input_file, model, params)
+    inputs, events = (table.functions(), table.events()) if table is not None else (None, ())
+    messages = [] if args.fmi_logging else None
     try:
-        result = simulate(run, parameters=params, stop_time=args.stop_time, step=args.step)
+        result = simulate(run, parameters=params, inputs=inputs, stop_time=args.stop_time, step=args.step,
+                          start_time=args.start_time, output_interval=args.output_interval,
+                          tolerance=args.tolerance, logging=args.fmi_logging, messages=messages,
+                          events=events)
     except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
         save_partial(e, out)
         raise
+    finally:
+        for m in messages or []:
+            print(f"{run.stem if hasattr(run, 'stem') else run}: {m}", file=sys.stderr)
     from artibus.runner import save
     save(result, out)
     if result.terminated is not None:     # the FMU's own end (fmi2Terminated): a normal end, exit 0
@@ -269,7 +305,7 @@ def cmd_demo(args):
             raise ArtibusError(f"-o {args.output}: -o is the results file (.csv); the directory of "
                                f"results and plots is --report DIR")
         csv = Path(args.output)
-    _check_output(csv)
+    _check_output(csv, results=True)
     png, bmax = demo.s_curve(out, csv)
     html_page = demo.page(out, csv, [png, demo.signals_png(out)], bmax)
     print(f"demo: {csv}\ndemo: {png}\ndemo: {html_page}\nmax |beta[1]| = {math.degrees(bmax):.1f} deg "
@@ -309,8 +345,7 @@ def cmd_sweep(args):
 
 def build_parser():
     from artibus.bench.fmi import add_fmi_option
-    p = argparse.ArgumentParser(prog="artibus", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = Parser(prog="artibus", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"artibus {__version__}")
     sub = p.add_subparsers(dest="verb", required=True)
     s = sub.add_parser("run", help="run an SSP bench")
@@ -318,7 +353,8 @@ def build_parser():
     s.add_argument("--all", action="store_true", help="run every bench")
     s.add_argument("--report", metavar="DIR", help="write plots and an HTML page with the KPIs to DIR")
     s.add_argument("--stop-time", type=arg_seconds, help="default: the bench's DefaultExperiment")
-    s.add_argument("--step", type=arg_seconds, help="base communication step, s")
+    s.add_argument("--step", "--step-size", type=arg_seconds, dest="step",
+                   help="base communication step, s (--step-size: FMPy's name)")
     s.add_argument("--single-rate", action="store_true",
                    help="every component at the one (base) step, as a master without multi-rate steps runs it")
     s.add_argument("--ssv", action="append", help="parameter file with names COMPONENT.VARIABLE")
@@ -329,13 +365,15 @@ def build_parser():
     s.add_argument("--record", action="append", metavar="COMP.VAR",
                    help="record this variable (default: every connected output)")
     s.add_argument("--algorithm", default="gauss-seidel", choices=["gauss-seidel", "jacobi"])
-    s.add_argument("-o", "--output", metavar="FILE",
-                   help="results: .csv or .mat (default: <bench>.csv, with --report DIR/results.csv); "
-                        "checked before the run; a run stopped by Ctrl-C/SIGTERM leaves FILE.partial.csv")
+    s.add_argument("-o", "--output", "--output-file", metavar="FILE", dest="output",
+                   help="results: .csv, .parquet, .mf4 (ASAM MDF 4) or .mat, by the extension (default: "
+                        "<bench>.csv, with --report DIR/results.csv); checked before the run; a run stopped by "
+                        "Ctrl-C/SIGTERM leaves FILE.partial.EXT")
     s.add_argument("--can", metavar="virtual|INTERFACE:CHANNEL",
                    help="for a bench that routes connections over CAN: python-can's virtual bus "
                         "(the default) or a real interface, e.g. socketcan:vcan0")
-    s.add_argument("--can-log", metavar="FILE.blf|FILE.asc", help="write the CAN traffic (simulated time)")
+    s.add_argument("--can-log", metavar="FILE.blf|FILE.asc|FILE.mf4",
+                   help="write the CAN traffic (simulated time; .mf4: ASAM MDF 4 CAN bus logging)")
     s.add_argument("--can-fault", action="append", metavar="SPEC",
                    help="inject a fault into the CAN network (repeatable): loss:MSG|NODE:RATE[:seed=N], "
                         "latency:MSG|NODE:DELAY_S[:jitter=S][:seed=N], corrupt:MSG|NODE:crc|repeat|skip[:rate=R], "
@@ -376,7 +414,8 @@ def build_parser():
     s.add_argument("--steering-map", help="a parameter set c[0..3] (seed 003 App. A), default the bench's")
     s.add_argument("--set", action="append", metavar="COMP.VAR=VALUE")
     s.add_argument("--stop-time", type=arg_seconds, help="default: the end of the driving signals")
-    s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default <log>_replay.csv)")
+    s.add_argument("-o", "--output", metavar="FILE",
+                   help="results: .csv, .parquet, .mf4 or .mat (default <log>_replay.csv)")
     s.add_argument("--report", metavar="DIR", help="plots of model against measured and errors.csv")
     add_fmi_option(s, "replay")
     s.set_defaults(func=cmd_replay)
@@ -426,11 +465,8 @@ def build_parser():
     s.set_defaults(func=cmd_info)
     s = sub.add_parser("simulate", help="run one FMU alone")
     s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU")
-    s.add_argument("--ssv", help="parameter set: name in ssp/parameters or path of an .ssv")
-    s.add_argument("--set", action="append", metavar="NAME=VALUE", help="set a parameter")
-    s.add_argument("--stop-time", type=arg_seconds)
-    s.add_argument("--step", type=arg_seconds)
-    s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: <FMU>.csv)")
+    from artibus.options import add_simulate_options      # (with FMPy's and fmusim's names)
+    add_simulate_options(s)
     add_fmi_option(s, "simulate")
     s.set_defaults(func=cmd_simulate)
     s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia), "

@@ -5,7 +5,7 @@ The tree <build>/fmu/<Name>/ already holds the build's own binary (binaries/linu
 for --platform x86_64-linux and FMI 2.0). This adds
 
   modelDescription.xml     the repository's modelDescription/<Name>.xml (the single source,
-                           kept whole) with author, version (pyproject.toml's), copyright,
+                           kept whole) with author, version (artibus's, src/artibus/base.py), copyright,
                            license, generationTool, DisplayUnits (the table DISPLAY_UNITS
                            below) and, where sources/ is shipped, <SourceFiles>; its
                            elements in the order of the FMI version's schema
@@ -136,12 +136,12 @@ INCLUDE_RE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 
 
 def project_version(root):
-    """version = "..." of [project] in pyproject.toml (tomllib is 3.11+, so by hand)."""
-    text = open(os.path.join(root, "pyproject.toml"), encoding="utf-8").read()
-    section = re.search(r"^\[project\]\s*$(.*?)(?=^\[|\Z)", text, re.M | re.S)
-    m = re.search(r'^version\s*=\s*"([^"]+)"', section.group(1) if section else "", re.M)
+    """artibus's version: __version__ = "..." of src/artibus/base.py, the one place it is
+    written (pyproject.toml takes it from there: dynamic = ["version"])."""
+    text = open(os.path.join(root, "src", "artibus", "base.py"), encoding="utf-8").read()
+    m = re.search(r'^__version__\s*=\s*"([^"]+)"', text, re.M)
     if not m:
-        sys.exit("package_fmu.py: no version in [project] of pyproject.toml")
+        sys.exit("package_fmu.py: no __version__ = \"...\" in src/artibus/base.py")
     return m.group(1)
 
 
@@ -735,6 +735,18 @@ def binaries_folder(platform, fmi_version="2"):
     return FMI2_FOLDERS.get(platform, platform) if fmi_version == "2" else platform
 
 
+def described_by(xml, lsbus, root):
+    """The files a binary's model description comes from: the description itself, or for an
+    FMI-LS-BUS node the files each build derives it from (its node file, the base models'
+    descriptions, src/fmi/lsbus_node.py; CMakeLists.txt's add_fmu LSBUS), never the derived
+    copy in this build's folder, written anew by each build (after a cross build made beside it)."""
+    if not lsbus:
+        return [xml]
+    md = os.path.join(root, "modelDescription")
+    return [lsbus, os.path.join(root, "src", "fmi", "lsbus_node.py")] + sorted(
+        os.path.join(md, f) for f in os.listdir(md) if f.endswith(".xml"))
+
+
 def add_binaries(tree, name, platform_dirs, fmi_version="2", inputs=(), root=""):
     """binaries/<folder>/<name>.<ext> of each cross-built platform whose folder (platform_dirs:
     {tuple: dir}, empty dirs skipped) holds <name>.<ext>; a platform without it gets no folder
@@ -832,7 +844,7 @@ def main(argv=None):
     files, system = closure(root, name, a.sources, a.fmi_version)
     # a cross build's binary older than what it is built from is another build's: never
     # packed silently beside this build's own binary
-    inputs = [os.path.join(root, f) for f in files] + [a.xml] + [
+    inputs = [os.path.join(root, f) for f in files] + described_by(a.xml, a.lsbus, root) + [
         os.path.join(root, "src", "fmi", f) for f in ("ode.c", "ode.h", "gen_vars.py")]
     binaries = [own] + add_binaries(tree, name, platform_dirs, a.fmi_version, inputs, root)
     platforms = sorted(d for d in os.listdir(os.path.join(tree, "binaries")))

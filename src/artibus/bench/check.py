@@ -66,16 +66,18 @@ def _fmu_defaults(model):
     except ArtibusError:
         return None
     from fmpy import read_model_description
-    md = read_model_description(str(path))
+
+    from artibus.fmu.model import model_of
+    md = model_of(read_model_description(str(path)))
     out = {}
     for v in md.modelVariables:
-        if v.causality == "parameter":
+        if v.causality == "parameter" and not v.shape:
             s = v.start
-            if v.type in ("Real",):
+            if v.kind == "Real":
                 s = float(s) if s is not None else None
-            elif v.type in ("Integer", "Enumeration"):
+            elif v.kind in ("Integer", "Enumeration"):
                 s = int(s) if s is not None else None
-            elif v.type == "Boolean":
+            elif v.kind == "Boolean":
                 s = s in (True, "true", "1", 1) if s is not None else None
             out[v.name] = s
     return out
@@ -292,7 +294,7 @@ def check_file(path, model=None, converted=None, units=None):
             from artibus.bench.units import convert
             variables = {v.name: v for v in md.modelVariables}
             for k, v in values.items():
-                if isinstance(v, Quantity) and k in variables and variables[k].type == "Real":
+                if isinstance(v, Quantity) and k in variables and variables[k].kind == "Real":
                     values[k] = convert(v, variables[k], md, k)
                     if converted is not None and values[k] is not v.value:
                         from artibus.bench.units import declared_unit
@@ -309,7 +311,9 @@ def _fmu_md(model):
     except ArtibusError:
         return None
     from fmpy import read_model_description
-    return read_model_description(str(path))
+
+    from artibus.fmu.model import model_of
+    return model_of(read_model_description(str(path)))
 
 
 def check_bench(bench, out=print):

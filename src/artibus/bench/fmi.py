@@ -1,33 +1,18 @@
-"""FMI 3.0 in the bench's words: an FMI 3.0 model description seen with FMI
-2.0's type names (``fmi2_view``), so that the reader of a bench, the
-parameter checks and the runner's set-up (written in FMI 2.0's words) take
-an FMI 3.0 FMU as they take its FMI 2.0 build; and which build of its FMUs a
-bench runs with (``FMI_VERSIONS``, ``fmi_choice``)."""
-import copy
+"""Which FMI version an FMU is (``fmi_major``: 2.0, or any 3.x the FMI 3.0 schema allows), the
+ranges of FMI 3.0's integer types, and which build of its FMUs a bench runs with
+(``FMI_VERSIONS``, ``fmi_choice``). An FMU's variables, FMI 2.0 and 3.0 alike, are read
+through artibus.fmu.model."""
 import re
 
 from artibus.base import ArtibusError
 
-#: an FMI 3.0 variable's type as FMI 2.0 names it (the types artibus's FMUs use; the
-#: checks of artibus.bench.parameters speak FMI 2.0)
-FMI2_TYPE = {"Float64": "Real", "Int32": "Integer", "Enumeration": "Enumeration",
-             "Boolean": "Boolean", "String": "String"}
 #: the range of each FMI 3.0 integer type (FMI 3.0 2.4.7.4.2): a value outside it is refused,
 #: never wrapped by the C call
 INTEGER_RANGE = {"Int8": (-2**7, 2**7 - 1), "UInt8": (0, 2**8 - 1), "Int16": (-2**15, 2**15 - 1),
                  "UInt16": (0, 2**16 - 1), "Int32": (-2**31, 2**31 - 1), "UInt32": (0, 2**32 - 1),
                  "Int64": (-2**63, 2**63 - 1), "UInt64": (0, 2**64 - 1)}
-#: FMI 3.0 types that are no numbers: an FMU with them opens on its own (artibus simulate,
-#: which does not record them), a bench refuses them
-NOT_NUMBERS = ("Binary", "Clock")
-#: FMI 3.0 types of FMUs of others (the Reference-FMUs' Feedthrough has them all) that
-#: artibus simulate reads, sets (artibus.bench.parameters.coerce, in their range) and
-#: records under their own names; a bench refuses them (its connections speak FMI 2.0)
-OTHER_WIDTHS = ("Float32", "Int8", "UInt8", "Int16", "UInt16", "UInt32", "Int64", "UInt64") + NOT_NUMBERS
 #: the builds of a bench's FMUs artibus runs: "2" (fmus/<Name>.fmu), "3" (fmus/fmi3/<Name>.fmu)
 FMI_VERSIONS = ("2", "3")
-_VIEWS = {}                            # (id(description), strict) -> (it, its view)
-_VIEWS_KEPT = 256
 
 
 #: the fmiVersion values the FMI 3.0 schema allows (fmi3ModelDescription.xsd, the attribute
@@ -41,43 +26,6 @@ def fmi_major(version):
     if version == "2.0":
         return 2
     return 3 if version and _FMI3_VERSION.fullmatch(version) else None
-
-
-def fmi2_view(md, strict=True):
-    """An FMI 3.0 model description as FMI 2.0 names its types (``FMI2_TYPE``:
-    Float64 -> Real, Int32 -> Integer, ...), the rest as FMPy read it: the
-    same variables, value references, units, starts and model structure
-    (tests/test_fmi3.py checks the two builds' descriptions agree), so that
-    the bench's reader and the runner's checks (artibus.bench, written in FMI
-    2.0's words) take an FMI 3.0 FMU as they take its FMI 2.0 build. A shallow
-    copy, made once per description; an FMI 2.0 one is returned as it is. A
-    type artibus does not read in a bench (Binary, Clock, the other widths) is an
-    error naming the variable, unless not ``strict`` (an FMU on its own): then it is
-    kept under its own type name (``OTHER_WIDTHS``)."""
-    if fmi_major(md.fmiVersion) != 3:
-        return md
-    kept = _VIEWS.get((id(md), strict))
-    if kept is not None and kept[0] is md:
-        return kept[1]
-    view = copy.copy(md)
-    copies = {}
-    for v in md.modelVariables:
-        if v.type not in FMI2_TYPE and (strict or v.type not in OTHER_WIDTHS):
-            raise ArtibusError(f"{md.modelName}: {v.name} is an FMI 3.0 {v.type}, which artibus does not read")
-        w = copies[id(v)] = copy.copy(v)
-        w.type = FMI2_TYPE.get(v.type, v.type)
-    view.modelVariables = [copies[id(v)] for v in md.modelVariables]
-    view.outputs = []
-    for o in md.outputs:                  # ModelStructure's Outputs on the copies (direct feedthrough)
-        u = copy.copy(o)
-        u.variable = copies.get(id(o.variable), o.variable)
-        if o.dependencies is not None:
-            u.dependencies = [copies.get(id(d), d) for d in o.dependencies]
-        view.outputs.append(u)
-    if len(_VIEWS) >= _VIEWS_KEPT:
-        _VIEWS.pop(next(iter(_VIEWS)))
-    _VIEWS[(id(md), strict)] = (md, view)        # (FMPy's descriptions have __slots__: no attribute on them)
-    return view
 
 
 def fmi_choice(fmi):

@@ -113,7 +113,7 @@ def coerce(v, value, finite=True):
         value = value.item()
     t = v.type
     text = value.strip() if isinstance(value, str) else None
-    if t == "Real":
+    if t in ("Real", "Float64"):
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
             raise ValueError(f"a Real is a number, not {type(value).__name__} {value!r}")
         try:
@@ -234,6 +234,9 @@ def check_against(values, fmu, source, prefix="", origins=None):
             raise ArtibusError(f"{label}: {no_variable(md, name)}")
         if v.causality not in ("parameter", "input"):
             raise ArtibusError(f"{label}: it is an {v.causality} of {md.modelName} and cannot be set")
+        if getattr(v, "shape", ()):
+            raise ArtibusError(f"{label}: {md.modelName}.{name} is an array of {v.size} values "
+                               f"({'x'.join(map(str, v.shape))}); a bench's parameters are scalar variables")
         if quantity:                         # (one on a Real is converted before: artibus.bench.rules)
             raise ArtibusError(f"{label}: a value with a unit ('{value.unit}') for {md.modelName}.{name}, an "
                                f"{v.type}: a unit belongs to a Real value (give the value without a unit)")
@@ -241,7 +244,7 @@ def check_against(values, fmu, source, prefix="", origins=None):
             value = values[name] = coerce(v, value)
         except ValueError as e:
             raise ArtibusError(f"{label}: not a valid {v.type} for {md.modelName}.{name}: {e}") from None
-        if v.type in ("Real", "Integer", "Float32") or v.type in INTEGER_RANGE:
+        if v.kind in ("Real", "Integer"):
             x = float(value)
             if v.min is not None and x < float(v.min) or v.max is not None and x > float(v.max):
                 raise ArtibusError(f"{label} is outside [{v.min}, {v.max}] of {md.modelName}")
@@ -256,5 +259,5 @@ def _model_description(path):
         md = read_model_description(str(path))
     except Exception as e:
         raise ArtibusError(f"{path}: not a readable FMI 2.0 or 3.0 FMU: {e}") from None
-    from artibus.bench.fmi import fmi2_view     # FMI 3.0: checked in FMI 2.0's type names
-    return fmi2_view(md, strict=False)
+    from artibus.fmu.model import model_of      # FMI 2.0 and 3.0 alike, by kind
+    return model_of(md)

@@ -48,7 +48,7 @@ def portable_path(bench, variants=None, out_dir=None):
 def _text(value, v):
     """(SSV element name, value attribute) of a parameter value for the FMU variable v
     (fmpy's ScalarVariable; None: typed by the Python value)."""
-    t = v.type if v is not None else ("Boolean" if isinstance(value, bool) else "Integer" if isinstance(value, int)
+    t = v.kind if v is not None else ("Boolean" if isinstance(value, bool) else "Integer" if isinstance(value, int)
                                       else "Real" if isinstance(value, float) else "String")
     if t == "Real":
         return "Real", repr(float(value))
@@ -111,15 +111,18 @@ def integer_view(fmu):
 def _steps(bench, z):
     """{component path: its communication step} as our runner takes it without
     --step: our annotation, else its FMU's default experiment's stepSize."""
-    from fmpy import read_model_description
     import tempfile
+
+    from fmpy import read_model_description
+
+    from artibus.fmu.model import model_of
     steps, mds = {}, {}
     with tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
         for path, c in bench.components.items():
             if c.source not in mds:
                 f = Path(tmp) / Path(c.source).name
                 f.write_bytes(z.read(c.source))
-                mds[c.source] = read_model_description(str(f))
+                mds[c.source] = model_of(read_model_description(str(f)))
             de = mds[c.source].defaultExperiment
             steps[path] = c.step or (float(de.stepSize) if de is not None and de.stepSize else None)
     return steps, mds

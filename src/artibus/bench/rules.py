@@ -50,7 +50,7 @@ def ssv_value(parameter, label):
 
 def bind(values, md, origins, prefix="", units=None):
     """The values {name: value, as its file types it} of one component's bindings as its FMU
-    ``md`` (FMI 2.0 type names: artibus.bench.fmi.fmi2_view) takes them, in a new dict: each
+    ``md`` (artibus.fmu.model's Model) takes them, in a new dict: each
     value with a unit (``units``: {name: (unit, the file's unit definitions)}) converted
     (with_unit), then each checked: a parameter or input of the FMU, of its type and in its
     range (artibus.bench.parameters.check_against). ``origins``: {name: "file:line"};

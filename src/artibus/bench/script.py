@@ -7,10 +7,14 @@
 - ``figures(result, out) -> [(png name, caption)]``: the report's drawings,
   written into the folder ``out``;
 - ``TEXT``: the report's notes;
-- optionally ``study(result, out) -> (kpis, images, text)``: a report that runs
-  further cases of the bench (the damping functions side by side, frequency
-  responses); the report then shows the study's KPIs and figures, and a sweep
-  still takes ``kpis(result)``.
+- optionally ``study(result, out) -> (kpis, images, text[, shown])``: a report
+  that runs further cases of the bench (the damping functions side by side,
+  frequency responses); the report then shows the study's KPIs and figures,
+  and a sweep still takes ``kpis(result)``. ``shown``: a run of the study's own
+  that the page shows instead of ``result`` (its span, animation and
+  results.csv: a replay). A study that runs other variants than the one run
+  grades only those the user asked for (``result.variants``, the --variant
+  names, None without).
 
 A bench without a bench.py gets the generic report (the first recorded signals
 over time, artibus.report.pages.generic) and no KPIs; the report of a run is

@@ -9,7 +9,6 @@ from pathlib import Path
 from lxml import etree
 
 from artibus.base import ArtibusError, parse_integer, parse_real
-from artibus.bench.fmi import fmi2_view
 
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -109,9 +108,11 @@ def _component_sources(ssp):
 
 
 def model_description(ssp, source):
-    """The model description of the FMU ``source`` inside the .ssp (FMPy's, read once a pack;
-    an FMI 3.0 one with FMI 2.0's type names, artibus.bench.fmi.fmi2_view)."""
+    """The model of the FMU ``source`` inside the .ssp (FMPy's description, read once a pack,
+    with artibus's Variables: artibus.fmu.model)."""
     from fmpy import read_model_description
+
+    from artibus.fmu.model import model_of
     st = Path(ssp).stat()
     key = (str(ssp), st.st_mtime_ns, st.st_size, source)
     if key not in _MD_CACHE:
@@ -120,7 +121,7 @@ def model_description(ssp, source):
                     tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
                 xml = Path(tmp) / "modelDescription.xml"
                 xml.write_bytes(fmu.read("modelDescription.xml"))
-                _MD_CACHE[key] = fmi2_view(read_model_description(str(xml), validate=False))
+                _MD_CACHE[key] = model_of(read_model_description(str(xml), validate=False))
         except Exception as e:      # not a zip, no modelDescription.xml, not FMI XML: named, no traceback
             raise ArtibusError(f"{ssp}: {source}: not an FMU whose modelDescription.xml can be read "
                                f"({type(e).__name__}: {e})") from None

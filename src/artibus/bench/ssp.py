@@ -225,7 +225,7 @@ def variant_overrides(ssp, names):
                 continue                   # the runner names the unknown component
             md = model_description(ssp, sources[comp])
             v = next((v for v in md.modelVariables if v.name == var), None)
-            if v is not None and v.type == "Real":
+            if v is not None and v.kind == "Real":
                 values[full] = to_unit(values[full], unit, defs, declared_unit(v), fmu_units(md),
                                        f"{where}: Parameter '{full}' = {values[full]!r} {unit}")
     return values

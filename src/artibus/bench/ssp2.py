@@ -38,7 +38,7 @@ from pathlib import Path
 from lxml import etree
 
 from artibus.base import ArtibusError, parse_real
-from artibus.bench.fmi import fmi2_view
+from artibus.fmu.model import model_of
 from artibus.bench.rules import bind, one_source, ssv_value
 from artibus.bench.ssd import NS
 from artibus.bench.units import ssp_units
@@ -179,7 +179,7 @@ def read_fmu(file, where):
             manifest = etree.fromstring(z.read(m)) if m in names else None
         if hasattr(file, "seek"):
             file.seek(0)
-        described = fmi2_view(read_model_description(file, validate=False), strict=False)
+        described = model_of(read_model_description(file, validate=False))
     except (zipfile.BadZipFile, KeyError, OSError, etree.XMLSyntaxError) as e:
         raise ArtibusError(f"{where}: not a readable FMU: {e}") from None
     except Exception as e:            # FMPy's reader: not FMI XML

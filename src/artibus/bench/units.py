@@ -197,7 +197,7 @@ def with_unit(raw, unit, definitions, var, md, label):
     left to the binding's check (artibus.bench.parameters.check_against names it)."""
     if var is None:
         return raw
-    if var.type not in ("Real", "Float32"):
+    if var.kind != "Real":
         raise ArtibusError(f"{label}: a value with a unit ('{unit}') for {md.modelName}.{var.name}, an {var.type}: "
                            "a unit belongs to a Real value (give the value without a unit)")
     if isinstance(raw, bool) or not isinstance(raw, (int, float)):

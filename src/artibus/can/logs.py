@@ -1,11 +1,53 @@
 """CAN logs: the frames of a .blf or .asc log (python-can's readers), decoded
-through the DBC with the receivers' E2E check of each frame (``decode_log``)."""
+through the DBC with the receivers' E2E check of each frame (``decode_log``);
+the writer of a run's log by its extension (``log_writer``: .blf, .asc, or .mf4,
+ASAM MDF 4's CAN bus logging)."""
 import math
 import re
 from pathlib import Path
 
 from artibus.base import ArtibusError
 from artibus.can.dbc import load_dbc
+
+#: the extensions a run's CAN log (--can-log) is written as
+LOG_SUFFIXES = (".blf", ".asc", ".mf4")
+
+
+def log_writer(path, part=None):
+    """python-can's writer of a CAN log by ``path``'s extension (LOG_SUFFIXES),
+    writing to ``part`` (default ``path``: the caller renames a part when the log
+    is complete). Times are simulated seconds, as the frames' time stamps."""
+    import can
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in LOG_SUFFIXES:
+        raise ArtibusError(f"{path}: the CAN log is written as {', '.join(LOG_SUFFIXES)} (by its suffix)")
+    target = str(part or path)
+    if suffix == ".mf4":
+        return _mf4_writer()(target)
+    return can.BLFWriter(target) if suffix == ".blf" else can.ASCWriter(target)
+
+
+def _mf4_writer():
+    """python-can's MF4Writer (asammdf: a CAN_DataFrame channel group whose source
+    is a CAN bus, ASAM MDF 4.1 "bus logging") with the measurement's start at
+    1970-01-01 00:00 UTC, so that a frame's time is its time stamp as given, the
+    simulated seconds a .blf of the same run holds (python-can's own writer takes
+    the wall clock at its opening as the start, and times from it). log_event's
+    text goes to the file's comment (MF4Writer has no events)."""
+    from datetime import datetime, timezone
+    from can.io import MF4Writer
+
+    class SimTimeMF4Writer(MF4Writer):
+        def __init__(self, file, **kwargs):
+            super().__init__(file, **kwargs)
+            self._mdf.header.start_time = datetime.fromtimestamp(0, timezone.utc)
+            self.last_timestamp = self._start_time = 0.0
+
+        def log_event(self, message, timestamp=None):
+            self._mdf.header.comment = message
+
+    return SimTimeMF4Writer
 
 
 def read_log(path):

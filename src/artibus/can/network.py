@@ -46,7 +46,7 @@ after the run (``log_frames``), the bus carries none. Faults, a tamper function
 or a real interface tick here (``Network.tick``), as the run's
 ``Simulation.stepping`` says.
 
-The traffic can be logged as .blf or .asc with python-can's writers; the log's
+The traffic can be logged as .blf, .asc or .mf4 with python-can's writers; the log's
 times are simulated seconds from the run's start time (a marker at the start
 fixes the writers' origin). ``decode_log`` reads a log back through the DBC.
 
@@ -220,8 +220,10 @@ class Network(_FaultInjection):
                 raise ArtibusError(f"--can {self.interface}: python-can has no interface '{kind}' "
                                    f"(known: {', '.join(sorted(can.interfaces.VALID_INTERFACES))})")
         self.log_path = Path(log) if log else None
-        if self.log_path is not None and self.log_path.suffix.lower() not in (".blf", ".asc"):
-            raise ArtibusError(f"--can-log {log}: the log is written as .blf or .asc (by its suffix)")
+        from artibus.can.logs import LOG_SUFFIXES, log_writer
+        if self.log_path is not None and self.log_path.suffix.lower() not in LOG_SUFFIXES:
+            raise ArtibusError(f"--can-log {log}: the log is written as {', '.join(LOG_SUFFIXES)} (by its suffix; "
+                               f".mf4: ASAM MDF 4 CAN bus logging)")
         try:
             self.bus = can.Bus(interface=kind, channel=channel, receive_own_messages=True,
                                preserve_timestamps=True, bitrate=self.bitrate)
@@ -233,8 +235,7 @@ class Network(_FaultInjection):
             self._part = self.log_path.with_name(self.log_path.name + ".part")
             try:
                 self._part.parent.mkdir(parents=True, exist_ok=True)
-                cls = can.BLFWriter if self.log_path.suffix.lower() == ".blf" else can.ASCWriter
-                self.writer = cls(str(self._part))
+                self.writer = log_writer(self.log_path, self._part)
             except OSError as e:
                 self.bus.shutdown()
                 self._part.unlink(missing_ok=True)

@@ -339,7 +339,7 @@ def replay(log_path, bench, maps=None, dbc=None, stop_time=None, overrides=None,
         for inp, (sig, unit) in drive.items():
             comp, _, var = inp.rpartition(".")
             v = units[comp].fmu.vars.get(var)
-            if v is None or v.causality != "input" or v.type != "Real":
+            if v is None or v.causality != "input" or v.kind != "Real":
                 raise ArtibusError(f"--map {sig}={inp}: not a Real input of {comp} in {b.file}")
             s = log[sig]
             su = unit if unit is not None else s.unit

@@ -66,7 +66,7 @@ class Result:
         """A result from a filled table (a row per time), kept as its array;
         its rows a view of the table's (no list of a row object per time)."""
         result = cls.__new__(cls)           # (the fields' defaults without __init__'s calls)
-        result.__dict__.update(names=list(names), rows=_ArrayRows(table), strings={}, units={}, terminated=None,
+        result.__dict__.update(names=list(names), rows=_ArrayRows(table), strings={}, units={}, descriptions={}, terminated=None,
                                _array=table)
         return result
 
@@ -75,6 +75,9 @@ class Result:
     #: {name: unit} of the columns, from the FMUs' model descriptions (the variable's
     #: unit, else its declaredType's; "" for none; "s" for time)
     units: dict = field(default_factory=dict)
+    #: {name: description} of the columns, from the model descriptions ("" for none),
+    #: for the writers that keep one per channel (an MDF 4 file: artibus.runner.formats)
+    descriptions: dict = field(default_factory=dict)
     #: a Termination where an FMU ended the run before the stop time, else None
     terminated: Termination | None = None
 

@@ -7,9 +7,9 @@ the result up to its last successful time, with ``Result.terminated``."""
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
-from artibus.bench.fmi import NOT_NUMBERS
 from artibus.bench.units import unit_of
 from artibus.fmu.instance import Fmu, claim_logger_proxy
+from artibus.fmu.model import NOT_NUMBERS
 from artibus.fmu.result import Result, SimulationError, Termination, terminated
 
 
@@ -67,14 +67,28 @@ def check_steps(n, where):
                            f"--step or a shorter --stop-time")
 
 
-def _row(values, types):
+def needs_event_mode(path):
+    """Whether an FMU runs with Event Mode (FMI 3.0 eventModeUsed): an FMI 3.0 FMU with
+    hasEventMode and clocks (FMI 3.0 5.2.2: clocks tick in Event Mode only); without clocks the
+    FMU handles its events within its steps (FMI 3.0 4.2.1, eventModeUsed = false)."""
+    from artibus.fmu.instance import read_model
+    try:
+        md = read_model(str(path))
+    except ArtibusError:
+        return False                     # (Fmu names why it cannot be read)
+    return bool(md.fmi == 3 and md.coSimulation is not None and md.coSimulation.hasEventMode
+                and any(v.kind == "Clock" for v in md.modelVariables))
+
+
+def _row(values, kinds):
     """A recorded row as floats: a Boolean as 0/1, an Integer or Enumeration
     as its number, a String as NaN (its text goes to Result.strings)."""
-    return [float("nan") if t == "String" else float(x) for x, t in zip(values, types)]
+    return [float("nan") if k == "String" else float(x) for x, k in zip(values, kinds)]
 
 
 def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
-             outputs=None, start_time=0.0):
+             outputs=None, start_time=0.0, output_interval=None, tolerance=None, logging=False,
+             messages=None, events=()):
     """Simulate one FMU (FMI 2.0 or 3.0, Co-Simulation).
 
     parameters: {name: value} set in initialization mode (checked against
@@ -82,7 +96,14 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     inputs: {name: f(t)} evaluated at each communication point (held over the step).
     outputs: names to record, of any type (default: every output).
     Without stop_time/step: the default experiment's, else DEFAULT_STOP_TIME
-    and (stop - start) / DEFAULT_STEPS.
+    and (stop - start) / DEFAULT_STEPS. output_interval: the results every so many
+    seconds, a whole number of steps (without step: the step, as FMPy's simulate_fmu
+    takes it in Co-Simulation). tolerance: the relative tolerance the FMU is told
+    (fmi2SetupExperiment, fmi3EnterInitializationMode). logging: the FMU's loggingOn;
+    messages: a list the FMU's log messages are added to when the run ends, however.
+    events: times the inputs jump (artibus.fmu.inputs.InputTable.events): the steps are cut
+    there and the point recorded, where the FMU takes a variable communication step
+    (canHandleVariableCommunicationStepSize), as FMPy's simulate_fmu does.
     Returns a Result; raises SimulationError (with the partial Result) on failure.
     Ctrl-C or SIGTERM (KeyboardInterrupt) ends it between two steps, the rows so
     far in ``e.result``: each doStep returns in bounded time (the FMUs refuse a
@@ -90,22 +111,28 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     """
     parameters = parameters or {}
     inputs = inputs or {}
-    with Fmu(path) as fmu:
+    with Fmu(path, event_mode=needs_event_mode(path), logging=logging) as fmu:
         claim_logger_proxy()
+        if step is None and output_interval is not None:
+            step = output_interval
         stop_time, step = _experiment(fmu, start_time, stop_time, step, path)
-        outputs, types = _recorded(fmu, outputs, path)
+        every = _every(output_interval, step, path)
+        variables = _recorded(fmu, outputs, path)
         from artibus.runner.results import check_room      # as `run` does: refused before it starts
         n = step_count(start_time, stop_time, step, path)
-        check_room(n + 1, len(outputs) + 1, path)
+        check_room(n + 1, sum(v.size for v in variables) + 1, path)
         check_steps(n, path)
-        result, record = _recorder(fmu, outputs, types)
+        result, record = _recorder(fmu, variables)
         try:
-            fmu.enter_initialization_mode(start_time)
+            fmu.calls.enter_initialization(start_time, tolerance=tolerance)
             fmu.set_values(parameters)
             fmu.set_values({n: f(start_time) for n, f in inputs.items()})
-            fmu.slave.exitInitializationMode()
+            fmu.calls.exit_initialization()
+            if getattr(fmu.calls, "mode", None) == "event":   # eventModeUsed: Event Mode first (FMI 3.0 4.2.1)
+                fmu.calls.leave_event_mode()
             record(start_time)
-            _steps(fmu, n, start_time, step, inputs, record, result)
+            cut = events if fmu.md.coSimulation.canHandleVariableCommunicationStepSize else ()
+            _steps(fmu, n, start_time, step, inputs, record, result, every, [e for e in cut if e < stop_time])
         except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the rows so far go with it
             n_rows = min([len(result.rows)] + [len(c) for c in result.strings.values()])
             del result.rows[n_rows:]     # (a row whose texts were not all taken)
@@ -115,7 +142,21 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             raise
         except FMICallException:
             raise _failure(fmu, result, record, path, start_time) from None
+        finally:
+            if messages is not None:
+                messages.extend(fmu.log)
         return result
+
+
+def _every(output_interval, step, path):
+    """The number of steps between two recorded points (1 without output_interval)."""
+    if output_interval is None:
+        return 1
+    k = round(output_interval / step)
+    if not (output_interval > 0 and k >= 1 and abs(k * step - output_interval) <= 1e-9 * output_interval):
+        raise ArtibusError(f"{path}: output interval {output_interval:g} s is not a whole number of "
+                           f"steps of {step:g} s")
+    return k
 
 
 def _experiment(fmu, start_time, stop_time, step, path):
@@ -132,43 +173,81 @@ def _experiment(fmu, start_time, stop_time, step, path):
 
 
 def _recorded(fmu, outputs, path):
-    """(names, types) of the recorded variables: those asked for, else every output
-    (a Binary or a Clock is no number for the table: not recorded, refused if asked for)."""
+    """The recorded Variables: those asked for, else every output (a Binary or a Clock is no
+    number for the table: not recorded, refused if asked for)."""
     if outputs is None:
-        outputs = [v.name for v in fmu.md.modelVariables if v.causality == "output"
-                   and v.type not in NOT_NUMBERS]
-    types = [fmu.var(n).type for n in outputs]
-    for n, ty in zip(outputs, types):
-        if ty in NOT_NUMBERS:
-            raise ArtibusError(f"{path}: {n} is an FMI 3.0 {ty}: not a number a result table can hold")
-    return outputs, types
+        return [v for v in fmu.md.modelVariables if v.causality == "output" and v.kind not in NOT_NUMBERS]
+    variables = [fmu.var(n) for n in outputs]
+    for v in variables:
+        if v.kind in NOT_NUMBERS:
+            raise ArtibusError(f"{path}: {v.name} is an FMI 3.0 {v.type}: not a number a result table can hold")
+    return variables
 
 
-def _recorder(fmu, outputs, types):
-    """(the Result, record(t): a row of the outputs' values at t, Strings in Result.strings)."""
-    result = Result(["time"] + list(outputs))
-    result.strings = {n: [] for n, t in zip(outputs, types) if t == "String"}
-    result.units = {"time": "s", **{n: unit_of(fmu.var(n)) for n in outputs}}
+def columns(v):
+    """The result's column names of the Variable ``v``: its name, or for an array one column
+    per element in row-major order, named as FMI 3.0's structured naming convention writes
+    an element (2.4.7.6 and 2.3.1: ``x[1,2]``, 1-based)."""
+    if not v.shape:
+        return [v.name]
+    import itertools
+    return [f"{v.name}[{','.join(str(i + 1) for i in k)}]" for k in itertools.product(*map(range, v.shape))]
+
+
+def _recorder(fmu, variables):
+    """(the Result, record(t): a row of the variables' values at t, an array's elements in
+    columns of their own, Strings in Result.strings)."""
+    names = [c for v in variables for c in columns(v)]
+    result = Result(["time"] + names)
+    strings = [c for v in variables if v.kind == "String" for c in columns(v)]
+    result.strings = {c: [] for c in strings}
+    result.units = {"time": "s", **{c: unit_of(v) for v in variables for c in columns(v)}}
+    result.descriptions = {"time": "simulation time",
+                           **{c: getattr(v, "description", None) or "" for v in variables for c in columns(v)}}
+    kinds = [v.kind for v in variables for _ in columns(v)]
 
     def record(t):
-        values = fmu.get_values(outputs)
-        result.rows.append([t] + _row(values, types))
-        for n, x, ty in zip(outputs, values, types):
-            if ty == "String":
-                result.strings[n].append(x)
+        values = fmu.calls.get(variables)
+        flat = [x for v, x in zip(variables, values) for x in (x if v.shape else [x])]
+        result.rows.append([t] + _row(flat, kinds))
+        for c, x, kind in zip(names, flat, kinds):
+            if kind == "String":
+                result.strings[c].append(x)
     return result, record
 
 
-def _steps(fmu, n, start_time, step, inputs, record, result):
-    """n steps from start_time, each recorded, the inputs set after it; an FMU's own end
+def _points(start_time, step, n, events):
+    """(t, i) of each communication point: the regular ones start + (i + 1) step, and between
+    them the input events (i None; one within 1e-9 relative of a regular point is that point,
+    as FMPy's simulate_fmu takes it)."""
+    import math
+    ev = iter(sorted(e for e in events if e > start_time))
+    e = next(ev, None)
+    last = start_time
+    for i in range(n):
+        t = start_time + (i + 1) * step
+        while e is not None and e < t and not math.isclose(e, t):
+            if not math.isclose(e, last):
+                yield e, None
+                last = e
+            e = next(ev, None)
+        while e is not None and math.isclose(e, t):
+            e = next(ev, None)
+        yield t, i
+        last = t
+
+
+def _steps(fmu, n, start_time, step, inputs, record, result, every=1, events=()):
+    """n steps from start_time (cut at the input ``events``), each recorded (every
+    ``every``-th regular one, each event), the inputs set after it; an FMU's own end
     (FMI 3.0 terminateSimulation, FMI 2.0 fmi2Discard with fmi2Terminated) ends them with
     Result.terminated, its values at its last successful time recorded (getters are
     allowed after fmi2Discard), as FMPy's simulate_fmu records them."""
     from artibus.runner.markers import PIECE, mark
     t = start_time
-    for i in range(n):
+    for t_next, i in _points(start_time, step, n, events):
         try:
-            t_end = fmu.do_step(t, step)
+            t_end = fmu.do_step(t, t_next - t)
             kind = "terminateSimulation"
         except FMICallException as e:
             t_end = terminated(fmu.slave, e.status) if e.function == "fmi2DoStep" else None
@@ -176,16 +255,17 @@ def _steps(fmu, n, start_time, step, inputs, record, result):
                 raise
             kind = None
         if t_end is not None:                   # a normal end (NaN: at the step's end)
-            t_end = t_end if t_end == t_end else start_time + (i + 1) * step
+            t_end = t_end if t_end == t_end else t_next
             if t_end > t:
                 record(t_end)
             result.terminated = (Termination(fmu.md.modelName, t_end, kind) if kind
                                  else Termination(fmu.md.modelName, t_end))
             return
-        t = start_time + (i + 1) * step
-        record(t)
+        t = t_next
+        if i is None or (i + 1) % every == 0 or i + 1 == n:
+            record(t)
         fmu.set_values({n_: f(t) for n_, f in inputs.items()})
-        if (i + 1) % PIECE == 0 and i + 1 < n:     # for the tests (artibus.runner.markers)
+        if i is not None and (i + 1) % PIECE == 0 and i + 1 < n:     # for the tests (artibus.runner.markers)
             mark(f"t={t!r}")
 
 

@@ -20,8 +20,8 @@ _WHERE = {
     **dict.fromkeys(("CALIBRATED", "FAIL", "NOT_GRADED", "PASS", "STYLE", "Kpi", "Table", "generic", "headline",
                      "run_metadata", "tally", "thumbnail", "write_html", "write_index", "write_kpi_csv",
                      "write_report"), "pages"),
-    **dict.fromkeys(("birds_eye", "colours", "draw_bound", "save_figure", "signals", "swept", "swept_area"),
-                    "plots"),
+    **dict.fromkeys(("birds_eye", "colours", "draw_bound", "legend_beside", "save_figure", "signals", "swept",
+                     "swept_area", "wrapped_title"), "plots"),
 }
 __all__ = sorted(_WHERE)
 

@@ -272,6 +272,7 @@ bound for the configuration that ran; "calibrated": the value we calibrated to t
 {_notes_html(notes)}
 {sections}
 {''.join(figs)}
+<p class=meta>{html.escape(meta_line())}</p>
 </body></html>
 """
     write_kpi_csv(out_dir / "kpis.csv", kpis)
@@ -286,9 +287,12 @@ bound for the configuration that ran; "calibrated": the value we calibrated to t
 
 
 def run_metadata():
-    """{date, artibus version, git commit, platform} of this run."""
+    """{date, artibus version, git commit, platform} of this run (the commit of the clone
+    artibus runs from; none from an installed wheel, whose folder may lie in another repository)."""
     from artibus.base import ROOT, __version__
     try:
+        if not (ROOT / ".git").exists():
+            raise OSError("not a git checkout")
         commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short=12", "HEAD"], capture_output=True,
                                 text=True, timeout=10).stdout.strip()
         dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
@@ -303,6 +307,11 @@ def run_metadata():
         "commit": commit or "unknown (not a git checkout)",
         "platform": f"{platform.platform()}, Python {platform.python_version()}",
     }
+
+
+def meta_line():
+    """The run's metadata in one line, at the foot of every bench's page: the artibus version above all."""
+    return "; ".join(f"{k}: {v}" for k, v in run_metadata().items())
 
 
 def headline(kpis, n=5):
@@ -395,22 +404,35 @@ def generic(r, out):
 
 
 def _report(bench, result, out):
+    """(KPIs, images, notes, the run the page shows): a study may return a run of
+    its own as a fourth item (a replay: the bench's own run stands still)."""
     mod = script.load(bench)
     if mod is None:
-        return generic(result, out)
+        return (*generic(result, out), result)
     if callable(getattr(mod, "study", None)):
-        return mod.study(result, out)
-    return mod.kpis(result), mod.figures(result, out), getattr(mod, "TEXT", "")
+        parts = tuple(mod.study(result, out))
+        return parts if len(parts) == 4 else (*parts, result)
+    return mod.kpis(result), mod.figures(result, out), getattr(mod, "TEXT", ""), result
 
 
-def write_report(bench, result, out_dir, wall=None, sections=""):
+def write_report(bench, result, out_dir, wall=None, sections="", results_file=None):
     """PNGs and index.html for one bench run (``sections``: more of the page,
-    HTML, after the KPI table); returns the KPIs."""
+    HTML, after the KPI table); returns the KPIs. Where the bench's study
+    shows a run of its own (_report), the page is that run's: its span in the
+    header, its animation, and its results saved as ``results_file`` (the
+    page's results.csv) in place of the bench's run."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    kpis, images, notes = _report(bench, result, out)
-    images = list(images) + bench_animation(result, out, title=f"{bench}, bird's-eye view")
-    span = result.time[-1] - result.time[0]
-    intro = f"Bench {bench}: {span:g} s simulated" + (f" in {wall:.2f} s." if wall else ".")
+    kpis, images, notes, shown = _report(bench, result, out)
+    if shown is not result:
+        wall = None                         # (the bench's run's wall time is not the shown run's)
+        if results_file is not None:
+            from artibus.runner import save
+            save(shown, results_file)
+    images = list(images) + bench_animation(shown, out, title=f"{bench}, bird's-eye view")
+    span = shown.time[-1] - shown.time[0]
+    intro = (f"Bench {bench}: {span:g} s simulated" + (f" in {wall:.2f} s." if wall else ".")
+             + (" The page shows the run of its study (results.csv), not the bench's run alone."
+                if shown is not result else ""))
     write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes, sections)
     return kpis

@@ -177,11 +177,10 @@ def birds_eye(path, traces, outlines=None, road=None, title="", every=10, envelo
             ax.set_ylim(*ylim)
         ax.grid(True, alpha=0.3)
         ax.set_ylabel("y [m]")
-        if n == len(axes) - 1 or tall:
-            ax.set_xlabel("x [m]")
+        ax.set_xlabel("x [m]")              # (each panel a window of its own: each says its unit)
     axes[0].set_title(title + (f"\n(split into {len(axes)} panels, each at equal scale)" if len(axes) > 1 else ""),
                       fontsize=10)
-    axes[0].legend(loc="best", fontsize=7, ncol=2 if len(traces) > 3 else 1)
+    legend_beside(axes[0], fontsize=7)     # beside the drawing: never over a trace
     if sp is not None:
         axw = fig.add_subplot(gs[-1, :])
         axw.plot(sp.s, sp.width, color="tab:red", lw=0.5, alpha=0.5, label="per 0.5 m of path")
@@ -202,8 +201,10 @@ def birds_eye(path, traces, outlines=None, road=None, title="", every=10, envelo
 def signals(path, t, panels, title="", bounds=None):
     """panels: [(ylabel, {label: values})], one axis each, shared time axis.
     bounds: [(panel index, value, label)]: the papers' bounds drawn as dashed
-    lines, each labelled with its source (draw_bound)."""
-    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.4 * len(panels)), sharex=True, squeeze=False)
+    lines, each labelled with its source (draw_bound). Each legend beside its
+    panel (legend_beside: never over the data), the title wrapped to the
+    figure's width (wrapped_title: never cut at its edges)."""
+    fig, axes = plt.subplots(len(panels), 1, figsize=(11, 2.4 * len(panels) + 0.3), sharex=True, squeeze=False)
     for ax, (ylabel, series) in zip(axes[:, 0], panels):
         for (label, y), c in zip(series.items(), colours() * 3):
             ax.plot(t, y, color=c, lw=1.2, label=label)
@@ -212,11 +213,38 @@ def signals(path, t, panels, title="", bounds=None):
     for i, value, label in bounds or []:
         draw_bound(axes[i, 0], value, label)
     for ax, _ in zip(axes[:, 0], panels):
-        ax.legend(loc="best", fontsize=8)
+        legend_beside(ax, fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
-    axes[0, 0].set_title(title)
+    wrapped_title(fig, title)
     fig.tight_layout()
     return save_figure(fig, path, dpi=110)
+
+
+def legend_beside(ax, width=42, **kw):
+    """The axis's legend to the right of it, outside the plotted area, so that it
+    never hides a curve (a legend inside, even at matplotlib's "best" place,
+    covers some of a panel full of data); tight_layout makes room for it. Its
+    labels broken into lines of at most ``width`` characters (a long bound's
+    source would otherwise take the plot's width)."""
+    import textwrap
+    handles, labels = ax.get_legend_handles_labels()
+    if not labels:
+        return None
+    labels = [textwrap.fill(label, width) for label in labels]
+    return ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **kw)
+
+
+def wrapped_title(fig, title, fontsize=11):
+    """The figure's title (suptitle: centred on the figure, not on an axis that a
+    legend beside it moves left), broken into lines that fit the figure's width
+    (a long one on one line runs past the figure's edges and is cut)."""
+    import textwrap
+    if not title:
+        return None
+    # an average glyph is about 0.55 em wide: the characters a line of 90 % of the figure's width holds
+    width = max(20, int(fig.get_figwidth() * 72 * 0.9 / (0.55 * fontsize)))
+    text = "\n".join(textwrap.fill(line, width) for line in str(title).split("\n"))
+    return fig.suptitle(text, fontsize=fontsize)
 
 
 def draw_bound(ax, value, label, horizontal=True, color="k"):

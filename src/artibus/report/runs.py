@@ -52,9 +52,10 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
                                                             **settings) as sim:
             name = sim.bench.name
             run = _Run(sim, stop_time, progress, log, fmi, checked)
+            run.variants = list(variants) if variants else None
             if not report:
                 out = Path(output or f"{name}.csv")
-                check_results_file(out, "-o", guard)
+                check_results_file(out, "-o", guard, results=True)
                 run.results(out, out)
                 continue
             final = Path(report) / name if every else Path(report)
@@ -100,6 +101,10 @@ def _refuse_inputs(guard, output, can_log, report, every):
     """The outputs the user named checked against the run's inputs (``guard``)
     before the bench is set up (a CAN log's writer opens at the set-up)."""
     if can_log:
+        from artibus.can.logs import LOG_SUFFIXES
+        if Path(can_log).suffix.lower() not in LOG_SUFFIXES:     # (an FMI-LS-BUS bench writes it after the run)
+            raise ArtibusError(f"--can-log {can_log}: the log is written as {', '.join(LOG_SUFFIXES)} "
+                               f"(by its suffix; .mf4: ASAM MDF 4 CAN bus logging)")
         check_not_input(can_log, "--can-log", guard)
     if report and every:
         for f in ("index.html", "summary.csv"):
@@ -107,7 +112,7 @@ def _refuse_inputs(guard, output, can_log, report, every):
     elif report:
         _check_report(Path(report), Path(output) if output else Path(report) / "results.csv", guard)
     elif output:
-        check_results_file(Path(output), "-o", guard)
+        check_results_file(Path(output), "-o", guard, results=True)
 
 
 class _Run:
@@ -116,6 +121,7 @@ class _Run:
     def __init__(self, sim, stop_time, progress, log, fmi, checked):
         self.sim, self.stop_time, self.progress, self.log, self.fmi = sim, stop_time, progress, log, fmi
         self.checked, self.result, self.can_summary = checked, None, None
+        self.variants = None   # the --variant names asked (a report's study grades only those: Result.variants)
 
     def results(self, out, partial_to, shown=None):
         """Run, then save the results to ``out`` (``shown``: the name it will have,
@@ -131,6 +137,7 @@ class _Run:
             runner.save_partial(e, partial_to)
             raise
         result.fmi = self.fmi     # the build its report's studies (a bench.py's study) run theirs with
+        result.variants = self.variants   # what the user asked to run: a study grades only that, shows the rest
         self.result = result
         try:
             print_warnings((u.path, u.fmu.log) for u in sim.units)
@@ -159,7 +166,7 @@ def _check_report(final, out, guard):
     checked against the inputs (``guard``) before the run."""
     check_not_input(final, "--report", guard, folder=True)
     if not _inside(out, final):
-        check_results_file(out, "-o", guard)
+        check_results_file(out, "-o", guard, results=True)
     b = _beside(final)
     for f in (b, runner.units_path(b), runner.partial_path(b), runner.units_path(runner.partial_path(b))):
         check_not_input(f, "--report", guard, beside=final)
@@ -218,7 +225,9 @@ def _page(run, bench, overrides, out_dir, final, stop_time, can_faults, settings
     if sr.multi_rate:
         log(f"{name}: single-rate at {sr.step:g} s: KPIs within {sr.deviation:.3g} % "
             f"({sr.worst}); the extra run took {sr.wall:.2f} s")
-    kpis = write_report(name, result, out_dir, sim.wall, sections=sr.html())
+    results_file = out_dir / "results.csv"      # (the page's own results: a study's run may replace them)
+    kpis = write_report(name, result, out_dir, sim.wall, sections=sr.html(),
+                        results_file=results_file if results_file.is_file() else None)
     if run.can_summary is not None:
         write_text(out_dir / "can_bus.txt", run.can_summary + "\n")
     for k in kpis:

@@ -1,6 +1,6 @@
 """A small FMI-LS-BUS 1.0 co-simulation master for FMI 3.0 Co-Simulation with Event Mode
 (issue 24): CAN network nodes, connected directly (two nodes) or through a bus simulation FMU
-such as CanBus, on FMPy's FMU3Slave. The C stepping core does what Network.advance does, in
+such as CanBus, on artibus's FMU instances with Event Mode (artibus.fmu.fmi3). The C stepping core does what Network.advance does, in
 the same order, on the same instances (src/runner_core/lsbus.c, artibus.runner.lsbus_core);
 this is its reference and the runner's fallback (ARTIBUS_CORE=0).
 
@@ -47,20 +47,16 @@ direct composition. Only its very first Tx (at t0) is built before its first fra
 ``Network.wire_frames`` lists each CAN frame once, at its delivery; ``write_can_log`` writes them
 to .blf/.asc with python-can, as the Real-wired benches' --can-log does.
 """
+import contextlib
 import ctypes
 import math
-import shutil
 import xml.etree.ElementTree as ET
 import zipfile
 from collections import defaultdict
 from pathlib import Path
 
-import fmpy
-from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi3 import FMU3Slave
 
-from artibus import cache
 from artibus.base import ArtibusError
 
 CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2 headers, fmi3FunctionTypes.h)
@@ -174,18 +170,16 @@ def read_terminals(path, md, fmu_name):
 # ---- one FMU instance -----------------------------------------------------------------------
 
 class Fmu:
-    """An FMI 3.0 CS instance with Event Mode and where it is: 'event' (in Event Mode, before
-    fmi3UpdateDiscreteStates), 'updated' (after it; 'need' says whether it asked for another
-    iteration) or 'step' (Step Mode)."""
+    """An FMI 3.0 CS node or bus FMU of the network: artibus's FMU instance (artibus.fmu.Fmu)
+    made with eventModeUsed, its Event Mode in the standard's call order (artibus.fmu.fmi3:
+    ``mode`` 'event', 'updated' or 'step', ``need``, ``next_event``, ``n_events``), its bus
+    terminals; a refused call an LsBusError naming the FMU."""
 
     def __init__(self, name, path, parameters=None, start_time=0.0):
         self.name, self.path = name, Path(path)
         if not self.path.is_file():
             raise LsBusError(f"{self.path}: no such FMU (FMU {name})")
-        # unpacked once per content and kept between runs, shared by the instances of one FMU,
-        # its model description read once (artibus.cache, as the runner's units)
-        self.dir, self._own_dir = cache.unpacked(self.path)
-        self.fmu = None
+        self.instance = None
         try:
             self._open(parameters, start_time)
         except BaseException as e:     # nothing left behind: the instance freed, its own copy removed
@@ -195,38 +189,37 @@ class Fmu:
             raise LsBusError(f"{self.path}: FMU {name}: {e}") from None
 
     def _open(self, parameters, start_time):
-        name = self.name
-        self.md = cache.stored(self.dir, f"modelDescription-fmpy-{fmpy.__version__}",
-                               lambda: read_model_description(str(self.path)))
-        from artibus.bench.fmi import fmi_major
-        if fmi_major(self.md.fmiVersion) != 3 or not self.md.coSimulation or not self.md.coSimulation.hasEventMode:
-            raise LsBusError(f"{self.path}: FMU {name} is no FMI 3.0 Co-Simulation FMU with hasEventMode")
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.terminals = read_terminals(self.path, self.md, name)
-        self.log = []
-        self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=str(self.dir),
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(eventModeUsed=True, loggingOn=False,
-                             logMessage=lambda env, st, cat, msg: self.log.append((st, msg.decode(errors="replace"))))
-        self.fmu.enterInitializationMode(startTime=start_time)
+        from artibus.fmu.instance import Fmu as Instance, read_model
+        md = read_model(str(self.path))
+        if md.fmi != 3 or not md.coSimulation or not md.coSimulation.hasEventMode:
+            raise LsBusError(f"{self.path}: FMU {self.name} is no FMI 3.0 Co-Simulation FMU with hasEventMode")
+        self.md, self.vars = md, md.by_name
+        self.terminals = read_terminals(self.path, md, self.name)
+        self.instance = Instance(self.path, instance_name=self.name, event_mode=True)
+        self.calls, self.fmu = self.instance.calls, self.instance.slave
+        self.calls.enter_initialization(start_time)
         for key, value in (parameters or {}).items():
             self.set(key, value)
-        self.fmu.exitInitializationMode()        # in Event Mode now (FMI 3.0.2, 4.2.1: eventModeUsed)
-        self.mode, self.need = "event", False
-        self.next_event = math.inf               # nextEventTime of the last update
-        self.n_events = 0
+        self.calls.exit_initialization()        # in Event Mode now (FMI 3.0.2, 4.2.1: eventModeUsed)
 
     def close(self):
-        if self.fmu is not None and getattr(self.fmu, "component", None):
-            try:
-                self.fmu.terminate()
-            except Exception:                     # an instance left in the error state
-                pass
-            self.fmu.freeInstance()
-        self.fmu = None
-        if self._own_dir:                         # (the cache off: a directory of its own)
-            shutil.rmtree(self.dir, ignore_errors=True)
-            self._own_dir = False
+        if self.instance is not None:
+            if getattr(self.fmu, "component", None):
+                try:
+                    self.fmu.terminate()
+                except Exception:                 # an instance left in the error state
+                    pass
+            self.instance.close()
+        self.instance = None
+
+    @property
+    def log(self):
+        """The FMU's messages so far: (status, message), status 0 OK ... 4 Fatal"""
+        return [(st, m) for st, _, m in self.calls.messages] if self.instance is not None else []
+
+    def errors(self):
+        """The FMU's error messages (status Error or Fatal) so far"""
+        return [m for st, m in self.log if st >= 3]
 
     def var(self, name):
         if name not in self.vars:
@@ -235,68 +228,44 @@ class Fmu:
 
     def set(self, name, value):
         v = self.var(name)
-        if v.type == "Float64":
-            self.fmu.setFloat64([v.valueReference], [float(value)])
-        elif v.type in ("Int32", "Enumeration"):
-            self.fmu.setInt32([v.valueReference], [int(value)])
-        elif v.type == "Boolean":
-            self.fmu.setBoolean([v.valueReference], [bool(value)])
-        else:
+        if v.kind not in ("Real", "Integer", "Enumeration", "Boolean") or v.shape:
             raise LsBusError(f"{self.path}: {name} of FMU {self.name} is a {v.type}: set it through a terminal")
+        self.calls.set([v], [bool(value) if v.kind == "Boolean" else float(value) if v.kind == "Real"
+                             else int(value)])
 
     def get(self, name):
         v = self.var(name)
-        get = {"Float64": self.fmu.getFloat64, "Int32": self.fmu.getInt32, "Boolean": self.fmu.getBoolean}
-        if v.type not in get:
+        if v.kind not in ("Real", "Integer", "Enumeration", "Boolean") or v.shape:
             raise LsBusError(f"{self.path}: {name} of FMU {self.name} is a {v.type}, not a number")
-        return get[v.type]([v.valueReference])[0]
+        return self.calls.get([v])[0]
 
-    # -- the standard's call order (FMI 3.0.2, 5.2.2)
+    # -- the standard's call order (FMI 3.0.2, 5.2.2): artibus.fmu.fmi3's Event Mode
+    mode = property(lambda self: self.calls.mode, lambda self, m: setattr(self.calls, "mode", m))
+    need = property(lambda self: self.calls.need, lambda self, n: setattr(self.calls, "need", n))
+    next_event = property(lambda self: self.calls.next_event, lambda self, t: setattr(self.calls, "next_event", t))
+    n_events = property(lambda self: self.calls.n_events, lambda self, k: setattr(self.calls, "n_events", k))
+
     def fresh_event(self):
         """Event Mode with nothing set yet: from Step Mode, or a further Event Mode at the
         same time after an update that asked for no iteration."""
-        if self.mode == "updated" and not self.need:
-            self.fmu.enterStepMode()
-            self.mode = "step"
-        if self.mode == "step":
-            self.fmu.enterEventMode()
-            self.mode, self.need = "event", False
-            self.n_events += 1
+        self.calls.enter_event_mode()
 
     def set_clocks(self, vrs):
-        if not vrs:
-            return
-        if self.mode == "step":
-            raise LsBusError(f"FMU {self.name}: fmi3SetClock in Step Mode (clocks tick in Event Mode, "
-                             "FMI 3.0.2, 5.2.2)")
-        if self.mode == "updated" and not self.need:
-            names = [v.name for v in self.md.modelVariables if v.valueReference in vrs]
-            raise LsBusError(f"FMU {self.name}: fmi3SetClock({', '.join(names)}) after fmi3UpdateDiscreteStates, "
-                             "which asked for no further event iteration: refused (FMI 3.0.2, 5.2.2: clocks, "
-                             "then inputs, then fmi3UpdateDiscreteStates)")
-        self.fmu.setClock(list(vrs), [True] * len(vrs))
+        with _as_lsbus_error():
+            self.calls.set_clocks(vrs)
 
     def update(self):
-        need, terminate, _, _, defined, t_next = self.fmu.updateDiscreteStates()
-        if terminate:
-            raise LsBusError(f"FMU {self.name} asked to terminate the simulation")
-        self.mode, self.need = "updated", bool(need)
-        self.next_event = t_next if defined else math.inf
-        return self.need
+        with _as_lsbus_error():
+            return self.calls.update()
 
     def settle(self):
         """fmi3UpdateDiscreteStates until the FMU asks for no further iteration"""
-        for _ in range(MAX_ITERATIONS):
-            if not self.update():
-                return
-        raise LsBusError(f"FMU {self.name}: discreteStatesNeedUpdate after {MAX_ITERATIONS} event iterations")
+        with _as_lsbus_error():
+            self.calls.settle()
 
     def leave_event_mode(self):
-        if self.mode != "step":
-            if self.mode == "event":
-                self.settle()
-            self.fmu.enterStepMode()
-            self.mode = "step"
+        with _as_lsbus_error():
+            self.calls.leave_event_mode()
 
     def intervals(self, terminals):
         """{terminal: interval} of the countdown Tx clocks that announce a new interval"""
@@ -307,6 +276,17 @@ class Fmu:
         iv, q = (ctypes.c_double * n)(), (ctypes.c_int * n)()
         self.fmu.getIntervalDecimal(vrs, iv, q)
         return {t: iv[i] for i, t in enumerate(terminals) if q[i] == CHANGED}
+
+
+@contextlib.contextmanager
+def _as_lsbus_error():
+    """artibus.fmu.fmi3's refusals as the network's LsBusError (the same message)"""
+    try:
+        yield
+    except LsBusError:
+        raise
+    except ArtibusError as e:
+        raise LsBusError(str(e)) from None
 
 
 # ---- the master -------------------------------------------------------------------------------
@@ -528,7 +508,7 @@ class Network:
         try:
             return self._run(stop_time, inputs, outputs)
         except FMICallException as e:
-            said = [(f.name, m) for f in self.nodes + ([self.bus] if self.bus else []) for st, m in f.log if st >= 3]
+            said = [(f.name, m) for f in self.nodes + ([self.bus] if self.bus else []) for m in f.errors()]
             why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
             raise LsBusError(f"t = {self.t:.6f} s: {e}{why}") from None
 
@@ -546,7 +526,7 @@ class Network:
                 if self.t >= t_end - EPS:
                     return self
         except FMICallException as e:
-            said = [(f.name, m) for f in self.nodes + ([self.bus] if self.bus else []) for st, m in f.log if st >= 3]
+            said = [(f.name, m) for f in self.nodes + ([self.bus] if self.bus else []) for m in f.errors()]
             why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
             raise LsBusError(f"t = {self.t:.6f} s: {e}{why}") from None
 

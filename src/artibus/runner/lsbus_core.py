@@ -193,7 +193,7 @@ class _LsBusCore:
         if c.fail_function:
             e = FMICallException(function=c.fail_function.decode(), status=c.fail_status)
             failed = [everyone[c.fail_fmu]] if name else everyone
-            said = [(f.name, m) for f in failed for s, m in f.log if s >= 3]
+            said = [(f.name, m) for f in failed for m in f.errors()]
             why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
             return LsBusError(f"t = {c.t:.6f} s: {f'FMU {name}: ' if name else ''}{e}{why}")
         text = c.message.decode(errors="replace")

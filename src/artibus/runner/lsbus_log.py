@@ -25,15 +25,17 @@ def can_transmits(buf):
 
 
 def write_can_log(frames, path):
-    """The frames on the wire, [(t, id, ide, data)] (Network.wire_frames), into a .blf or
-    .asc log by python-can's writers, as the Real-wired bench's --can-log writes them."""
+    """The frames on the wire, [(t, id, ide, data)] (Network.wire_frames), into a .blf,
+    .asc or .mf4 log by python-can's writers (artibus.can.logs.log_writer), as the
+    Real-wired bench's --can-log writes them."""
     import can
+    from artibus.can.logs import LOG_SUFFIXES, log_writer
     path = Path(path)
-    if path.suffix.lower() not in (".blf", ".asc"):
-        raise ArtibusError(f"{path}: the CAN log is written as .blf or .asc (by its suffix)")
+    if path.suffix.lower() not in LOG_SUFFIXES:
+        raise ArtibusError(f"{path}: the CAN log is written as {', '.join(LOG_SUFFIXES)} (by its suffix)")
     path.parent.mkdir(parents=True, exist_ok=True)
     part = path.with_name(path.name + ".part")    # renamed when complete: a failed write leaves nothing
-    writer = can.BLFWriter(str(part)) if path.suffix.lower() == ".blf" else can.ASCWriter(str(part))
+    writer = log_writer(path, part)
     try:
         for t, can_id, ide, data in frames:
             writer.on_message_received(can.Message(timestamp=t, arbitration_id=can_id, is_extended_id=bool(ide),

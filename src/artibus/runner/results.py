@@ -1,10 +1,9 @@
 """A run's results in memory and on disk: the room its table needs
-(``check_room``), CSV or MATLAB files with their units (``save``,
-``units_path``, ``read_units``) and where the results of a run stopped midway
-go (``partial_path``, ``save_partial``)."""
+(``check_room``), files in the format of their extension with their units
+(``save``, ``units_path``, ``read_units``; the formats: artibus.runner.formats)
+and where the results of a run stopped midway go (``partial_path``,
+``save_partial``)."""
 from pathlib import Path
-
-import numpy as np
 
 from artibus.base import ArtibusError
 
@@ -36,7 +35,8 @@ def check_room(rows, cols, where, available=None):
 
 
 def save(result, path):
-    """CSV, or MATLAB .mat (one variable per signal, names made MATLAB-safe),
+    """By ``path``'s extension (artibus.runner.formats): CSV, Parquet, ASAM MDF 4
+    (.mf4) or MATLAB (.mat: one variable per signal, names made MATLAB-safe),
     written to a temporary name beside ``path`` and renamed (artibus.files):
     ``path`` is the complete file or is left as it was, never torn by a
     Ctrl-C, a SIGTERM or a full disk. A Ctrl-C or SIGTERM while it writes is
@@ -47,9 +47,11 @@ def save(result, path):
     to the sidecar ``units_path(path)`` (``out.csv`` -> ``out.units.csv``: a CSV
     with the columns ``name,unit``, a row per column of the results in their
     order, "" for none), written after the results (an interrupt in between
-    leaves the results without their units, never units without results). A .mat holds a struct
-    ``units`` with a field per signal (the signal's MATLAB-safe name) holding its
-    unit; a signal whose safe name is ``units`` is saved as ``units_``.
+    leaves the results without their units, never units without results). The
+    other formats hold their units (and the variables' descriptions) themselves:
+    a .mat in the structs ``units``, ``descriptions`` and ``names`` (the signal's
+    name as in the CSV) with a field per signal (its MATLAB-safe name), a
+    .parquet in each field's metadata, an .mf4 in each channel.
     Returns ``path``."""
     from artibus.files import signals_held
     from artibus.runner.markers import mark
@@ -63,23 +65,11 @@ def save(result, path):
 def _save(result, path):
     import csv
     from artibus.files import atomic_path
+    from artibus.runner import formats
     units = getattr(result, "units", None) or {}
     with atomic_path(path) as tmp:
-        if path.suffix == ".mat":
-            from scipy.io import savemat
-            data = result.array()
-            safe, safe_units = {}, {}
-            for i, n in enumerate(result.names):
-                key = "".join(ch if ch.isalnum() else "_" for ch in n).strip("_")[:63] or f"v{i}"
-                key = "units_" if key == "units" else key
-                safe[key] = (np.array(result.strings[n], dtype=object) if n in result.strings  # a cell array
-                             else data[:, i])
-                safe_units[key] = units.get(n, "")
-            safe["units"] = safe_units
-            savemat(str(tmp), safe)
-        else:
-            result.to_csv(tmp)
-    if path.suffix != ".mat":
+        formats.write(result, path, tmp)
+    if path.suffix.lower() == ".csv":
         with atomic_path(units_path(path)) as tmp:
             with open(tmp, "w", newline="") as f:
                 w = csv.writer(f, quoting=csv.QUOTE_NONNUMERIC)
@@ -104,7 +94,7 @@ def read_units(path):
 
 def partial_path(path):
     """Where the results of a run that stopped midway go: ``out.csv`` ->
-    ``out.partial.csv`` (``.mat`` likewise), never the final name."""
+    ``out.partial.csv`` (every format likewise), never the final name."""
     path = Path(path)
     return path.with_name(f"{path.stem}.partial{path.suffix or '.csv'}")
 
@@ -127,13 +117,18 @@ def save_partial(e, out):
     e.partial_time = result.time[-1]
 
 
-def check_results_file(path, what, inputs):
+def check_results_file(path, what, inputs, results=False):
     """A results file's place checked before the run (artibus.files.check_output),
     and neither ``path`` nor the files written beside it (its units, its partial
     results and theirs) one of the run's ``inputs`` [(path, what it is)]
-    (artibus.files.check_not_input: by identity). Returns ``path``."""
+    (artibus.files.check_not_input: by identity); ``results``: a run's results
+    file, its extension one of the formats (artibus.runner.formats.check_format).
+    Returns ``path``."""
     from artibus.files import check_not_input, check_output
     path = check_not_input(check_output(path, what), what, inputs)
+    if results:                           # (after check_output: a directory is named as one)
+        from artibus.runner.formats import check_format
+        check_format(path, what)
     for f in (units_path(path), partial_path(path), units_path(partial_path(path))):
         check_not_input(f, what, inputs, beside=path)
     return path

@@ -118,7 +118,7 @@ class _Setup:
             resolve_resources(self._tmp, where, values, origins.get(path))
             for var, value in values.items():     # --ssv FILE's values with a unit: in the variable's
                 v = units[path].fmu.vars.get(var)
-                if isinstance(value, Quantity) and v is not None and v.type == "Real":
+                if isinstance(value, Quantity) and v is not None and v.kind == "Real":
                     values[var] = convert(value, v, units[path].fmu.md, f"{path}.{var}")
         for path, values in self.parameters.items():
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
@@ -145,7 +145,7 @@ class _Setup:
             label = f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}"
             a, b = units[c.start[0]], units[c.end[0]]
             va, vb = self._connection_ends(c, label, a, b)
-            if va.type != "Real" or vb.type != "Real":
+            if not (_in_core(va) and _in_core(vb)):
                 self._typed_link(c, label, a, va, b, vb)
                 continue
             if c.mapping is not None:
@@ -155,15 +155,9 @@ class _Setup:
                 f, o = c.factor, c.offset
             else:
                 f, o = unit_conversion(a.fmu.md, va, b.fmu.md, vb, label)
-            if c.start[1] not in a.out_names:
-                a.out_names.append(c.start[1])
-                a.out_vrs.append(va.valueReference)
-            if c.end[1] in b.in_names:
+            if vb in b.inputs:
                 raise ArtibusError(f"{label}: input {c.end[0]}.{c.end[1]} is connected twice")
-            b.in_names.append(c.end[1])
-            b.in_vrs.append(vb.valueReference)
-            self.links.append(Link(a, a.out_names.index(c.start[1]), b, len(b.in_names) - 1,
-                                   f, o, f"{c.end[0]}.{c.end[1]}", c))
+            self.links.append(Link(a, a.output_index(va), b, b.input_index(vb), f, o, f"{c.end[0]}.{c.end[1]}", c))
             if c.can is None:                 # a connection routed over CAN goes through self.can
                 b.links_in.append(self.links[-1])
 
@@ -175,10 +169,12 @@ class _Setup:
             from artibus.bench.parameters import no_variable
             u, var = (a, c.start[1]) if va is None else (b, c.end[1])
             raise ArtibusError(f"{label}: no variable '{u.path}.{var}' ({no_variable(u.fmu.md, var)})")
-        if va.type != vb.type:
+        if va.kind != vb.kind:
             raise ArtibusError(f"{label}: types {va.type} -> {vb.type} ({c.start[0]}.{c.start[1]} is "
                                f"{va.type}, {c.end[0]}.{c.end[1]} is {vb.type}): a connection joins "
                                f"variables of one type")
+        for u, v in ((a, va), (b, vb)):
+            _scalar_number(v, f"{label}: {u.path}.{v.name}")
         if va.causality not in ("output", "parameter", "calculatedParameter") or vb.causality != "input":
             raise ArtibusError(f"{label}: connects a {va.causality} to a {vb.causality} "
                                f"(expected output -> input)")
@@ -194,15 +190,15 @@ class _Setup:
                 for d in deps:
                     if d.causality == "input":
                         u.feeds.add((d.name, o.variable.name))
-        self.order = _order(self.units, [(l.src, l.src.out_names[l.src_index], l.dst, l.dst.in_names[l.dst_index])
+        self.order = _order(self.units, [(l.src, l.src.outputs[l.src_index].name, l.dst, l.dst.inputs[l.dst_index].name)
                                          for l in self.links if l.connection.can is None]
-                            + [(src, src.tout[j][0], u, u.tin[i][0])
+                            + [(src, src.tout[j].name, u, u.tin[i].name)
                                for u in self.units for i, src, j, _ in u.typed_sources], where)
 
     def _recording(self, units, record, where):
         """self.record: (unit, variable) of every column: what was asked for, else every
         output connector the bench declares and every connected output; each unit's
-        outputs to read (Real ones in out_names, the others in tout)."""
+        outputs to read (Float64 ones in outputs, the others in tout)."""
         self.record = []
         for name in record or []:
             comp, _, var = name.rpartition(".")
@@ -216,19 +212,19 @@ class _Setup:
         if not record:
             for u in self.units:
                 for n in dict.fromkeys(self.bench.components[u.path].outputs + u.out_names
-                                       + [n for n, _, _ in u.tout]):
+                                       + [v.name for v in u.tout]):
                     if n not in u.fmu.vars:
                         raise ArtibusError(f"{where}: Component '{u.path}': connector '{n}' is "
                                            f"not a variable of {u.fmu.md.modelName}")
                     self.record.append((u, n))
         for u, n in self.record:
             v = u.fmu.var(n)
-            if v.type != "Real":
-                if n not in [m for m, _, _ in u.tout]:
-                    u.tout.append((n, v.type, v.valueReference))
-            elif n not in u.out_names:
-                u.out_names.append(n)
-                u.out_vrs.append(v.valueReference)
+            _scalar_number(v, f"{where}: recording {u.path}.{n}")
+            if not _in_core(v):
+                if v not in u.tout:
+                    u.tout.append(v)
+            else:
+                u.output_index(v)
 
     def _stimuli(self, units, stimuli, where):
         """Each stimulus {"comp.input": f(t)} on its unit: added to the input's connection,
@@ -236,18 +232,16 @@ class _Setup:
         for name, f in stimuli.items():
             comp, _, var = name.rpartition(".")
             v = units[comp].fmu.vars.get(var) if comp in units else None
-            if v is None or v.causality != "input" or v.type != "Real":
-                raise ArtibusError(f"stimulus {name}: not a Real input of a component of {where}")
+            if v is None or v.causality != "input" or not _in_core(v):
+                raise ArtibusError(f"stimulus {name}: not a Real (Float64) input of a component of {where}")
             u = units[comp]
             if self.can is not None and any(l.dst is u and l.name == name for l in self.can_links):
                 raise ArtibusError(f"stimulus {name}: the input is routed over CAN in {where}")
-            if var in u.in_names:
-                u.stimuli.append((u.in_names.index(var), f, None))
+            if v in u.inputs:
+                u.stimuli.append((u.inputs.index(v), f, None))
             else:
-                u.in_names.append(var)
-                u.in_vrs.append(v.valueReference)
                 base = float(self.parameters[comp].get(var, v.start))
-                u.stimuli.append((len(u.in_names) - 1, f, base))
+                u.stimuli.append((u.input_index(v), f, base))
 
     def _buffers(self):
         """Each unit's calls and value buffers (_RawCalls, _TypedCalls), its sources into
@@ -267,13 +261,15 @@ class _Setup:
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
         self._col_units = {"time": "s", **{f"{u.path}.{n}": declared_unit(u.fmu.vars[n]) or ""
                                            for u, n in self.record}}
+        self._col_descriptions = {"time": "simulation time", **{f"{u.path}.{n}": u.fmu.vars[n].description or ""
+                                                                 for u, n in self.record}}
         self._rec = []
         for u in self.units:
             cols = [k + 1 for k, (v, _) in enumerate(self.record) if v is u]
             idx = [u.column(n) for v, n in self.record if v is u]
             if cols:
                 self._rec.append((u, np.array(idx), np.array(cols)))
-        self._text_cols = {f"{u.path}.{n}": u for u, n in self.record if u.fmu.vars[n].type == "String"}
+        self._text_cols = {f"{u.path}.{n}": u for u, n in self.record if u.fmu.vars[n].kind == "String"}
 
     def _typed_link(self, c, label, a, va, b, vb):
         """A connection of Integer, Boolean, String or Enumeration variables (see
@@ -281,17 +277,16 @@ class _Setup:
         convert = _typed_convert(label, a, va, b, vb, c.mapping)
         if c.factor != 1.0 or c.offset != 0.0:
             raise ArtibusError(f"{label}: a LinearTransformation on {va.type} variables "
-                               f"(SSP 1.0: it applies to Real ones)")
+                               + ("(artibus applies it to Float64 ones)" if va.kind == "Real" else
+                                  "(SSP 1.0: it applies to Real ones)"))
         if c.can is not None:
             raise ArtibusError(f"{label}: routed over CAN: the runner routes Real variables only")
-        if c.end[1] in [n for n, _, _ in b.tin] or c.end[1] in b.in_names:
+        if vb in b.tin or vb in b.inputs:
             raise ArtibusError(f"{label}: input {c.end[0]}.{c.end[1]} is connected twice")
-        names = [n for n, _, _ in a.tout]
-        if c.start[1] not in names:
-            a.tout.append((c.start[1], va.type, va.valueReference))
-            names.append(c.start[1])
-        b.tin.append((c.end[1], vb.type, vb.valueReference))
-        b.typed_sources.append((len(b.tin) - 1, a, names.index(c.start[1]), convert))
+        if va not in a.tout:
+            a.tout.append(va)
+        b.tin.append(vb)
+        b.typed_sources.append((len(b.tin) - 1, a, a.tout.index(va), convert))
 
     def _setup_can(self, where, interface, log, faults=None, routed=True):
         """The CAN network of a bench that routes connections over CAN (see artibus.can);
@@ -322,3 +317,23 @@ class _Setup:
         self.can_ratio = int(round(r))
 
     # --- the algorithm ---------------------------------------------------------------
+
+
+def _in_core(v):
+    """Whether the stepping core gets and sets ``v`` itself: a scalar Float64 (FMI 2.0's Real,
+    FMI 3.0's Float64); the other types go through the core's hooks (_TypedCalls)."""
+    return v.type in ("Real", "Float64") and not v.shape
+
+
+def _scalar_number(v, label):
+    """An error unless ``v`` is a scalar a connection or a result column can carry: an array
+    (FMI 3.0 <Dimension>), a Binary or a Clock (FMI-LS-BUS terminals carry those: an SSP 2.0
+    bench's Bus) named with its type and shape."""
+    from artibus.fmu.model import NOT_NUMBERS
+    if v.shape:
+        raise ArtibusError(f"{label} is an array of {v.size} values ({v.type}, "
+                           f"{'x'.join(map(str, v.shape))}): a connection or a column of the results "
+                           f"carries one scalar variable")
+    if v.kind in NOT_NUMBERS:
+        raise ArtibusError(f"{label} is an FMI 3.0 {v.type}: not a number a connection or a result "
+                           f"column carries (a Binary or Clock is connected through an FMI-LS-BUS terminal)")

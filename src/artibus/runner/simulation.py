@@ -148,6 +148,7 @@ class Simulation(_Setup):
         if result is None:
             return result
         result.units = {n: self._col_units.get(n, "") for n in result.names}
+        result.descriptions = {n: self._col_descriptions.get(n, "") for n in result.names}
         if not self._text_cols:
             return result
         table = result.array()

@@ -17,9 +17,9 @@ from artibus.fmu import Fmu
 class Link:
     """One connection, resolved to value references."""
     src: "Unit"
-    src_index: int          # index into src.out_vrs
+    src_index: int          # index into src.outputs
     dst: "Unit"
-    dst_index: int          # index into dst.in_vrs
+    dst_index: int          # index into dst.inputs
     factor: float
     offset: float
     name: str
@@ -33,10 +33,8 @@ class Unit:
     fmu: Fmu
     step: float
     ratio: int = 1                               # step / base step
-    in_vrs: list = field(default_factory=list)   # Real inputs that are connected
-    in_names: list = field(default_factory=list)
-    out_vrs: list = field(default_factory=list)  # Real outputs that are read
-    out_names: list = field(default_factory=list)
+    inputs: list = field(default_factory=list)   # the Float64 inputs the core sets (Variables)
+    outputs: list = field(default_factory=list)  # the Float64 outputs the core reads (Variables)
     out_values: list = field(default_factory=list)
     in_values: list = field(default_factory=list)
     feeds: set = field(default_factory=set)      # (input name, output name) direct feedthrough
@@ -46,16 +44,34 @@ class Unit:
     stimuli: list = field(default_factory=list)   # (input index, f(t), base value or None)
     wall: float = 0.0
     raw: object = None                           # _RawCalls, once the variables are known
-    # Integer, Boolean, String and Enumeration variables (_TypedCalls):
-    tout: list = field(default_factory=list)     # outputs read: (name, type, value reference)
-    tin: list = field(default_factory=list)      # connected inputs: (name, type, value reference)
+    # the other types' variables (Integer, Boolean, String, Enumeration, Float32: _TypedCalls):
+    tout: list = field(default_factory=list)     # outputs read (Variables)
+    tin: list = field(default_factory=list)      # connected inputs (Variables)
     typed_sources: list = field(default_factory=list)  # (input index, source unit, output index, convert)
 
+    in_names = property(lambda self: [v.name for v in self.inputs])
+    in_vrs = property(lambda self: [v.valueReference for v in self.inputs])
+    out_names = property(lambda self: [v.name for v in self.outputs])
+    out_vrs = property(lambda self: [v.valueReference for v in self.outputs])
+
+    def output_index(self, v):
+        """The place of the Float64 output ``v`` in ``outputs``, added if not there yet."""
+        if v not in self.outputs:
+            self.outputs.append(v)
+        return self.outputs.index(v)
+
+    def input_index(self, v):
+        """The place of the Float64 input ``v`` in ``inputs``, added if not there yet."""
+        if v not in self.inputs:
+            self.inputs.append(v)
+        return self.inputs.index(v)
+
     def column(self, name):
-        """The place of an output in raw.out (Real ones first, then the typed ones)."""
-        if name in self.out_names:
-            return self.out_names.index(name)
-        return len(self.out_names) + [n for n, _, _ in self.tout].index(name)
+        """The place of an output in raw.out (Float64 ones first, then the typed ones)."""
+        names = self.out_names
+        if name in names:
+            return names.index(name)
+        return len(names) + [v.name for v in self.tout].index(name)
 
 
 def _address(dll, name):
@@ -145,19 +161,19 @@ class _TypedCalls(_RawCalls):
         self.texts = {}
         self._get_groups = self._groups(unit.tout, self.fmi)
         self._set_groups = self._groups(unit.tin, self.fmi)
-        self._string_out = [i for i, (_, t, _) in enumerate(unit.tout) if t == "String"]
+        self._string_out = [i for i, v in enumerate(unit.tout) if v.kind == "String"]
 
     @staticmethod
     def _groups(variables, fmi=2):
-        """[(FMI type of the call, [indices], [value references])] per type (FMI 3.0's
-        names: artibus.fmu.instance.FMI3_ACCESSOR)."""
-        from artibus.fmu.instance import FMI3_ACCESSOR
+        """[(the get/set call's type, [indices], [value references])] per type (each FMI
+        version's calls: artibus.fmu.fmi2.ACCESSOR, artibus.fmu.fmi3.ACCESSOR)."""
+        from artibus.fmu import fmi2, fmi3
+        accessor = (fmi3 if fmi == 3 else fmi2).ACCESSOR
         groups = {}
-        for i, (_, t, vr) in enumerate(variables):
-            g = groups.setdefault(FMI3_ACCESSOR[t] if fmi == 3 else "Integer" if t == "Enumeration" else t,
-                                  ([], []))
+        for i, v in enumerate(variables):
+            g = groups.setdefault(accessor[v.type], ([], []))
             g[0].append(i)
-            g[1].append(vr)
+            g[1].append(v.valueReference)
         return [(t, idx, vrs) for t, (idx, vrs) in groups.items()]
 
     def read(self):
@@ -178,7 +194,7 @@ class _TypedCalls(_RawCalls):
                     x = x.decode("utf-8", errors="replace") if isinstance(x, bytes) else x or ""
                     self.out[self.n_real + i] = self.texts.setdefault(x, len(self.texts))
                 else:
-                    x = bool(x) if t == "Boolean" else int(x)
+                    x = bool(x) if t == "Boolean" else float(x) if t in ("Float32", "Float64") else int(x)
                     self.out[self.n_real + i] = x
                 self.tout_values[i] = x
 
@@ -211,13 +227,15 @@ def _typed_convert(label, a, va, b, vb, mapping):
     it lists, the others pass unchanged."""
     ends = (f"{a.path}.{va.name} is {va.type}{' ' + va.declaredType.name if va.declaredType else ''}, "
             f"{b.path}.{vb.name} is {vb.type}{' ' + vb.declaredType.name if vb.declaredType else ''}")
-    if va.type != vb.type:
+    if va.kind != vb.kind:
         raise ArtibusError(f"{label}: the types differ ({ends}): a connection joins variables of one type")
     kind, table = mapping if mapping else (None, None)
     expect = {"Boolean": ("Boolean",), "Integer": ("Integer",), "Enumeration": ("Integer", "Enumeration")}
-    if kind is not None and kind not in expect.get(va.type, ()):
+    if kind is not None and kind not in expect.get(va.kind, ()):
         raise ArtibusError(f"{label}: a {kind}MappingTransformation does not apply to {ends}")
-    if va.type == "Enumeration":
+    if va.kind == "Integer" and va.type != vb.type:       # (Int16 -> Int32, ...): in the input's range
+        return _in_range(label, vb, None if kind is None else table)
+    if va.kind == "Enumeration":
         items_a = {i.name: int(i.value) for i in va.declaredType.items}
         items_b = {i.name: int(i.value) for i in vb.declaredType.items}
         if kind == "Enumeration":
@@ -238,6 +256,21 @@ def _typed_convert(label, a, va, b, vb, mapping):
     if kind is None:
         return None
     return lambda x: table.get(x, x)
+
+
+def _in_range(label, vb, table):
+    """The conversion into the integer input ``vb`` of another width (FMI 3.0: Int16 -> Int32,
+    ...): the value mapped (``table``: an IntegerMappingTransformation), then refused, naming the
+    connection, when outside ``vb``'s type (FMI 3.0 2.4.7.4.2), never wrapped."""
+    from artibus.bench.fmi import INTEGER_RANGE
+    low, high = INTEGER_RANGE.get(vb.type, INTEGER_RANGE["Int32"])
+
+    def convert(x):
+        y = table.get(x, x) if table else x
+        if not low <= y <= high:
+            raise ArtibusError(f"{label}: {y} is outside the range of {vb.name}'s {vb.type} [{low}, {high}]")
+        return y
+    return convert
 
 
 def _last_message(log):

@@ -193,11 +193,11 @@ def _overlay(path, runs, signals, title, t_window=None, vlines=None, bounds=None
             ax.set_xlim(*t_window)
     for i, value, label in bounds or []:
         plots.draw_bound(axes[i, 0], value, label)
-    axes[0, 0].legend(loc="upper right", fontsize=8, ncol=2)
+    plots.legend_beside(axes[0, 0], fontsize=8)       # beside the panel: never over a curve
     for i, _, _ in bounds or []:
-        axes[i, 0].legend(loc="upper right", fontsize=8, ncol=2)
+        plots.legend_beside(axes[i, 0], fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
-    axes[0, 0].set_title(title)
+    plots.wrapped_title(fig, title)
     fig.tight_layout()
     from artibus.report import save_figure
     save_figure(fig, path, dpi=110)
@@ -562,7 +562,7 @@ def _torque_figure(path, torque):
             ax.plot(fs, [getattr(torque[f][fn], attr) for f in fs], st, label=LABELS[fn])
         ax.set_xscale("log", base=2)
         ax.set_xticks(fs, [f"x{f:g}" for f in fs])
-        ax.set_xlabel("damper torque against our estimate (HubnerDamper.ssv)")
+        ax.set_xlabel("damper torque against our estimate\n(HubnerDamper.ssv) [factor]")
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)

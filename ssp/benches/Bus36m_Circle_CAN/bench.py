@@ -23,9 +23,9 @@ def figures(r, out):
     receivers, lost = can_receivers(r), can_lost(r)
     if receivers:
         report.signals(out / "fallback.png", r.time, [
-            ("fallback state", {c: r[f"{c}.fallback"] for c in receivers}),
-            ("cycles since a good frame", {n[4:-len(".sinceGood")]: r[n] for n in lost}),
+            ("fallback state [0-3]", {c: r[f"{c}.fallback"] for c in receivers}),
+            ("since a good frame [cycles]", {n[4:-len(".sinceGood")]: r[n] for n in lost}),
         ], title="What the receivers saw: fallback states and stale messages")
-        images.append(("fallback.png", "Each receiver's fallback state and each message's cycles since its "
-                                       "last good frame (E2E check)."))
+        images.append(("fallback.png", "Each receiver's fallback state (0 normal, 1 holding, 2 ramping, "
+                                       "3 straight) and each message's cycles since its last good frame (E2E check)."))
     return images

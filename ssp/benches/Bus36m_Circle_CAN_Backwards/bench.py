@@ -49,16 +49,17 @@ def figures(r, out):
         panels.append(("steering [deg]", steer))
     ecus = [c for c in ("ECU1", "ECU2", "ECU3") if f"{c}.drivingDirection" in r.names]
     if ecus:
-        panels.append(("driving direction (0 forwards, 1 backwards)", {c: r[f"{c}.drivingDirection"] for c in ecus}))
+        panels.append(("driving direction [0 fwd, 1 back]", {c: r[f"{c}.drivingDirection"] for c in ecus}))
     receivers, lost = can_receivers(r), can_lost(r)
     if receivers:
-        panels.append(("fallback state", {c: r[f"{c}.fallback"] for c in receivers}))
+        panels.append(("fallback state [0-3]", {c: r[f"{c}.fallback"] for c in receivers}))
     if lost:
-        panels.append(("cycles since a good frame", {n[4:-len(".sinceGood")]: r[n] for n in lost}))
+        panels.append(("since a good frame [cycles]", {n[4:-len(".sinceGood")]: r[n] for n in lost}))
     if panels:
         report.signals(out / "network.png", r.time, panels,
                        title="Backwards on CAN: steering, driving direction, what the receivers saw")
-        images.append(("network.png", "Steered angles, the driving direction each ECU steered for, each "
-                                      "receiver's fallback state and each message's cycles since its last good "
+        images.append(("network.png", "Steered angles, the driving direction each ECU steered for (0 forwards, "
+                                      "1 backwards), each receiver's fallback state (0 normal, 1 holding, "
+                                      "2 ramping, 3 straight) and each message's cycles since its last good "
                                       "frame (E2E check)."))
     return images

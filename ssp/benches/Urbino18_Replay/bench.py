@@ -25,8 +25,9 @@ def figures(r, out):
 
 
 def study(r, out):
-    """The shipped log replayed into this bench: model against measured, RMS per signal (the page's KPIs)."""
+    """The shipped log replayed into this bench: model against measured, RMS per signal (the page's KPIs);
+    the page shows the replay's run (its span, animation, results.csv), not the bench's own standing still."""
     from artibus.can import replay
-    rep = replay.replay(LOG, "Urbino18_Replay")
+    rep = replay.replay(LOG, "Urbino18_Replay", record=["Bus.x[0]", "Bus.y[0]", "Bus.theta[0]"])
     kpis, images, notes = replay.page_parts(rep, out, f"{LOG.name} replayed into Urbino18_Replay")
-    return kpis, images, [f"The shipped recorded drive {LOG.relative_to(ROOT)} replayed. " + TEXT] + notes
+    return kpis, images, [f"The shipped recorded drive {LOG.relative_to(ROOT)} replayed. " + TEXT] + notes, rep.result

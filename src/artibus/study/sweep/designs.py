@@ -61,7 +61,9 @@ def _ssp_info(path, data):
     import io
 
     from fmpy import read_model_description
+
     from artibus.bench import ssp as ssp_mod
+    from artibus.fmu.model import model_of
     b = ssp_mod.read(path)
     variables, common, var_hash = {}, [], {}
     with zipfile.ZipFile(io.BytesIO(data)) as z, tempfile.TemporaryDirectory(prefix="artibus-sweep-") as tmp:
@@ -77,7 +79,7 @@ def _ssp_info(path, data):
             if not f.is_file():
                 f.parent.mkdir(parents=True, exist_ok=True)
                 f.write_bytes(z.read(c.source))
-            md = read_model_description(str(f))
+            md = model_of(read_model_description(str(f)))
             for v in md.modelVariables:
                 if v.causality in ("parameter", "input"):
                     variables[f"{cpath}.{v.name}"] = v
@@ -96,18 +98,18 @@ def typed_value(info, name, value, where):
                            f"name in component '{comp}'")
     text = value.strip() if isinstance(value, str) else value
     try:
-        if v.type == "Real":
+        if v.kind == "Real":
             if isinstance(text, bool):
                 raise ValueError
             return parse_real(text)
-        if v.type in ("Integer", "Enumeration"):
+        if v.kind in ("Integer", "Enumeration"):
             if isinstance(text, bool):
                 raise ValueError
             x = parse_real(text)
             if not x == int(x):
                 raise ValueError
             return int(x)
-        if v.type == "Boolean":
+        if v.kind == "Boolean":
             if isinstance(text, (bool, np.bool_)):
                 return bool(text)
             if str(text).lower() in ("true", "1", "1.0"):

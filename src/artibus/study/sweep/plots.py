@@ -125,6 +125,41 @@ def study(out, kpi=None, worst=10, largest=True, log=None):
     return written
 
 
+def parameter_units(manifest, names):
+    """{COMP.VAR: unit} of swept parameters, from the model descriptions of the
+    bench's FMUs (the variable's unit, else its declaredType's); a name without
+    one (the variant axis, a unitless variable, a bench that cannot be read) is
+    left out."""
+    import io
+    import zipfile
+    from fmpy import read_model_description
+    from artibus.bench import ssp
+    from artibus.bench.units import unit_of
+    out = {}
+    try:
+        path = ssp.ssp_path(manifest.get("run", manifest["bench"]))
+        bench = ssp.read(path)
+        with zipfile.ZipFile(path) as z:
+            mds = {}
+            for n in names:
+                comp, _, var = n.partition(".")
+                c = bench.components.get(comp)
+                if c is None:
+                    continue
+                if c.source not in mds:
+                    mds[c.source] = {v.name: v for v in read_model_description(io.BytesIO(z.read(c.source))).modelVariables}
+                v = mds[c.source].get(var)
+                if v is not None and unit_of(v):
+                    out[n] = unit_of(v)
+    except (ArtibusError, OSError, KeyError, zipfile.BadZipFile):
+        pass                  # (the plot is drawn without the units it cannot find)
+    return out
+
+
+def _label(name, units):
+    return f"{name} [{units[name]}]" if name in units else name
+
+
 def _plot(path, manifest, rows, col):
     import matplotlib
     matplotlib.use("Agg")
@@ -133,6 +168,7 @@ def _plot(path, manifest, rows, col):
     if not ok:
         return False
     axes = [(n, vs) for n, vs in manifest["axes"] if len(vs) > 1]
+    units = parameter_units(manifest, [n for n, _ in axes])     # each axis with its unit (the KPI's is in its name)
     if manifest["method"] == "grid" and len(axes) >= 2:
         (xn, _), (yn, _) = axes[0], axes[1]
         third = axes[2][0] if len(axes) > 2 else None
@@ -153,9 +189,9 @@ def _plot(path, manifest, rows, col):
             ax.set_xticks(range(len(xs)), [f"{x:g}" if isinstance(x, float) else str(x) for x in xs],
                           rotation=90 if len(xs) > 8 else 0, fontsize=7)
             ax.set_yticks(range(len(ys)), [f"{y:g}" if isinstance(y, float) else str(y) for y in ys], fontsize=7)
-            ax.set_xlabel(xn)
-            ax.set_ylabel(yn)
-            ax.set_title(f"{third} = {pv}" if third else manifest["bench"], fontsize=9)
+            ax.set_xlabel(_label(xn, units))
+            ax.set_ylabel(_label(yn, units))
+            ax.set_title(f"{third} = {pv} {units.get(third, '')}".rstrip() if third else manifest["bench"], fontsize=9)
         fig.colorbar(im, ax=axs[0].tolist(), label=col)
         fig.suptitle(f"{manifest['bench']}: {col}", fontsize=10)
     elif manifest["method"] == "grid" and len(axes) == 1:
@@ -163,7 +199,7 @@ def _plot(path, manifest, rows, col):
         pts = sorted(((r[n], r[col]) for r in ok), key=lambda p: _num_key(p[0]))
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
         ax.plot([str(p[0]) if not isinstance(p[0], (int, float)) else p[0] for p in pts], [p[1] for p in pts], "o-")
-        ax.set_xlabel(n)
+        ax.set_xlabel(_label(n, units))
         ax.set_ylabel(col)
         ax.grid(True, alpha=0.3)
         ax.set_title(manifest["bench"])

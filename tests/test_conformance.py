@@ -1,0 +1,128 @@
+"""A conformance suite that needs nothing from outside a registry (issue 38): the Modelica
+Reference-FMUs built from the sources the crate fmi-sys carries (scripts/build_reference_fmus.sh),
+FMI 2.0 and 3.0 Co-Simulation, each run by `artibus simulate` as the FMI cross-check runs
+it (the start and stop time and relative tolerance of its <Model>_ref.opt, the inputs of its
+<Model>_in.csv) and held against
+
+- FMPy's `simulate_fmu` on the same FMU with the same options (another importer): equal to
+  1e-9 relative (the CSV holds 12 significant digits);
+- the reference results the sources carry (<Model>_ref.csv) by the cross-check's rule,
+  `fmpy.util.validate_signal` (a band around the reference; no point outside it).
+
+Clocks is a Scheduled Execution FMU only (no Co-Simulation): refused by name. Where a reference
+result names variables the built FMU does not have (the sources' Feedthrough_ref.csv is of an
+older Feedthrough), that comparison is skipped with the names, the comparison with FMPy kept."""
+import subprocess
+import sys
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.util import read_csv, validate_signal
+
+ROOT = Path(__file__).resolve().parents[1]
+REFERENCE = ROOT / ".tools" / "reference-fmus"
+MODELS = ["BouncingBall", "Dahlquist", "Feedthrough", "LinearTransform", "Resource", "Stair", "VanDerPol"]
+
+
+def options(model):
+    """{StartTime, StopTime, StepSize, RelTol} of <model>_ref.opt"""
+    path = REFERENCE / "ref" / f"{model}_ref.opt"
+    out = {}
+    for line in path.read_text().splitlines():
+        if "," in line:
+            k, v = line.split(",", 1)
+            out[k.strip()] = float(v)
+    return out
+
+
+def cases():
+    for version in (2, 3):
+        for m in MODELS:
+            if version == 2 and m == "LinearTransform":
+                continue                     # (FMI 3.0 only: arrays)
+            yield pytest.param(m, version, id=f"fmi{version}-{m}")
+
+
+def fmu_of(model, version):
+    path = REFERENCE / ("fmi3" if version == 3 else "") / f"{model}.fmu"
+    if not path.is_file() or not (REFERENCE / "ref" / f"{model}_ref.opt").is_file():
+        pytest.skip(f"{path} or its reference results not built (scripts/build_reference_fmus.sh; needs cargo)")
+    return path
+
+
+def input_file(model, version, path):
+    """The cross-check's <model>_in.csv where its columns are inputs of this build"""
+    f = REFERENCE / "ref" / f"{model}_in.csv"
+    if not f.is_file():
+        return None
+    inputs = {v.name for v in fmpy.read_model_description(str(path)).modelVariables if v.causality == "input"}
+    header = f.read_text().splitlines()[0].split(",")[1:]
+    return f if all(h.strip('" ') in inputs for h in header) else None
+
+
+@pytest.mark.parametrize("model, version", cases())
+def test_reference_fmu_as_the_cross_check_runs_it(model, version, tmp_path):
+    path = fmu_of(model, version)
+    opt = options(model)
+    out = tmp_path / "ours.csv"
+    args = ["--start-time", opt["StartTime"], "--stop-time", opt["StopTime"], "--relative-tolerance", opt["RelTol"]]
+    if opt.get("StepSize"):
+        args += ["--output-interval", opt["StepSize"]]
+    inp = input_file(model, version, path)
+    if inp is not None:
+        args += ["--input-file", inp]
+    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(path), *map(str, args), "-o", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    # FMPy on the same FMU with the same options
+    kw = dict(start_time=opt["StartTime"], stop_time=opt["StopTime"], relative_tolerance=opt["RelTol"],
+              fmi_type="CoSimulation")
+    # the same output interval (FMPy's own default doubles the default experiment's step while
+    # over 1000 points; artibus keeps it: docs/guide/fmus-alone.md)
+    kw["output_interval"] = opt.get("StepSize") or float(ours["time"][1] - ours["time"][0])
+    theirs = fmpy.simulate_fmu(str(path), input=read_csv(str(inp)) if inp is not None else None, **kw)
+    assert len(ours) == len(theirs)
+    np.testing.assert_allclose(ours["time"], theirs["time"], rtol=1e-9, atol=1e-12)
+    for name in theirs.dtype.names[1:]:
+        if inp is not None and theirs[name].dtype in (np.int64, np.uint64):
+            # FMPy reads an input file as float64: 2**63 - 1 becomes 2**63 and wraps to -2**63 in
+            # an Int64; the file's own integers are the reference (Feedthrough: output = input)
+            rows = [line.split(",") for line in Path(inp).read_text().splitlines()]
+            col = rows[0].index(name.replace("_output", "_input"))
+            assert ours[name][0] == pytest.approx(int(rows[1][col]), rel=1e-9)      # (the CSV: 12 digits)
+            assert ours[name][-1] == pytest.approx(int(rows[-1][col]), rel=1e-9)
+            continue
+        y = np.asarray(theirs[name], dtype=float).reshape(len(theirs), -1)
+        cols = [name] if y.shape[1] == 1 else [f"{name}[{k + 1}]" for k in range(y.shape[1])]
+        for k, c in enumerate(cols):
+            scale = max(1.0, float(np.max(np.abs(y[:, k]))))
+            np.testing.assert_allclose(ours[c], y[:, k], rtol=1e-9, atol=1e-12 * scale, err_msg=c)
+    # the reference results the sources carry, by the cross-check's rule
+    ref_path = REFERENCE / "ref" / f"{model}_ref.csv"
+    if not ref_path.read_text().strip():
+        pytest.skip(f"{ref_path.name} is empty")
+    ref = np.genfromtxt(ref_path, delimiter=",", names=True, deletechars="")
+    absent = [n for n in ref.dtype.names[1:] if n not in ours.dtype.names]
+    if absent:
+        pytest.skip(f"{ref_path.name} names {', '.join(absent)}, which {path.name} does not have "
+                    "(the sources' reference results are of an older build); compared with FMPy only")
+    for n in ref.dtype.names[1:]:
+        t_ref, y_ref = ref["time"], ref[n].astype(float)
+        if len(t_ref) < 2:
+            assert ours[n][0] == y_ref[0]
+            continue
+        *_, outside = validate_signal(ours["time"], ours[n].astype(float), t_ref, y_ref)
+        assert not np.any(outside), f"{model} FMI {version}.0: {n} leaves the reference band"
+
+
+def test_a_scheduled_execution_only_fmu_is_refused_by_name(tmp_path):
+    path = REFERENCE / "fmi3" / "Clocks.fmu"
+    if not path.is_file():
+        pytest.skip(f"{path} not built")
+    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(path), "-o", str(tmp_path / "c.csv")],
+                       capture_output=True, text=True)
+    assert p.returncode == 1 and "Traceback" not in p.stderr
+    assert "Clocks has no Co-Simulation interface" in p.stderr
