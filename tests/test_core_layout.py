@@ -1,7 +1,7 @@
 """Issue 37: one declaration of the stepping core's structs.
 
 The ctypes structures of artibus.runner are built from the library's own table
-(src/runner_core/gen_layout.py reads core.h and lsbus.h). These tests hold that
+(src/runner_core/gen_layout.py reads core.h, lsbus.h and me.h). These tests hold that
 table and the classes made from it to a reading that shares nothing with the
 generator: the compiler's debugging information (DWARF, read with binutils'
 readelf) of a translation unit that includes the headers. A field the generator
@@ -18,7 +18,7 @@ import pytest
 from artibus.runner import corelib, layout
 from tests.conftest import ROOT
 
-HEADERS = [ROOT / "src/runner_core/core.h", ROOT / "src/runner_core/lsbus.h"]
+HEADERS = [ROOT / "src/runner_core/core.h", ROOT / "src/runner_core/lsbus.h", ROOT / "src/runner_core/me.h"]
 INCLUDES = [ROOT / "src/runner_core", ROOT / "include/fmi2", ROOT / "include/fmi3"]
 
 pytestmark = pytest.mark.skipif(not corelib.core_library_path().is_file() or shutil.which("readelf") is None,
@@ -30,7 +30,7 @@ def dwarf_structs(tmp_path):
     typedef, from gcc -g's DWARF as readelf prints it."""
     names = sorted({m for h in HEADERS for m in re.findall(r"\}\s*(ac_\w+)\s*;", h.read_text())})
     src = tmp_path / "probe.c"
-    src.write_text('#include "core.h"\n' + "".join(f"{n} probe_{n};\n" for n in names))
+    src.write_text('#include "core.h"\n#include "me.h"\n' + "".join(f"{n} probe_{n};\n" for n in names))
     obj = tmp_path / "probe.o"
     subprocess.run(["gcc", "-std=c11", "-g", "-gdwarf-4", "-c", str(src), "-o", str(obj)]
                    + [f"-I{d}" for d in INCLUDES], check=True)

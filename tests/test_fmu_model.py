@@ -215,3 +215,29 @@ def test_the_lsbus_network_runs_on_the_one_fmu_model():
             assert isinstance(f.instance, Fmu) and isinstance(f.calls, Calls) and f.calls.event_mode_used
         net.run(0.05)
         assert all(f.n_events > 0 for f in net.nodes)
+
+
+def test_structural_parameters_resize_the_arrays(tmp_path):
+    """m = 3, n = 2 set in Configuration Mode (FMI 3.0 2.3): A is 3x2, u 2, y 3; with
+    A = [[1, 2], [3, 4], [5, 6]] and u = [1, 1], y = [3, 7, 11], in three columns"""
+    out = tmp_path / "lt.csv"
+    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(linear_transform()), "--set", "m=3",
+                        "--set", "n=2", "--set", "A=1 2 3 4 5 6", "--set", "u=1 1", "--stop-time", "1",
+                        "-o", str(out)], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    header = out.read_text().splitlines()[0].replace('"', "").split(",")
+    assert header == ["time", "y[1]", "y[2]", "y[3]"]
+    np.testing.assert_array_equal(np.loadtxt(out, delimiter=",", skiprows=1)[:, 1:], [[3.0, 7.0, 11.0]] * 501)
+
+
+@pytest.mark.parametrize("sets, words", [
+    (["m=3", "A=1 2 3 4"], "LinearTransform.A is an array of 6 values (3x2), given 4"),
+    (["m=6"], "is outside [1, 5] of LinearTransform"),
+    (["u=1 x"], "not a valid Float64 for LinearTransform.u"),
+])
+def test_a_wrong_structural_or_array_value_is_an_error_naming_it(sets, words, tmp_path):
+    args = [a for s in sets for a in ("--set", s)]
+    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(linear_transform()), *args,
+                        "-o", str(tmp_path / "x.csv")], capture_output=True, text=True)
+    assert p.returncode == 1 and "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert words in p.stderr, p.stderr

@@ -154,9 +154,12 @@ def test_an_array_input_from_its_element_columns(tmp_path):
     assert p.returncode == 1 and "u[3]" in p.stderr and "no such element" in p.stderr
 
 
-def test_model_exchange_asked_for_is_refused_naming_what_runs(tmp_path):
-    p = artibus("simulate", reference("Dahlquist"), "--fmi-type", "ModelExchange", "-o", tmp_path / "o.csv")
-    assert p.returncode == 1 and "Co-Simulation" in p.stderr and "--fmi-type CoSimulation" in p.stderr
+def test_model_exchange_asked_of_an_fmu_without_it_is_refused_naming_what_runs(tmp_path):
+    """(Model Exchange runs since issue 38's ME facade: tests/test_me_facade.py.) An FMU with
+    Co-Simulation only: --fmi-type ModelExchange refused, naming the interface it has."""
+    from conftest import fmu_file
+    p = artibus("simulate", fmu_file("SteeringECU"), "--fmi-type", "ModelExchange", "-o", tmp_path / "o.csv")
+    assert p.returncode == 1 and "no Model Exchange" in p.stderr and "--fmi-type CoSimulation" in p.stderr
 
 
 def test_an_unknown_option_suggests_the_nearest_of_its_verb():

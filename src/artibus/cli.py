@@ -130,8 +130,14 @@ def cmd_run(args):
                 user=user, stop_time=args.stop_time, step=args.step, record=args.record,
                 algorithm=args.algorithm, can=args.can, can_log=args.can_log, can_faults=args.can_fault,
                 report=args.report, output=args.output, progress=sys.stderr.isatty(), single_rate=args.single_rate,
-                checked=lambda out: setattr(args, "_out", out), fmi=args.fmi, inputs=_given(args.ssv, "an --ssv file"))
+                checked=lambda out: setattr(args, "_out", out), fmi=args.fmi, inputs=_given(args.ssv, "an --ssv file"),
+                fmi_type=_fmi_type(args.fmi_type), relative_tolerance=args.tolerance, me_method=args.me_method)
     return 0
+
+
+def _fmi_type(text):
+    """--fmi-type of `run`: "me" (Model Exchange where an FMU has it), else None (Co-Simulation)."""
+    return "me" if text in ("ModelExchange", "me") else None
 
 
 def cmd_replay(args):
@@ -263,7 +269,7 @@ def cmd_simulate(args):
     from artibus.options import check_interface, input_file, start_values
     from artibus.fmu.instance import read_model
     model = read_model(run)
-    check_interface(args, model, run)
+    interface = check_interface(args, model, run)     # "cs" or "me" (--fmi-type)
     params = read_parameters(args.ssv, fmu) if args.ssv else {}
     extra = {**start_values(args), **parse_set(args.set)}
     if any("[" in k for k in extra):          # mu[*], mu[1:6]: each element
@@ -279,7 +285,7 @@ def cmd_simulate(args):
         result = simulate(run, parameters=params, inputs=inputs, stop_time=args.stop_time, step=args.step,
                           start_time=args.start_time, output_interval=args.output_interval,
                           tolerance=args.tolerance, logging=args.fmi_logging, messages=messages,
-                          events=events)
+                          events=events, interface=interface, me_method=args.me_method or "bdf")
     except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
         save_partial(e, out)
         raise
@@ -379,6 +385,15 @@ def build_parser():
                         "latency:MSG|NODE:DELAY_S[:jitter=S][:seed=N], corrupt:MSG|NODE:crc|repeat|skip[:rate=R], "
                         "silent:NODE, busoff:NODE[:recover[=DELAY_S]]; each may end in @T0 or @T0-T1 (s). "
                         "With --report, the fault-free run's KPIs are printed and written beside the faulty ones")
+    s.add_argument("--fmi-type", "--interface-type", dest="fmi_type",
+                   choices=["CoSimulation", "ModelExchange", "cs", "me"], default=None,
+                   help="ModelExchange|me: every FMU that has Model Exchange runs as ME, integrated with CVODE "
+                        "by the stepping core (default: Co-Simulation)")
+    s.add_argument("--relative-tolerance", "--tolerance", type=float, dest="tolerance",
+                   help="the Model Exchange FMUs' integrator's relative tolerance (default: their default "
+                        "experiment's, else 1e-6)")
+    s.add_argument("--me-method", choices=["bdf", "adams"], default=None,
+                   help="the Model Exchange FMUs' integrator: CVODE's BDF (default, stiff-safe) or Adams")
     add_fmi_option(s, "run")
     s.set_defaults(func=cmd_run)
     s = sub.add_parser("plot", help="a PNG of signals of a results CSV, a panel per unit")

@@ -69,7 +69,10 @@ def add_simulate_options(s):
                    help="inputs: a time column, a column per input (FMPy's and the cross-check's CSV)")
     s.add_argument("--fmi-type", "--interface-type", dest="fmi_type",
                    choices=["CoSimulation", "ModelExchange", "cs", "me"], default=None,
-                   help="the FMU's interface (artibus simulate runs Co-Simulation)")
+                   help="the FMU's interface: Co-Simulation, or Model Exchange integrated with CVODE "
+                        "(default: Co-Simulation where the FMU has it)")
+    s.add_argument("--me-method", choices=["bdf", "adams"], default=None,
+                   help="Model Exchange: CVODE's BDF (default, stiff-safe) or Adams")
     s.add_argument("--fmi-logging", "--debug-logging", "--log-fmi-calls", action="store_true", dest="fmi_logging",
                    help="the FMU logs (loggingOn): its messages printed to stderr")
     s.add_argument("-o", "--output", "--output-file", metavar="FILE", dest="output",
@@ -90,12 +93,19 @@ def start_values(args):
 
 
 def check_interface(args, model, path):
-    """--fmi-type: Co-Simulation runs; Model Exchange is refused, naming what runs instead."""
-    if args.fmi_type in ("ModelExchange", "me"):
-        cs = " (it has Co-Simulation too: --fmi-type CoSimulation)" if model.coSimulation is not None else ""
-        raise ArtibusError(f"{path}: --fmi-type {args.fmi_type}: artibus simulate runs FMUs in Co-Simulation; "
-                           f"Model Exchange is not run here yet{cs}; FMPy runs it: "
-                           f"fmpy simulate --fmi-type ModelExchange {path}")
+    """--fmi-type: the interface the FMU runs in, "cs" or "me" (Model Exchange: integrated by
+    the stepping core's ME facade, artibus.fmu.me); without it Co-Simulation where the FMU has
+    it, else Model Exchange (as FMPy chooses). An interface the FMU lacks is refused by name."""
+    if args.fmi_type is None:        # (neither: Co-Simulation, which artibus.fmu.Fmu refuses by name)
+        return "me" if model.coSimulation is None and model.modelExchange is not None else "cs"
+    want = "me" if args.fmi_type in ("ModelExchange", "me") else "cs"
+    if want == "me" and model.modelExchange is None:
+        raise ArtibusError(f"{path}: --fmi-type {args.fmi_type}: {model.modelName} has no Model Exchange "
+                           "interface (it runs in Co-Simulation: --fmi-type CoSimulation)")
+    if want == "cs" and model.coSimulation is None:
+        raise ArtibusError(f"{path}: --fmi-type {args.fmi_type}: {model.modelName} has no Co-Simulation "
+                           "interface (it runs in Model Exchange: --fmi-type ModelExchange)")
+    return want
 
 
 def input_file(path, model, given):

@@ -27,15 +27,7 @@
 #include <string.h>
 #include <time.h>
 
-#ifdef _WIN32
-#include <windows.h>
-#define LOAD(path) ((void *)LoadLibraryA(path))
-#define SYM(lib, name) ((void *)GetProcAddress((HMODULE)(lib), name))
-#else
-#include <dlfcn.h>
-#define LOAD(path) dlopen(path, RTLD_NOW | RTLD_LOCAL)
-#define SYM(lib, name) dlsym(lib, name)
-#endif
+#include "dynload.h"            /* LOAD, SYM: dlopen or LoadLibrary */
 
 #include "fmi3FunctionTypes.h"
 

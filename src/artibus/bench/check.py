@@ -310,10 +310,8 @@ def _fmu_md(model):
         path = fmu_path(model)
     except ArtibusError:
         return None
-    from fmpy import read_model_description
-
-    from artibus.fmu.model import model_of
-    return model_of(read_model_description(str(path)))
+    from artibus.fmu.model import model_of, read_description
+    return model_of(read_description(str(path)))
 
 
 def check_bench(bench, out=print):
@@ -328,7 +326,7 @@ def check_bench(bench, out=print):
     path = ssp_mod.ssp_path(bench)
     b = ssp_mod.read(path)
     notices = not_applied(path)
-    out(f"{b.name}: {path}")
+    out(f"{b.name}: {b.file if b.file != f'{path}/SystemStructure.ssd' else path}")   # an unpacked SSP: its .ssd
     out(f"  not applied by the artibus runner ({len(notices)}):" if notices else
         "  everything in it is applied by the artibus runner")
     for n in notices:
@@ -338,7 +336,14 @@ def check_bench(bench, out=print):
     for what, other in specific:
         out(f"    {what}")
         out(f"      another master: {other}")
-    if b.version == "2.0":       # its FMI-LS-BUS network, read and checked as the runner reads it
+    if b.read_as != b.version:
+        out(f"  SystemStructure.ssd says version=\"{b.version}\" but holds SSP {b.read_as} content only (no connector "
+            f"of an SSP 2.0 type, no FMI-LS-BUS network): read as SSP {b.read_as}")
+    for name, value in b.system_values.items():
+        out(f"  system connector {name} = {value!r}: bound, connected to no FMU variable (the value stays the "
+            f"connector's)")
+    _loops(path, b, out)
+    if b.read_as == "2.0":       # its FMI-LS-BUS network, read and checked as the runner reads it
         from artibus.bench.ssp2 import network_lines
         for line in network_lines(path):
             out(f"  {line}")
@@ -349,6 +354,23 @@ def check_bench(bench, out=print):
         for p, k, (raw, unit, x, target) in conv:
             out(f"    {p}.{k} = {raw:g} {unit} -> {x:.10g} {target} (from {b.components[p].origins.get(k, '?')})")
     return 0
+
+
+def _loops(path, b, out):
+    """The loops Gauss-Seidel breaks, each at one connection with one step of delay, as `artibus
+    run` breaks them (artibus.runner.plan.gauss_seidel_order over the FMUs' declared
+    dependencies); an algebraic loop is its ArtibusError, as the run's."""
+    from artibus.bench.ssd import model_description
+    from artibus.runner.plan import feedthrough, gauss_seidel_order, wire
+    feeds = {p: feedthrough(model_description(path, c.source)) for p, c in b.components.items()}
+    wires = [wire(b.file, c) for c in b.connections if c.can is None]
+    broken = gauss_seidel_order(list(b.components), wires, feeds, b.file).broken
+    if broken:
+        out(f"  loops through outputs that declare no dependencies, broken under Gauss-Seidel ({len(broken)}; "
+            f"--algorithm jacobi delays every connection one step):")
+    for w, loop in broken:
+        cycle = " -> ".join([f"{x.src}.{x.output}" for x in loop] + [f"{loop[0].src}.{loop[0].output}"])
+        out(f"    {cycle}: broken at {w.label}, one step of delay")
 
 
 def _print_units(units, head, out, indent=""):
@@ -362,7 +384,9 @@ def _print_units(units, head, out, indent=""):
 
 def _is_bench(name):
     from artibus.bench import ssp as ssp_mod
-    return str(name).endswith(".ssp") or str(name) in ssp_mod.bench_names()
+    p = Path(str(name))
+    return (p.suffix.lower() in (".ssp", ".ssd") or (p.is_dir() and (p / "SystemStructure.ssd").is_file())
+            or str(name) in ssp_mod.bench_names())
 
 
 def main(paths, model=None, out=print):

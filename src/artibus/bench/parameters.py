@@ -7,7 +7,6 @@ of range is reported with the file, the element and the value.
 """
 import math
 
-from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssv
 
 from artibus.base import ArtibusError, ROOT, parse_integer, parse_real
@@ -223,7 +222,7 @@ def check_against(values, fmu, source, prefix="", origins=None):
     component path) and the value. The values are replaced by their typed
     form in ``values``."""
     from artibus.bench.units import Quantity
-    md = fmu if hasattr(fmu, "modelVariables") else _model_description(fmu)
+    md = _configured(fmu if hasattr(fmu, "modelVariables") else _model_description(fmu), values)
     variables = {v.name: v for v in md.modelVariables}
     for name, value in list(values.items()):
         v = variables.get(name)
@@ -232,23 +231,50 @@ def check_against(values, fmu, source, prefix="", origins=None):
         label = f"{origin}: Parameter '{prefix}{name}' = {value if quantity else repr(value)}"
         if v is None:
             raise ArtibusError(f"{label}: {no_variable(md, name)}")
-        if v.causality not in ("parameter", "input"):
+        if v.causality not in ("parameter", "input", "structuralParameter"):
             raise ArtibusError(f"{label}: it is an {v.causality} of {md.modelName} and cannot be set")
-        if getattr(v, "shape", ()):
-            raise ArtibusError(f"{label}: {md.modelName}.{name} is an array of {v.size} values "
-                               f"({'x'.join(map(str, v.shape))}); a bench's parameters are scalar variables")
         if quantity:                         # (one on a Real is converted before: artibus.bench.rules)
             raise ArtibusError(f"{label}: a value with a unit ('{value.unit}') for {md.modelName}.{name}, an "
                                f"{v.type}: a unit belongs to a Real value (give the value without a unit)")
-        try:
-            value = values[name] = coerce(v, value)
-        except ValueError as e:
-            raise ArtibusError(f"{label}: not a valid {v.type} for {md.modelName}.{name}: {e}") from None
-        if v.kind in ("Real", "Integer"):
-            x = float(value)
-            if v.min is not None and x < float(v.min) or v.max is not None and x > float(v.max):
-                raise ArtibusError(f"{label} is outside [{v.min}, {v.max}] of {md.modelName}")
+        values[name] = _checked_value(v, value, label, md)
     return values
+
+
+def _configured(md, values):
+    """The model ``md`` with its arrays sized by the structural parameters among ``values``
+    (FMI 3.0 2.3, Configuration Mode), the arrays' values then checked against those sizes."""
+    from artibus.fmu.model import Model, model_of
+    md = model_of(md)
+    sizes = {}
+    for v in md.modelVariables:
+        if v.causality == "structuralParameter" and v.name in values:
+            try:
+                sizes[v.valueReference] = int(str(values[v.name]).strip())
+            except ValueError:
+                pass                                   # (its own check names it)
+    return Model(md.description, structural=sizes) if sizes else md
+
+
+def _checked_value(v, value, label, md):
+    """``value`` as the variable ``v`` takes it, in its range: a scalar, or for an FMI 3.0 array
+    (its shape from the model: artibus.fmu.model) a list of its values, given as a sequence or
+    as FMI 3.0 writes an array's start (values separated by blanks, 2.4.7.6; commas too)."""
+    shape = getattr(v, "shape", ())
+    items = value if not shape else (value.replace(",", " ").split() if isinstance(value, str) else list(value))
+    if shape and len(items) != v.size:
+        raise ArtibusError(f"{label}: {md.modelName}.{v.name} is an array of {v.size} values "
+                           f"({'x'.join(map(str, shape))}), given {len(items)}")
+    out = []
+    for x in (items if shape else [value]):
+        try:
+            x = coerce(v, x)
+        except ValueError as e:
+            raise ArtibusError(f"{label}: not a valid {v.type} for {md.modelName}.{v.name}: {e}") from None
+        if v.kind in ("Real", "Integer"):
+            if v.min is not None and float(x) < float(v.min) or v.max is not None and float(x) > float(v.max):
+                raise ArtibusError(f"{label} is outside [{v.min}, {v.max}] of {md.modelName}")
+        out.append(x)
+    return out if shape else out[0]
 
 
 def _model_description(path):
@@ -256,7 +282,8 @@ def _model_description(path):
     if not Path(str(path)).is_file():
         raise ArtibusError(f"{path}: no such FMU file")
     try:
-        md = read_model_description(str(path))
+        from artibus.fmu.model import read_description
+        md = read_description(str(path))
     except Exception as e:
         raise ArtibusError(f"{path}: not a readable FMI 2.0 or 3.0 FMU: {e}") from None
     from artibus.fmu.model import model_of      # FMI 2.0 and 3.0 alike, by kind

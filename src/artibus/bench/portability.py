@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from lxml import etree
 
-from artibus.bench.ssp import ANNOTATION, CAN_ANNOTATION, NS, REBIND, VARIANT_DIR, variants
+from artibus.bench.ssp import ANNOTATION, CAN_ANNOTATION, NS, REBIND, VARIANT_DIR, origin, variants
 
 META = {"id", "description", "author", "fileversion", "copyright", "license", "generationTool",
         "generationDateAndTime", "version", "name"}
@@ -119,7 +119,7 @@ def not_applied(ssp):
     with zipfile.ZipFile(ssp) as z:
         names = z.namelist()
         root = etree.fromstring(z.read("SystemStructure.ssd"))
-        _scan(root, f"{ssp}/SystemStructure.ssd", out)
+        _scan(root, origin(ssp), out)
         refs = [el.get("source") for el in root.iter(tag=etree.Element)
                 if etree.QName(el).localname in ("ParameterBinding", "ParameterMapping") and el.get("source")]
         refs += [n for n in names if n.startswith(f"{VARIANT_DIR}/") and n.endswith(".ssv")]
@@ -182,7 +182,7 @@ def artibus_specific(ssp, bench=None):
             for r in etree.fromstring(z.read(f"{VARIANT_DIR}/{n}.ssv")).iterfind(f".//artibus:{REBIND}", NS):
                 out.append((f"variant {n} rebinds {r.get('from')} to {r.get('to')}",
                             "binds the parameter set the .ssd names"))
-    if bench.version == "2.0":
+    if bench.read_as == "2.0":      # (version="2.0" on SSP 1.0 content is read as SSP 1.0: artibus.bench.ssp._version)
         out.append(("an SSP 2.0 system structure (its FMI-LS-BUS network: ssc:Binary and ssc:Clock connectors, "
                     "artibus.bench.ssp2)", "reads SSP 1.0 only (ecos, libcosim, fmpy.ssp): not this bench; an "
                     "SSP 2.0 master with FMI 3.0 clocks and Event Mode runs its network"))

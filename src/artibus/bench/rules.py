@@ -16,7 +16,7 @@ Every message names the file and line the value or the connection is written at.
 """
 from artibus.base import ArtibusError, parse_integer, parse_real
 from artibus.bench.parameters import check_against
-from artibus.bench.ssd import model_description
+from artibus.bench.ssd import model_description, origin as ssd_origin
 from artibus.bench.units import declared_unit, fmu_units, with_unit
 
 
@@ -86,7 +86,7 @@ def bind_component(ssp, c, given, used):
         md = model_description(ssp, c.source)
     except ArtibusError as e:          # named as the bench names the component
         reason = str(e).removeprefix(f"{ssp}: ").removeprefix(f"{c.source}: ")
-        raise ArtibusError(f"{ssp}/SystemStructure.ssd:{c.line}: Component '{c.path}' source=\"{c.source}\": "
+        raise ArtibusError(f"{ssd_origin(ssp)}:{c.line}: Component '{c.path}' source=\"{c.source}\": "
                            f"not a readable FMU: {reason}") from None
     fmu_defs = fmu_units(md)
     variables = {v.name: v for v in md.modelVariables}
@@ -99,5 +99,5 @@ def bind_component(ssp, c, given, used):
         if then is not None:
             x = then[0] * x + then[1]
         c.parameters[var] = x
-    origins = {k: c.origins.get(k, f"{ssp}/SystemStructure.ssd:{c.line}") for k in c.parameters}
+    origins = {k: c.origins.get(k, f"{ssd_origin(ssp)}:{c.line}") for k in c.parameters}
     bind(c.parameters, md, origins, prefix=f"{c.path}.")

@@ -21,6 +21,16 @@ MAPPINGS = {"BooleanMappingTransformation": "Boolean", "IntegerMappingTransforma
             "EnumerationMappingTransformation": "Enumeration"}
 
 
+#: {an unpacked SSP's pack: its .ssd} (artibus.bench.packs.pack_unpacked): the file messages name
+_UNPACKED = {}
+
+
+def origin(ssp):
+    """The file messages name for the .ssd of ``ssp``: an unpacked SSP's own .ssd (a folder or an
+    .ssd given to run, packed by artibus.bench.ssp), else ``<ssp>/SystemStructure.ssd``."""
+    return _UNPACKED.get(str(ssp), f"{ssp}/SystemStructure.ssd")
+
+
 def _number(el, attr, default, where, integer=False):
     """Attribute ``attr`` of element ``el`` as a number (the strict syntax of
     artibus.base.parse_real), ``default`` when absent; ArtibusError naming the
@@ -110,9 +120,7 @@ def _component_sources(ssp):
 def model_description(ssp, source):
     """The model of the FMU ``source`` inside the .ssp (FMPy's description, read once a pack,
     with artibus's Variables: artibus.fmu.model)."""
-    from fmpy import read_model_description
-
-    from artibus.fmu.model import model_of
+    from artibus.fmu.model import model_of, read_description
     st = Path(ssp).stat()
     key = (str(ssp), st.st_mtime_ns, st.st_size, source)
     if key not in _MD_CACHE:
@@ -121,7 +129,7 @@ def model_description(ssp, source):
                     tempfile.TemporaryDirectory(prefix="artibus-") as tmp:
                 xml = Path(tmp) / "modelDescription.xml"
                 xml.write_bytes(fmu.read("modelDescription.xml"))
-                _MD_CACHE[key] = model_of(read_model_description(str(xml), validate=False))
+                _MD_CACHE[key] = model_of(read_description(str(xml), validate=False))
         except Exception as e:      # not a zip, no modelDescription.xml, not FMI XML: named, no traceback
             raise ArtibusError(f"{ssp}: {source}: not an FMU whose modelDescription.xml can be read "
                                f"({type(e).__name__}: {e})") from None

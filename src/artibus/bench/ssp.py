@@ -43,8 +43,9 @@ from artibus.bench.bindings import Pack, bound_values
 from artibus.bench.fmi import build_of, fmi_choice, pack_file
 from artibus.bench.ssp2 import clocked   # an FMI-LS-BUS component keeps its FMI 3.0 build
 from artibus.bench.ssd import (MAPPINGS, NS, _component_sources, _compose, _depth,  # noqa: F401
-                               _number, _sources_inside_components, map_transformation,
+                               _number, origin, _sources_inside_components, map_transformation,
                                model_description)
+from artibus.bench.packs import pack_unpacked, write_pack
 from artibus.bench.rules import bind_component, one_source
 from artibus.bench.units import declared_unit, fmu_units, ssp_units, to_unit
 
@@ -73,6 +74,11 @@ def ssp_path(bench, fmi=None):
     (its .ssd, the FMUs, parameter sets, roads), as make would: a rebuilt FMU
     or an edited parameter set is what runs, never a stale copy."""
     p, fmi = Path(bench), fmi_choice(fmi)
+    if p.suffix.lower() == ".ssd" or p.is_dir():
+        if fmi is not None:
+            raise ArtibusError(f"--fmi {fmi}: {p} is an SSP of its own, run with the FMUs it names (--fmi "
+                               f"picks the build of a bench of ssp/benches by name)")
+        return pack_unpacked(p)
     if p.suffix == ".ssp":
         if not p.is_file():
             raise ArtibusError(f"{p}: no such file")
@@ -86,7 +92,7 @@ def ssp_path(bench, fmi=None):
         q = pack_file(bench, fmi, files)
         packed = q.stat().st_mtime_ns if q.is_file() else None
         if packed is None or any(f.stat().st_mtime_ns > packed for f in (ssd_file, *files.values())):
-            _write_pack(q, ssd_file, files)
+            write_pack(q, ssd_file, files)
         return q
     # not a bench of ssp/benches: an error, also where a pack of that name is left in fmus/
     import difflib
@@ -234,21 +240,8 @@ def variant_overrides(ssp, names):
 def pack(bench, out_dir=None, fmi=None):
     """ssp/benches/<bench>/ -> <fmu_dir>/<bench>.ssp with every file it references (_sources; fmi: see ssp_path)."""
     ssd_file, files = _sources(bench, fmi_choice(fmi))
-    return _write_pack(Path(out_dir) / f"{bench}.ssp" if out_dir else pack_file(bench, fmi_choice(fmi), files),
+    return write_pack(Path(out_dir) / f"{bench}.ssp" if out_dir else pack_file(bench, fmi_choice(fmi), files),
                        ssd_file, files)
-
-
-def _write_pack(out, ssd_file, files):
-    from artibus.files import atomic_path
-    out.parent.mkdir(parents=True, exist_ok=True)
-    # packed under a name of this process's own, then renamed: a run that reads it never
-    # sees half a file, and runs packing the same stale bench at once do not collide
-    with atomic_path(out, fsync=False) as tmp:
-        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
-            z.write(ssd_file, "SystemStructure.ssd")
-            for ref, path in sorted(files.items()):
-                z.write(path, ref)
-    return out
 
 
 def _rebound(ssp, old, new, where):
@@ -315,7 +308,10 @@ class Bench:
     stop_time: float | None = None
     can: dict | None = None        # the CAN network: {"source" (DBC in the .ssp), "period", "line"}
     version: str = "1.0"           # the .ssd's SSP version: "2.0" may hold an FMI-LS-BUS network (ssp2)
+    read_as: str = "1.0"           # the version of its content: "1.0" for version="2.0" on SSP 1.0 content (_version)
     units: dict = field(default_factory=dict)   # unit -> its UnitDef (None: unknown), of the values with one
+    system_values: dict = field(default_factory=dict)   # "Sub.connector" -> the value bound to a system
+                                                        # connector connected to no FMU variable (SSP 1.0 5.3.5)
 
 
 def read(ssp):
@@ -326,7 +322,7 @@ def read(ssp):
     from artibus.bench.ssp2 import read_ssd
 
     ssp = str(ssp)
-    where = f"{ssp}/SystemStructure.ssd"
+    where = origin(ssp)
     from artibus.files import check_archive
     try:
         with zipfile.ZipFile(ssp) as z:   # its members checked before any is read (a second .ssd, a link)
@@ -339,7 +335,8 @@ def read(ssp):
     with zipfile.ZipFile(ssp) as z:
         names = set(z.namelist())
 
-    bench = Bench(name=ssd.name, file=where, components={}, connections=[], version=root.get("version"))
+    bench = Bench(name=ssd.name, file=where, components={}, connections=[], version=root.get("version"),
+                  read_as=_version(ssp, where))
     de = root.find("ssd:DefaultExperiment", NS)
     if de is not None:
         bench.start_time = _number(de, "startTime", 0.0, where)
@@ -368,6 +365,45 @@ def read(ssp):
                 f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}")
                for c in bench.connections)
     return bench
+
+
+#: SSP 1.0's connector types (SSP 1.0 5.3.2 "Connectors"); SSP 2.0 adds Float32, Int8 ... Binary, Clock
+SSP1_TYPES = {"Real", "Integer", "Boolean", "String", "Enumeration"}
+_VERSION_WARNED = set()
+
+
+def _version(ssp, where):
+    """The .ssd's SSP version as it is read (Bench.read_as): "2.0" only for a file with SSP 2.0
+    content (a connector of a type SSP 1.0 does not have: Binary, Clock, Float32, ...). OMSimulator
+    3.x writes version="2.0" on files of SSP 1.0 content in the namespaces both versions share
+    (SSP 2.0 2.2 "Version Mixing"): read as SSP 1.0, with a warning once a process. (The whole file: read_ssd's
+    view of an SSP 2.0 bench leaves its FMI-LS-BUS components out.)"""
+    with zipfile.ZipFile(ssp) as z:
+        root = etree.fromstring(z.read("SystemStructure.ssd"))
+    if root.get("version") != "2.0" or any(_connector_type(k) not in SSP1_TYPES
+                                           for k in root.iter(f"{{{NS['ssd']}}}Connector")):
+        return root.get("version")
+    if where not in _VERSION_WARNED:
+        import sys
+        _VERSION_WARNED.add(where)
+        print(f"warning: {where}:{root.sourceline}: <SystemStructureDescription version=\"2.0\">: SSP 1.0 "
+              f"content only (no connector of an SSP 2.0 type, no FMI-LS-BUS network; as OMSimulator 3.x "
+              f"writes its files): read as SSP 1.0", file=sys.stderr)
+    return "1.0"
+
+
+def _connector_type(connector):
+    """The local name of a Connector's type element (ssc:Real, ...), "Real" when it has none."""
+    for c in connector:
+        if isinstance(c.tag, str) and etree.QName(c).namespace == NS["ssc"]:
+            return etree.QName(c).localname
+    return "Real"
+
+
+def _end(element, connector):
+    """A connection's end as messages name it: element.connector, or the connector alone when it
+    is the system's own (no element, or "" as OMSimulator writes it)."""
+    return f"{element}.{connector}" if element else connector
 
 
 @dataclass
@@ -417,7 +453,8 @@ class _Reading:
                 self.walk(el, path)
 
     def _node(self, prefix, element, connector):
-        if element is None:            # a connector of the system itself
+        if not element:            # a connector of the system itself (no startElement/endElement, or "" as
+                                   # OMSimulator writes it: SSP 1.0 5.3.7, the enclosing system)
             return ("sys", prefix, connector)
         path = f"{prefix}.{element}" if prefix else element
         if path in self.bench.components:
@@ -441,8 +478,8 @@ class _Reading:
             line = xc.sourceline
             a = self._node(prefix, conn.startElement, conn.startConnector)
             b = self._node(prefix, conn.endElement, conn.endConnector)
-            label = (f"{where}:{line}: Connection {conn.startElement}.{conn.startConnector}"
-                     f" -> {conn.endElement}.{conn.endConnector}")
+            label = (f"{where}:{line}: Connection {_end(conn.startElement, conn.startConnector)}"
+                     f" -> {_end(conn.endElement, conn.endConnector)}")
             for n in (a, b):
                 if n[0] == "sys" and n[1] not in xml_systems:
                     raise ArtibusError(f"{label}: no element '{n[1]}'")
@@ -499,6 +536,9 @@ class _Reading:
                     node_ = ("sys", sys_path, conn)
                     targets += [(n[1], n[2]) for n, *_ in self.ends(node_, 1.0, 0.0, 0, None, None, frozenset())]
                     targets += [(a[1], a[2]) for a, b, *_ in self.edges if b == node_ and a[0] == "comp"]
+                    if not targets:        # a system connector connected to no FMU: the value stays its own
+                        self.bench.system_values[full] = value
+                        continue
                 if not targets:
                     raise ArtibusError(f"{sys_origins.get(name, where)}: parameter '{name}' = {value!r} bound at "
                                        f"system '{prefix or root_name}': no component variable or system "

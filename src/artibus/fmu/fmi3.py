@@ -65,6 +65,14 @@ class Calls:
         self.event_mode_used = bool(event_mode)
         self.slave.instantiate(loggingOn=logging, eventModeUsed=self.event_mode_used, logMessage=self._logger)
 
+    def configure(self, variables, values):
+        """The structural parameters ``variables`` set in Configuration Mode (FMI 3.0 2.3, "State:
+        Configuration Mode": between instantiation and initialisation; the arrays they dimension
+        resized at fmi3ExitConfigurationMode)."""
+        self.slave.enterConfigurationMode()
+        self.set(variables, values)
+        self.slave.exitConfigurationMode()
+
     def enter_initialization(self, start_time=0.0, tolerance=None, stop_time=None):
         self.slave.enterInitializationMode(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
 

@@ -4,14 +4,12 @@ FMPy's FMU2Slave or FMU3Slave) with a log of its own, and model descriptions rea
 content."""
 import shutil
 
-from fmpy import read_model_description
-
 from artibus import cache
 from artibus.base import ArtibusError
 from artibus.bench.fmi import fmi_major
 from artibus.fmu import fmi2, fmi3
 from artibus.fmu.fmi2 import claim_logger_proxy  # noqa: F401
-from artibus.fmu.model import model_of
+from artibus.fmu.model import model_of, read_description
 
 
 def _declared_version(path):
@@ -45,7 +43,7 @@ def _model_description(path):
             info = z.getinfo("modelDescription.xml")
         key = (info.CRC, info.file_size)
     except (OSError, KeyError, zipfile.BadZipFile):
-        return read_model_description(path)       # its own error, named
+        return read_description(path)             # its own error, named
     md = _MDS.get(key)
     if md is None:
         md = _stored_description(path)
@@ -61,15 +59,15 @@ def _stored_description(path):
     next process; under FMPy's version, as its classes pickle."""
     import fmpy
     if cache.root() is None:          # (the cache off: nothing kept)
-        return read_model_description(path)
+        return read_description(path)
     try:
         entry, temporary = cache.unpacked(path)
     except Exception:                 # a broken archive: read_model_description names it
-        return read_model_description(path)
+        return read_description(path)
     if temporary:
         shutil.rmtree(entry, ignore_errors=True)
-        return read_model_description(path)
-    return cache.stored(entry, f"modelDescription-fmpy-{fmpy.__version__}", lambda: read_model_description(path))
+        return read_description(path)
+    return cache.stored(entry, f"modelDescription-fmpy-{fmpy.__version__}-a1", lambda: read_description(path))
 
 
 class Fmu:
@@ -78,16 +76,20 @@ class Fmu:
     ``log`` its messages. ``event_mode``: an FMI 3.0 instance made with eventModeUsed (its
     events and clocks in Event Mode: artibus.fmu.fmi3)."""
 
-    def __init__(self, path, instance_name="artibus", logging=False, event_mode=False):
+    def __init__(self, path, instance_name="artibus", logging=False, event_mode=False, interface="cs"):
         from pathlib import Path
         self.path = str(path)
         if not Path(self.path).is_file():
             raise ArtibusError(f"{self.path}: no such FMU file")
         self.md = read_model(self.path)
         self.fmi = self.md.fmi
-        if self.md.coSimulation is None:
-            raise ArtibusError(f"{self.path}: {self.md.modelName} has no Co-Simulation interface "
-                               "(artibus runs FMUs in Co-Simulation)")
+        self.interface = interface       # "cs", or "me": Model Exchange through the ME facade (artibus.fmu.me)
+        if interface == "me" and self.md.modelExchange is None:
+            raise ArtibusError(f"{self.path}: {self.md.modelName} has no Model Exchange interface "
+                               "(--fmi-type me); it runs in Co-Simulation")
+        if interface != "me" and self.md.coSimulation is None:
+            me = " (it has Model Exchange: --fmi-type me)" if self.md.modelExchange is not None else ""
+            raise ArtibusError(f"{self.path}: {self.md.modelName} has no Co-Simulation interface{me}")
         self.vars = {v.name: v for v in self.md.modelVariables if v.causality != "independent"}
         self.log = []
         self.instance_name = instance_name
@@ -96,7 +98,11 @@ class Fmu:
             # unpacked once per content and kept (artibus.cache), or into a temporary directory
             self._dir, self._own_dir = cache.unpacked(self.path)
             self._dir = str(self._dir)
-            self.calls = (fmi3 if self.fmi == 3 else fmi2).Calls(self.md, self._dir, instance_name)
+            if interface == "me":
+                from artibus.fmu import me
+                self.calls = me.calls(self.md, self._dir, instance_name)
+            else:
+                self.calls = (fmi3 if self.fmi == 3 else fmi2).Calls(self.md, self._dir, instance_name)
         except ArtibusError:     # the archive refused or not unpacked (artibus.cache removed its copy)
             self._remove_dir()
             raise
@@ -137,8 +143,12 @@ class Fmu:
         declared type first (artibus.bench.parameters.coerce: no rounding, no
         "yes" for true, an Enumeration by item name or value, in the type's range;
         an array: a sequence of its values, each checked)."""
+        self.calls.set([self.var(n) for n in values], self._checked(values))
+
+    def _checked(self, values):
+        """Each value of {name: value} as its variable's type takes it (coerce), in order."""
         from artibus.bench.parameters import coerce
-        variables, checked = [], []
+        checked = []
         for name, value in values.items():
             v = self.var(name)
             try:
@@ -147,9 +157,8 @@ class Fmu:
             except (TypeError, ValueError) as e:
                 raise ArtibusError(f"{self.instance_name}.{name} = {value!r}: not a valid {v.type} "
                                    f"for {self.md.modelName}: {e}") from None
-            variables.append(v)
             checked.append(x)
-        self.calls.set(variables, checked)
+        return checked
 
     def get(self, *names):
         """The Real (Float64) variables' values, in one call."""
@@ -160,10 +169,28 @@ class Fmu:
         (Integer, Enumeration), bool, str; an array as the list of its values."""
         return self.calls.get([self.var(n) for n in names])
 
-    def enter_initialization_mode(self, start_time=0.0):
+    def configure(self, values):
+        """The structural parameters {name: value} set in Configuration Mode (FMI 3.0 only), the
+        model's arrays resized by them: ``md`` and ``vars`` are this instance's own from then on."""
+        if not values:
+            return
+        from artibus.fmu.model import Model
+        variables = [self.var(n) for n in values]
+        for v in variables:
+            if v.causality != "structuralParameter" or self.fmi != 3:
+                raise ArtibusError(f"{self.path}: {v.name} is no structural parameter of {self.md.modelName}")
+        checked = self._checked(values)
+        self.calls.configure(variables, checked)
+        sizes = {v.valueReference: x for v, x in zip(variables, checked)}
+        self.md = Model(self.md.description, structural=sizes)
+        self.vars = {v.name: v for v in self.md.modelVariables if v.causality != "independent"}
+        self.calls.model = self.md
+
+    def enter_initialization_mode(self, start_time=0.0, tolerance=None):
         """FMI 2.0: setupExperiment and enterInitializationMode; FMI 3.0:
-        enterInitializationMode with the start time."""
-        self.calls.enter_initialization(start_time)
+        enterInitializationMode with the start time (and the relative tolerance, if given:
+        a Model Exchange instance's integrator's too, artibus.fmu.me)."""
+        self.calls.enter_initialization(start_time, tolerance=tolerance)
 
     def do_step(self, t, h):
         """One step from t to t + h. None, or where the FMU ended the simulation itself

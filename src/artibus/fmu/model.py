@@ -36,12 +36,15 @@ class Variable:
     __slots__ = ("declared", "name", "valueReference", "type", "kind", "shape", "size",
                  "causality", "variability", "unit", "start")
 
-    def __init__(self, declared):
+    def __init__(self, declared, structural=None):
         self.declared = declared
         self.name, self.valueReference = declared.name, declared.valueReference
         self.type = declared.type
         self.kind = KINDS.get(declared.type, declared.type)
         self.shape = tuple(declared.shape or ()) if declared.dimensions else ()
+        if structural and declared.dimensions:      # sized by structural parameters set in Configuration Mode
+            self.shape = tuple(int(structural.get(d.valueReference, n)) if d.start is None else int(d.start)
+                               for d, n in zip(declared.dimensions, self.shape))
         self.size = math.prod(self.shape) if self.shape else 1
         self.causality, self.variability = declared.causality, declared.variability
         dt = declared.declaredType
@@ -77,11 +80,13 @@ class _Output:
 class Model:
     """An FMU's model description with artibus's Variables (see the module's docstring)."""
 
-    def __init__(self, md):
+    def __init__(self, md, structural=None):
+        """``structural``: {value reference: value} of structural parameters set in Configuration
+        Mode (FMI 3.0 2.3, "Configuration Mode": it resizes the arrays they dimension)."""
         from artibus.bench.fmi import fmi_major
         self.description = md
         self.fmi = fmi_major(md.fmiVersion)
-        self.modelVariables = [Variable(v) for v in md.modelVariables]
+        self.modelVariables = [Variable(v, structural) for v in md.modelVariables]
         by_id = {id(d): v for d, v in zip(md.modelVariables, self.modelVariables)}
         self.outputs = [_Output(o, by_id) for o in md.outputs]
         self.by_name = {v.name: v for v in self.modelVariables}
@@ -113,3 +118,27 @@ def model_of(md):
         _MODELS.pop(next(iter(_MODELS)))
     _MODELS[id(md)] = (md, model)     # (FMPy's descriptions have __slots__: no attribute on them)
     return model
+
+
+def read_description(path, validate=True):
+    """fmpy.read_model_description of the FMU or modelDescription.xml ``path``, with what FMPy
+    0.3 leaves out put back: the min and max of FMI 3.0's unsigned integer types (UInt8 ..
+    UInt64; FMPy reads them for Float*, Int* and Enumeration only), so that a value outside
+    them is refused (FMI 3.0 2.4.7.4.2)."""
+    from fmpy import read_model_description
+    md = read_model_description(str(path), validate=validate)
+    unsigned = {v.name: v for v in md.modelVariables if v.type.startswith("UInt")}
+    if unsigned:
+        import zipfile
+
+        from lxml import etree
+        if zipfile.is_zipfile(str(path)):
+            with zipfile.ZipFile(str(path)) as z:
+                root = etree.fromstring(z.read("modelDescription.xml"))
+        else:
+            root = etree.parse(str(path)).getroot()
+        for el in root.iterfind("ModelVariables/*"):
+            v = unsigned.get(el.get("name"))
+            if v is not None:
+                v.min, v.max = el.get("min"), el.get("max")
+    return md

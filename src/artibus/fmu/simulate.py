@@ -88,8 +88,8 @@ def _row(values, kinds):
 
 def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
              outputs=None, start_time=0.0, output_interval=None, tolerance=None, logging=False,
-             messages=None, events=()):
-    """Simulate one FMU (FMI 2.0 or 3.0, Co-Simulation).
+             messages=None, events=(), interface="cs", me_method="bdf"):
+    """Simulate one FMU (FMI 2.0 or 3.0, Co-Simulation or Model Exchange).
 
     parameters: {name: value} set in initialization mode (checked against
     each variable's type, see artibus.bench.parameters.coerce).
@@ -101,6 +101,9 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     takes it in Co-Simulation). tolerance: the relative tolerance the FMU is told
     (fmi2SetupExperiment, fmi3EnterInitializationMode). logging: the FMU's loggingOn;
     messages: a list the FMU's log messages are added to when the run ends, however.
+    interface: "cs" (Co-Simulation) or "me" (Model Exchange: the FMU integrated between the
+    communication points with CVODE, its events handled, artibus.fmu.me; me_method "bdf" or
+    "adams", CVODE's method).
     events: times the inputs jump (artibus.fmu.inputs.InputTable.events): the steps are cut
     there and the point recorded, where the FMU takes a variable communication step
     (canHandleVariableCommunicationStepSize), as FMPy's simulate_fmu does.
@@ -109,10 +112,13 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     far in ``e.result``: each doStep returns in bounded time (the FMUs refuse a
     step longer than their limit, docs/developer/fmi-layer.md).
     """
-    parameters = parameters or {}
+    parameters = dict(parameters or {})
     inputs = inputs or {}
-    with Fmu(path, event_mode=needs_event_mode(path), logging=logging) as fmu:
+    me = interface == "me"           # Model Exchange: integrated by the ME facade (artibus.fmu.me)
+    with Fmu(path, event_mode=not me and needs_event_mode(path), logging=logging, interface=interface) as fmu:
         claim_logger_proxy()
+        fmu.configure({n: parameters.pop(n) for n in list(parameters)       # (FMI 3.0: they size arrays)
+                       if n in fmu.vars and fmu.vars[n].causality == "structuralParameter"})
         if step is None and output_interval is not None:
             step = output_interval
         stop_time, step = _experiment(fmu, start_time, stop_time, step, path)
@@ -123,6 +129,10 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         check_room(n + 1, sum(v.size for v in variables) + 1, path)
         check_steps(n, path)
         result, record = _recorder(fmu, variables)
+        if me:                           # CVODE's method; no input changes: CVODE steps freely
+            fmu.calls.facade.use_method(me_method)
+            if not inputs:
+                fmu.calls.facade.free_running()
         try:
             fmu.calls.enter_initialization(start_time, tolerance=tolerance)
             fmu.set_values(parameters)
@@ -131,7 +141,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             if getattr(fmu.calls, "mode", None) == "event":   # eventModeUsed: Event Mode first (FMI 3.0 4.2.1)
                 fmu.calls.leave_event_mode()
             record(start_time)
-            cut = events if fmu.md.coSimulation.canHandleVariableCommunicationStepSize else ()
+            cut = events if me or fmu.md.coSimulation.canHandleVariableCommunicationStepSize else ()
             _steps(fmu, n, start_time, step, inputs, record, result, every, [e for e in cut if e < stop_time])
         except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the rows so far go with it
             n_rows = min([len(result.rows)] + [len(c) for c in result.strings.values()])

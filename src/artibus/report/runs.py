@@ -15,7 +15,8 @@ from artibus.runner.results import check_results_file
 
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
                 algorithm="gauss-seidel", can=None, can_log=None, can_faults=None, report=None, output=None,
-                progress=False, checked=None, log=print, single_rate=False, fmi=None, inputs=()):
+                progress=False, checked=None, log=print, single_rate=False, fmi=None, inputs=(),
+                fmi_type=None, relative_tolerance=None, me_method=None):
     """Run each bench (names or .ssp paths) with its variants (``variants``: names, as
     ``--variant``), then the user's values (``user``: {"comp.var": value}, from
     --ssv and --set); ``every``: the benches are all of ssp/benches/ (``--all``:
@@ -32,7 +33,9 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     step (--single-rate). With ``report`` each multi-rate bench is run once
     more single-rate for its page (artibus.report.single_rate). ``fmi``: the
     build of the benches' FMUs, None (as each bench's .ssd names them), "2" or
-    "3" (--fmi; artibus.bench.fmi); the extra runs use the same. Returns
+    "3" (--fmi; artibus.bench.fmi); the extra runs use the same. ``fmi_type`` "me" (--fmi-type):
+    every FMU that has Model Exchange runs as ME at ``relative_tolerance`` with CVODE's ``me_method``
+    (runner.Simulation). Returns
     [(bench, report directory, KPIs)] of the benches with a report. The drawing
     (artibus.report.pages, comparison: matplotlib) is imported only with ``report``."""
     if report:
@@ -42,6 +45,8 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     summary = []
     kept = {}
     settings = dict(step=step, record=record, algorithm=algorithm, can=can, fmi=fmi)
+    if fmi_type is not None or relative_tolerance is not None or me_method:      # (Model Exchange, issue 38)
+        settings.update(fmi_type=fmi_type, relative_tolerance=relative_tolerance, me_method=me_method or "bdf")
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, variants), **(user or {})}
         guard = list(inputs) + bench_inputs(bench)

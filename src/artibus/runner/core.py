@@ -248,8 +248,9 @@ class _CoreStepper:
         before = (c_double * max(1, sum(u.raw.n_in for u in units)))()
         exits = None
         if all(u.fmu.slave.fmiCallLogger is None for u in units):
-            exits = (c_void_p * len(units))(
-                *(cast(getattr(u.fmu.slave.dll, f"fmi{u.fmu.fmi}ExitInitializationMode"), c_void_p).value
+            exits = (c_void_p * len(units))(     # (a Model Exchange unit: its ME facade's, artibus.fmu.me)
+                *(u.fmu.calls.facade.exit_function if getattr(u.fmu.calls, "facade", None) is not None else
+                  cast(getattr(u.fmu.slave.dll, f"fmi{u.fmu.fmi}ExitInitializationMode"), c_void_p).value
                   for u in units))
         self._keep += [order, before, exits]
         self.settling = struct("ac_settle")(
@@ -415,6 +416,7 @@ class _CoreStepper:
             return result
         if failed:
             u, t = sim.units[s.fail_unit], start + k * h
+            getattr(u.fmu.calls, "explain", lambda: None)()    # (Model Exchange: the facade's own words)
             after = (f" (after '{sim.units[s.ended_unit].path}' ended the simulation)" if s.ended_unit >= 0
                      else "")
             partial = None if after else Result.from_array(sim.names, table[:k + 1, :m].copy())

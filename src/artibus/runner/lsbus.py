@@ -82,7 +82,7 @@ class Terminal:
     """One bus terminal of an FMU: the value references of its four members and, for a
     time-based Tx clock, its period and shift."""
 
-    def __init__(self, fmu_name, name, members, variables, clocks):
+    def __init__(self, fmu_name, name, members, variables, clocks, max_sizes=None):
         self.name = name
         missing = [m for m in MEMBERS if m not in members]
         if missing:
@@ -106,6 +106,9 @@ class Terminal:
             raise LsBusError(f"{fmu_name}: {tx.name} has intervalVariability={self.tx_kind!r}; "
                              "this master ticks constant, fixed, countdown and triggered clocks")
         self.tx_name = tx.name
+        # Rx_Data's maxSize (FMI 3.0.2, 2.4.7.6, Binary: "maximal size of a value" in bytes), None: unbounded
+        size = (max_sizes or {}).get(v["Rx_Data"].name)
+        self.rx_max = int(size) if size and size.isdigit() else None
 
     def next_tick(self, t0, t):
         """the first tick of a periodic Tx clock after the instant t, i.e. later than t + EPS
@@ -148,6 +151,7 @@ def read_terminals(path, md, fmu_name):
         md_root = ET.fromstring(z.read("modelDescription.xml"))
         clocks = {c.get("name"): (c.get("intervalDecimal"), c.get("shiftDecimal")) for c in md_root.iter("Clock")}
         mimes = {b.get("name"): b.get("mimeType") for b in md_root.iter("Binary")}
+        sizes = {b.get("name"): b.get("maxSize") for b in md_root.iter("Binary")}
     variables = {v.name: v for v in md.modelVariables}
     out = {}
     for t in root.iter("Terminal"):
@@ -161,7 +165,7 @@ def read_terminals(path, md, fmu_name):
         for m in ("Rx_Data", "Tx_Data"):
             if m in members:
                 check_mime(path, members[m], mimes.get(members[m]))
-        out[t.get("name")] = Terminal(fmu_name, t.get("name"), members, variables, clocks)
+        out[t.get("name")] = Terminal(fmu_name, t.get("name"), members, variables, clocks, sizes)
     if not out:
         raise LsBusError(f"{path}: terminalsAndIcons.xml has no terminal of kind {NETWORK_TERMINAL}")
     return out
@@ -432,6 +436,13 @@ class Network:
         if not data:
             return
         for dst, dterm in self.links[(src, term)]:
+            held = len(batch.get(dterm, b"")) if dst is self.bus else sum(map(len, pending.get((dst, dterm), ())))
+            if dterm.rx_max is not None and held + len(data) > dterm.rx_max:
+                raise LsBusError(f"t = {self.t:.6f} s: {'node ' if src is not self.bus else ''}{src.name}: "
+                                 f"{term.name}.Tx_Data ({term.tx_name} active) has {len(data)} bytes, "
+                                 f"{held + len(data)} with what the instant holds for {dst.name}'s "
+                                 f"{dterm.name}.Rx_Data, over its maxSize {dterm.rx_max} (FMI 3.0.2, 2.4.7.6, "
+                                 "Binary maxSize)")
             self.frames.append((self.t, src.name, dst.name, dterm.name, data))
             if dst is self.bus:
                 batch[dterm] = batch.get(dterm, b"") + data
@@ -447,7 +458,12 @@ class Network:
         f.set_clocks([t.tx_clock for t in ticking] + [t.rx_clock for t in rx])
         if rx:
             f.fmu.setBinary([t.rx_data for t in rx], list(rx.values()))
-        f.settle()
+        try:
+            f.settle()
+        except LsBusError as e:       # bounded: a node that never leaves Event Mode, named with its clocks
+            clocks = [t.tx_name for t in ticking] + [f"{t.name}.Rx_Clock" for t in rx]
+            raise LsBusError(f"t = {self.t:.6f} s: node {f.name} ({', '.join(clocks) or 'no clock'} active): "
+                             f"{e}") from None
         if not ticking:
             return {}
         out = f.fmu.getBinary([t.tx_data for t in ticking])

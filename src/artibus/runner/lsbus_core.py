@@ -196,5 +196,5 @@ class _LsBusCore:
             said = [(f.name, m) for f in failed for m in f.errors()]
             why = f"; {said[-1][0]} said: {said[-1][1]}" if said else ""
             return LsBusError(f"t = {c.t:.6f} s: {f'FMU {name}: ' if name else ''}{e}{why}")
-        text = c.message.decode(errors="replace")
-        return LsBusError(f"FMU {name}: {text}" if name else text)
+        text = c.message.decode(errors="replace")      # the master refused: when, too
+        return LsBusError(f"t = {c.t:.6f} s: FMU {name}: {text}" if name else f"t = {c.t:.6f} s: {text}")

@@ -1,57 +1,160 @@
 """The step plan: the order of the components (Gauss-Seidel, from the
-connection graph and the FMUs' direct feedthrough; an algebraic loop is an
-error naming it) and which components start and end their communication
-step at each base step (``_Plan``, multi-rate)."""
+connection graph and the FMUs' direct feedthrough: ``gauss_seidel_order``)
+and which components start and end their communication step at each base
+step (``_Plan``, multi-rate).
+
+Direct feedthrough is read from each output's ``dependencies`` (FMI 2.0
+2.2.8 "Definition of the Model Structure", FMI 3.0 2.4.8 "Model Structure"):
+an output that lists an input depends on it (declared); an output without
+the attribute "must be assumed" to depend on every input (assumed: many
+exporters write no dependencies at all, so a controller + plant loop of
+such FMUs is the normal case). A loop of feedthrough that is declared all
+around is an algebraic loop, an error under Gauss-Seidel; a loop through
+at least one assumed feedthrough is broken at one of those connections,
+which then carries its source's output of the previous step (one step of
+delay), as other SSP masters run such files. Jacobi needs no order: every
+connection carries the previous step's outputs (Simulation: no order, no
+loop check)."""
 import math
+from dataclasses import dataclass
 
 from artibus.base import ArtibusError
 
 
-def _order(units, links, where):
-    """links: (source unit, output name, destination unit, input name) of
-    every connection. Gauss-Seidel order: a component whose outputs feed another's inputs
-    directly (through feedthrough) goes first. A cycle made only of direct
-    feedthrough is an algebraic loop."""
-    # graph on (unit, output) -> (unit, input) -> (unit, output via feedthrough)
-    feed_edges = {}
-    for src, src_out, dst, dst_in in links:      # (source unit, output, destination unit, input)
-        for (i, o) in dst.feeds:
-            if i == dst_in:
-                feed_edges.setdefault((src.path, src_out), []).append(
-                    ((dst.path, o), f"{src.path}.{src_out} -> {dst.path}.{dst_in}"))
-    # cycle detection on the feedthrough graph
-    state, stack = {}, []
+def feedthrough(md):
+    """{(input name, output name): declared} of a model (artibus.fmu.model.Model): True where
+    the output lists the input in its dependencies, False where the output has no
+    dependencies attribute and so is assumed to depend on every input (FMI 2.0 2.2.8,
+    FMI 3.0 2.4.8); an empty list: no feedthrough."""
+    inputs = [v for v in md.modelVariables if v.causality == "input"]
+    out = {}
+    for o in md.outputs:
+        declared = o.dependencies is not None
+        for d in o.dependencies if declared else inputs:
+            if d.causality == "input":
+                out[(d.name, o.variable.name)] = declared
+    return out
 
-    def visit(n):
+
+@dataclass(frozen=True)
+class Wire:
+    """A connection as the order sees it: component paths and variable names; label names it
+    in messages (the file and line of its Connection)."""
+    src: str
+    output: str
+    dst: str
+    input: str
+    label: str = ""
+
+    def text(self):
+        return f"{self.src}.{self.output} -> {self.dst}.{self.input}"
+
+
+def wire(where, c):
+    """The Wire of a bench's Connection (artibus.bench.ssp.Connection), labelled with its file and line."""
+    return Wire(c.start[0], c.start[1], c.end[0], c.end[1],
+                f"{where}:{c.line}: Connection {c.start[0]}.{c.start[1]} -> {c.end[0]}.{c.end[1]}")
+
+
+@dataclass(frozen=True)
+class Order:
+    """gauss_seidel_order's answer: the component paths in stepping order; the connections
+    broken (one step of delay), each with the loop it broke."""
+    paths: list
+    broken: list                 # [(Wire, [Wire of its loop])]
+
+
+def _feed_edges(wires, feeds, cut):
+    """(component, output) -> [((component, output), wire, declared)]: the output reaches
+    the other output through the wire and the destination's feedthrough; wires in cut left out"""
+    edges = {}
+    for w in wires:
+        if w in cut:
+            continue
+        for (i, o), declared in sorted(feeds.get(w.dst, {}).items()):
+            if i == w.input:
+                edges.setdefault((w.src, w.output), []).append(((w.dst, o), w, declared))
+    return edges
+
+
+def _a_cycle(edges):
+    """The first cycle of the feedthrough graph (depth first, in the wires' order) as
+    [(wire, declared)], or None."""
+    state, stack = {}, []         # stack: [(node, the edge taken to it)]
+
+    def visit(n, via):
         state[n] = 1
-        stack.append(n)
-        for m, label in feed_edges.get(n, []):
+        stack.append((n, via))
+        for m, w, declared in edges.get(n, []):
             if state.get(m) == 1:
-                cycle = stack[stack.index(m):] + [m]
-                raise ArtibusError(f"{where}: algebraic loop (direct feedthrough all around): "
-                                   + " -> ".join(f"{c}.{v}" for c, v in cycle))
+                at = next(k for k, (node, _) in enumerate(stack) if node == m)
+                return [e for _, e in stack[at + 1:]] + [(w, declared)]
             if state.get(m) is None:
-                visit(m)
+                found = visit(m, (w, declared))
+                if found:
+                    return found
         stack.pop()
         state[n] = 2
+        return None
 
-    for n in list(feed_edges):
+    for n in list(edges):
         if state.get(n) is None:
-            visit(n)
-    # order components: Kahn on "A feeds B through B's feedthrough", then the rest
-    deps = {u.path: set() for u in units}
-    for src, _, dst, dst_in in links:
-        if any(i == dst_in for i, _ in dst.feeds) and src is not dst:
-            deps[dst.path].add(src.path)
+            found = visit(n, None)
+            if found:
+                return found
+    return None
+
+
+def _break_loops(paths, wires, feeds, where):
+    """[(wire, loop)]: one wire per loop of feedthrough, until none is left; the wire
+    broken is a loop's connection into an assumed feedthrough whose destination comes
+    first in the bench (paths' order), the connection's text breaking a tie. A loop
+    declared all around is an algebraic loop: an error naming it."""
+    rank = {p: k for k, p in enumerate(paths)}
+    broken = []
+    while True:
+        cycle = _a_cycle(_feed_edges(wires, feeds, {w for w, _ in broken}))
+        if cycle is None:
+            return broken
+        loop = [w for w, _ in cycle]
+        assumed = [w for w, declared in cycle if not declared]
+        if not assumed:
+            raise ArtibusError(f"{where}: algebraic loop (direct feedthrough all around, declared by the "
+                               f"outputs' dependencies): " + " -> ".join(
+                                   [f"{w.src}.{w.output}" for w in loop] + [f"{loop[0].src}.{loop[0].output}"])
+                               + f" ({loop[0].label}); Gauss-Seidel cannot order it (--algorithm jacobi "
+                               f"runs it, every connection one step delayed)")
+        broken.append((min(assumed, key=lambda w: (rank.get(w.dst, len(rank)), w.text())), loop))
+
+
+def gauss_seidel_order(paths, wires, feeds, where):
+    """The Order of components ``paths`` (the bench's order) joined by ``wires`` (Wire), with
+    ``feeds`` {path: feedthrough(md)}: a component whose output reaches another's input
+    directly (through that one's feedthrough) goes first; each loop broken (_break_loops),
+    an algebraic loop an error."""
+    broken = _break_loops(paths, wires, feeds, where)
+    cut = {w for w, _ in broken}
+    deps = {p: set() for p in paths}
+    for w in wires:
+        if w not in cut and w.src != w.dst and any(i == w.input for i, _ in feeds.get(w.dst, {})):
+            deps[w.dst].add(w.src)
     ordered, done = [], set()
-    while len(ordered) < len(units):
-        ready = [u for u in units if u.path not in done and deps[u.path] <= done]
-        if not ready:  # cannot happen without an algebraic loop
-            ready = [next(u for u in units if u.path not in done)]
-        for u in ready:
-            ordered.append(u)
-            done.add(u.path)
-    return ordered
+    while len(ordered) < len(paths):
+        ready = [p for p in paths if p not in done and deps[p] <= done]
+        if not ready:  # a loop of components, none of variables (A.y1 -> B -> A.u2, u2 not feeding y1)
+            ready = [next(p for p in paths if p not in done)]
+        for p in ready:
+            ordered.append(p)
+            done.add(p)
+    return Order(ordered, broken)
+
+
+def loop_warning(where, wire, loop):
+    """The warning of a loop broken at ``wire`` (gauss_seidel_order)."""
+    path = " -> ".join([f"{w.src}.{w.output}" for w in loop] + [f"{loop[0].src}.{loop[0].output}"])
+    return (f"{where}: loop {path} through outputs that declare no dependencies (FMI 2.0 2.2.8, FMI 3.0 "
+            f"2.4.8: assumed to depend on every input): Gauss-Seidel breaks it at {wire.label or wire.text()}, "
+            f"one step of delay there")
 
 
 AC_PROPAGATE, AC_WRITE, AC_STEP = 0, 1, 2     # core.h's operations (the plan as data: _Plan.ops)

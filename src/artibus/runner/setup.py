@@ -12,7 +12,7 @@ from artibus.base import ArtibusError
 from artibus.bench.parameters import check_against, suggest
 from artibus.bench.units import Quantity, convert, declared_unit, unit_conversion
 from artibus.fmu import Fmu
-from artibus.runner.plan import _order
+from artibus.runner.plan import feedthrough, gauss_seidel_order, loop_warning, wire
 from artibus.runner.unit import Link, Unit, _RawCalls, _TypedCalls, _typed_convert
 
 
@@ -56,7 +56,8 @@ class _Setup:
         units = {}
         for path, c in self.bench.components.items():
             try:
-                fmu = Fmu(Path(self._tmp) / c.source, instance_name=path)
+                fmu = Fmu(Path(self._tmp) / c.source, instance_name=path,
+                          interface=_interface(getattr(self, "fmi_type", None), path, Path(self._tmp) / c.source))
             except ArtibusError as e:    # a corrupt or missing FMU: named as the bench names it
                 raise ArtibusError(f"{where}:{c.line}: Component '{path}' source=\"{c.source}\": "
                                    + str(e).replace(f"{Path(self._tmp) / c.source}: ", "")) from None
@@ -181,19 +182,28 @@ class _Setup:
         return va, vb
 
     def _feedthrough_order(self, where):
-        """Each unit's direct feedthrough from its model description, then self.order
-        (artibus.runner.plan._order: Gauss-Seidel's order, an algebraic loop an error)."""
+        """Each unit's direct feedthrough from its model description (artibus.runner.plan.feedthrough),
+        then self.order: Jacobi's is the bench's (every connection one step delayed: no order, no
+        loop check); Gauss-Seidel's from the connections (artibus.runner.plan.gauss_seidel_order:
+        a loop through assumed feedthrough broken at one connection, named in a warning and in
+        self.broken; an algebraic loop an error)."""
+        feeds = {}
         for u in self.units:
-            inputs = [v for v in u.fmu.md.modelVariables if v.causality == "input"]
-            for o in u.fmu.md.outputs:
-                deps = o.dependencies if o.dependencies is not None else inputs
-                for d in deps:
-                    if d.causality == "input":
-                        u.feeds.add((d.name, o.variable.name))
-        self.order = _order(self.units, [(l.src, l.src.outputs[l.src_index].name, l.dst, l.dst.inputs[l.dst_index].name)
-                                         for l in self.links if l.connection.can is None]
-                            + [(src, src.tout[j].name, u, u.tin[i].name)
-                               for u in self.units for i, src, j, _ in u.typed_sources], where)
+            feeds[u.path] = feedthrough(u.fmu.md)
+            u.feeds.update(feeds[u.path])
+        self.broken = []
+        if self.algorithm == "jacobi":
+            self.order = list(self.units)
+            return
+        into = {c.end: c for c in self.bench.connections}
+        wires = [wire(where, l.connection) for l in self.links if l.connection.can is None]
+        wires += [wire(where, into[(u.path, u.tin[i].name)]) for u in self.units for i, *_ in u.typed_sources]
+        order = gauss_seidel_order([u.path for u in self.units], wires, feeds, where)
+        by_path = {u.path: u for u in self.units}
+        self.order = [by_path[p] for p in order.paths]
+        self.broken = order.broken
+        for broken, loop in order.broken:
+            _warn_once(loop_warning(where, broken, loop))
 
     def _recording(self, units, record, where):
         """self.record: (unit, variable) of every column: what was asked for, else every
@@ -317,6 +327,28 @@ class _Setup:
         self.can_ratio = int(round(r))
 
     # --- the algorithm ---------------------------------------------------------------
+
+
+def _interface(fmi_type, path, source):
+    """The interface component ``path`` runs in (Simulation's fmi_type): "me" where asked for by
+    name, or for every FMU that has Model Exchange with fmi_type "me"; else "cs"."""
+    if isinstance(fmi_type, dict):
+        return "me" if fmi_type.get(path) in ("me", "ModelExchange") else "cs"
+    if fmi_type in ("me", "ModelExchange"):
+        from artibus.fmu.instance import read_model
+        return "me" if read_model(str(source)).modelExchange is not None else "cs"
+    return "cs"
+
+
+_WARNED = set()
+
+
+def _warn_once(text):
+    """A warning on stderr, once a process (a sweep's runs of one bench print it once)."""
+    import sys
+    if text not in _WARNED:
+        _WARNED.add(text)
+        print(f"warning: {text}", file=sys.stderr)
 
 
 def _in_core(v):

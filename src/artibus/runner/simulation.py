@@ -80,7 +80,7 @@ class Simulation(_Setup):
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
                  stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False, fmi=None,
-                 lsbus_wire_time=None):
+                 lsbus_wire_time=None, fmi_type=None, relative_tolerance=None, me_method="bdf"):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
         the start of each of the component's steps. cut: inputs ("comp.input")
@@ -102,9 +102,14 @@ class Simulation(_Setup):
         FMI version: a bench of ssp/benches by name, artibus.bench.ssp.ssp_path).
         An SSP 2.0 bench with FMI-LS-BUS components runs their network
         (artibus.runner.lsbus_bench) in place of a CAN network; lsbus_wire_time:
-        its bus's wireTime (None: the bench's binding)."""
+        its bus's wireTime (None: the bench's binding). fmi_type: None or "cs" (Co-Simulation),
+        "me" (every FMU that has Model Exchange runs as ME, integrated by the stepping core's ME
+        facade, artibus.fmu.me; the others in Co-Simulation), or {component: "cs" | "me"};
+        relative_tolerance: the ME units' (default: their default experiment's, else
+        artibus.fmu.me.BENCH_TOLERANCE); me_method: their CVODE's, "bdf" or "adams"."""
         self.can = self.lsbus = None     # the bench's network: a CAN one, or an FMI-LS-BUS one (network)
         self.single_rate = single_rate
+        self.fmi_type, self.relative_tolerance, self.me_method = fmi_type, relative_tolerance, me_method
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
         self.algorithm = algorithm
@@ -164,13 +169,19 @@ class Simulation(_Setup):
         here when FMPy logs the calls). A failure's unit is self._busy."""
         for u in self.units:
             self._busy = u            # the unit being called: a failure names it
-            u.fmu.enter_initialization_mode(start)
+            if getattr(u.fmu.calls, "facade", None) is not None:      # Model Exchange: its integrator's tolerance
+                from artibus.fmu.me import bench_tolerance
+                u.fmu.calls.facade.use_method(self.me_method)
+                u.fmu.enter_initialization_mode(start, bench_tolerance(u.fmu.md, self.relative_tolerance))
+            else:
+                u.fmu.enter_initialization_mode(start)
             u.fmu.set_values(self.parameters[u.path])
             u.raw.written = None      # every connected input is set at least once
         exited = stepper.settle(MAX_INIT_ITERATIONS)
         for u in () if exited else self.units:
             self._busy = u
-            u.fmu.slave.exitInitializationMode()
+            me = getattr(u.fmu.calls, "facade", None) is not None     # Model Exchange: the facade exits
+            u.fmu.calls.exit_initialization() if me else u.fmu.slave.exitInitializationMode()
             u.raw.read()
         self._busy = None
 

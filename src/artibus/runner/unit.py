@@ -1,7 +1,7 @@
 """A component while it runs (``Unit``), the connections into it (``Link``),
 and its calls into the FMU: fmi2GetReal/SetReal/DoStep (an FMI 3.0 FMU:
-fmi3GetFloat64/SetFloat64/DoStep) through ctypes on buffers allocated once
-(``_RawCalls``), Integer, Boolean, String and Enumeration variables through
+fmi3GetFloat64/SetFloat64/DoStep; a Model Exchange FMU: the ME facade's, artibus.fmu.me)
+through ctypes on buffers allocated once (``_RawCalls``), Integer, Boolean, String and Enumeration variables through
 FMPy's calls (``_TypedCalls``, the conversion of such a connection:
 ``_typed_convert``)."""
 from ctypes import CDLL, c_double, c_int, c_size_t, c_uint, c_void_p
@@ -96,15 +96,19 @@ class _RawCalls:
 
     def __init__(self, unit):
         slave = unit.fmu.slave
-        dll = CDLL(slave.dll._name)      # the library FMPy loaded: the same instance
         self.fmi, self.slave = unit.fmu.fmi, slave
-        v = "fmi3" if self.fmi == 3 else "fmi2"
-        self._get, self._set, self._do = (getattr(dll, f"{v}{f}") for f in
-                                          (("GetFloat64", "SetFloat64", "DoStep") if self.fmi == 3
-                                           else ("GetReal", "SetReal", "DoStep")))
+        facade = getattr(unit.fmu.calls, "facade", None)    # Model Exchange (artibus.fmu.me)
+        if facade is not None:
+            self._me_calls(facade)
+        else:
+            dll = CDLL(slave.dll._name)      # the library FMPy loaded: the same instance
+            v = "fmi3" if self.fmi == 3 else "fmi2"
+            self._get, self._set, self._do = (getattr(dll, f"{v}{f}") for f in
+                                              (("GetFloat64", "SetFloat64", "DoStep") if self.fmi == 3
+                                               else ("GetReal", "SetReal", "DoStep")))
+            self.comp = c_void_p(slave.component)
         for f in (self._get, self._set, self._do):
             f.restype = c_int
-        self.comp = c_void_p(slave.component)
         self.n_out, self.n_in = len(unit.out_vrs), len(unit.in_vrs)
         self._n_out, self._n_in = c_size_t(self.n_out), c_size_t(self.n_in)
         # FMI 3.0: nValues after the values; fmi3DoStep's out-arguments
@@ -117,8 +121,20 @@ class _RawCalls:
         self.written = None       # the input values last set (bytes): unchanged ones are not set again
         # FMI 2.0: fmi2GetBooleanStatus/fmi2GetRealStatus, whose fmi2Terminated says the FMU ended
         # the run (the stepping core asks them: core.h's ac_unit), None where the library lacks them
-        self.status_functions = (None, None) if self.fmi == 3 else tuple(
-            _address(dll, f"fmi2Get{w}Status") for w in ("Boolean", "Real"))
+        if facade is not None:
+            self.status_functions = (None, None) if self.fmi == 3 else (
+                facade.functions["getBooleanStatus"], facade.functions["getRealStatus"])
+        else:
+            self.status_functions = (None, None) if self.fmi == 3 else tuple(
+                _address(dll, f"fmi2Get{w}Status") for w in ("Boolean", "Real"))
+
+    def _me_calls(self, facade):
+        """A Model Exchange unit's calls: the ME facade's (src/runner_core/me.c), with the
+        facade as the component: its step integrates the FMU, its get and set pass through."""
+        names = (("artibus_me3_get_float64", "artibus_me3_set_float64", "artibus_me3_do_step") if self.fmi == 3
+                 else ("artibus_me_get_real", "artibus_me_set_real", "artibus_me_do_step"))
+        self._get, self._set, self._do = (facade.lib[n] for n in names)     # (objects of their own)
+        self.comp = c_void_p(facade.component)
 
     def read(self):
         if self.n_out:

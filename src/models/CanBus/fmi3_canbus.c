@@ -287,6 +287,14 @@ fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], si
         const int rx = node_of(vr[i], VR_NODE_RX_CLOCK), tx = node_of(vr[i], VR_NODE_TX_CLOCK);
         if (rx < 0 && tx < 0) return FAIL("fmi3SetClock: value reference %u is no clock of CanBus", vr[i]);
         const int k = rx >= 0 ? rx : tx;
+        /* a Tx clock announced due now (interval 0) may be set after an update that asked for
+           no further iteration: it begins a new super-dense instant of this Event Mode (FMI
+           3.0.2, 2.2.9, "Countdown aperiodic Clock": T_interval >= 0; 2.3, Event Mode,
+           fmi3SetClock: "No further constraints are imposed on the activation of time-based
+           Clocks", aperiodic clocks with interval 0 may be active for more than one update) */
+        if (values[i] && tx >= 0 && c->updated && !c->needUpdate && c->announced[k] <= c->time + CANBUS_TIME_EPS) {
+            c->updated = false;
+        }
         if (values[i] && c->updated && !c->needUpdate)
             return FAIL("fmi3SetClock: Node%d.%s set after fmi3UpdateDiscreteStates, which asked for no "
                         "further event iteration: illegal call sequence (FMI 3.0.2, 5.2.2: clocks, then "

@@ -27,9 +27,16 @@ static const char *bus_name(unsigned vr) {
            vr == LSBUS_VR_RX_CLOCK ? "Rx_Clock" : vr == LSBUS_VR_TX_CLOCK ? "Tx_Clock" : "?";
 }
 
+static Status evaluate(ModelInstance *comp);
+
 int lsnode_get_binary(ModelInstance *comp, unsigned vr, size_t *size, const uint8_t **value) {
     ready(comp);
     if (vr == LSBUS_VR_TX_DATA) {
+        /* read while Tx_Clock is active, before the update: the tick's frames computed now
+           (lsbus_node.h; FMI 3.0.2, 2.2.8) */
+        if (comp->v.state == S_EVENT_MODE && B->txClock && !B->sent) {
+            if (core_refresh(comp) > Warning || evaluate(comp) > Warning) return Error;
+        }
         *size = B->txSize;
         *value = B->tx;
         return OK;
@@ -105,12 +112,13 @@ int lsnode_interval(ModelInstance *comp, unsigned vr, double *interval) {
 void lsnode_enter_event_mode(ModelInstance *comp) {
     ready(comp);
     B->rxClock = B->txClock = 0;
-    B->updated = 0;
+    B->updated = B->sent = 0;
+    B->txSize = 0;            /* a new activation: Tx_Data holds only what it computes */
 }
 
 void lsnode_leave_event_mode(ModelInstance *comp) {
     B->rxClock = B->txClock = 0;
-    B->updated = 0;
+    B->updated = B->sent = 0;
     B->rxSize = 0;
 }
 
@@ -246,9 +254,9 @@ static Status transmit(ModelInstance *comp) {
     return OK;
 }
 
-int lsnode_update(ModelInstance *comp) {
-    ready(comp);
-    B->updated = 1;
+/* the node's output function in this Event Mode (lsbus_node.h): the Rx_Data set so far
+   received, then, Tx_Clock active and not yet done, the tick's frames built */
+static Status evaluate(ModelInstance *comp) {
     if (B->rxClock && receive(comp) && !B->stepped) {
         /* the first event: the model starts from its first frames (the network's settle) */
         node_sync(comp);
@@ -256,6 +264,13 @@ int lsnode_update(ModelInstance *comp) {
         B->initFromFrames = 1;
         model_outputs(comp);
     }
-    if (B->txClock) return transmit(comp);
-    return OK;
+    if (!B->txClock || B->sent) return OK;
+    B->sent = 1;
+    return transmit(comp);
+}
+
+int lsnode_update(ModelInstance *comp) {
+    ready(comp);
+    B->updated = 1;
+    return evaluate(comp);
 }

@@ -15,7 +15,15 @@
  *            periodic with the DBC's cycle time: the ECUs' 10 ms): the operations
  *            this node sends; size 0 when it has none.
  * In Event Mode (FMI 3.0, Co-Simulation with eventModeUsed) the importer sets the
- * active clocks and Rx_Data, then calls fmi3UpdateDiscreteStates, which
+ * active clocks and Rx_Data, reads Tx_Data while Tx_Clock is active, then calls
+ * fmi3UpdateDiscreteStates. The node's output function runs once per Event Mode, at
+ * the first of: fmi3GetBinary(Tx_Data) with Tx_Clock active (FMI 3.0.2, 2.2.8, "Model
+ * Partitions and Clocked Variables": reading an output of an active clock computes it;
+ * "Getting and Setting Variable Values": a clocked variable is read only while its clock
+ * is active, and fmi3UpdateDiscreteStates ends the activation, 2.3 Event Mode), or
+ * fmi3UpdateDiscreteStates (Rx_Data set after that read is received there). The tick's
+ * frames stay readable until the Event Mode ends, for importers that read them after the
+ * update. It
  *   1. reads Rx_Data operation by operation (lsbus_can_read): a CAN Transmit of a
  *      message the node listens to goes through the receivers' E2E check of the
  *      runner's network (Network._deliver: CRC, then the counter: repeated, or
@@ -63,6 +71,7 @@ typedef struct {
     size_t txSize;
     int rxClock, txClock;         /* the clocks active in this event */
     int updated;                  /* fmi3UpdateDiscreteStates done in this Event Mode */
+    int sent;                     /* this Event Mode's Tx_Data built (Tx_Clock active) */
     int configured;               /* the Configuration (baud rate) sent */
     int stepped;                  /* a step was taken since the start */
     int initFromFrames;           /* the first event re-initialised the model from its frames */
