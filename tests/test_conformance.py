@@ -11,7 +11,11 @@ it (the start and stop time and relative tolerance of its <Model>_ref.opt, the i
 
 Clocks is a Scheduled Execution FMU only (no Co-Simulation): refused by name. Where a reference
 result names variables the built FMU does not have (the sources' Feedthrough_ref.csv is of an
-older Feedthrough), that comparison is skipped with the names, the comparison with FMPy kept."""
+older Feedthrough), that comparison is skipped with the names, the comparison with FMPy kept.
+
+An FMU made another way: pythonfmu3 (PyPI, the test extra) builds one from a Python class (an
+array output of 4, an input, a state, an Int32 counter), run by `artibus simulate` against FMPy
+and against its own equations, and in a one-FMU bench by `artibus run --input-file`."""
 import subprocess
 import sys
 from pathlib import Path
@@ -126,3 +130,110 @@ def test_a_scheduled_execution_only_fmu_is_refused_by_name(tmp_path):
                        capture_output=True, text=True)
     assert p.returncode == 1 and "Traceback" not in p.stderr
     assert "Clocks has no Co-Simulation interface" in p.stderr
+
+
+# -- FMUs made another way: pythonfmu3 (PyPI) builds an FMI 3.0 Co-Simulation FMU from a Python
+# class, its binary embedding the Python that loads it. Its conventions: outputs computed in
+# do_step only (at t0 they hold their start values), no default experiment, arrays as numpy arrays.
+PYTHON_FMU = '''
+import numpy as np
+from pythonfmu3 import Dimension, Fmi3Causality, Fmi3Slave, Fmi3Variability, Float64, Int32
+
+
+class Scaled(Fmi3Slave):
+    """y[i] = gain[i] u (an array output of 4), x' = u by explicit Euler, n the steps taken"""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.time, self.u, self.x, self.n = 0.0, 0.0, 0.0, 0
+        self.gain = np.array(GAIN)
+        self.y = np.zeros(4)
+        self.register_variable(Float64("time", causality=Fmi3Causality.independent,
+                                       variability=Fmi3Variability.continuous))
+        self.register_variable(Float64("u", causality=Fmi3Causality.input, variability=Fmi3Variability.continuous,
+                                       start=0.0))
+        self.register_variable(Float64("gain", causality=Fmi3Causality.parameter, variability=Fmi3Variability.tunable,
+                                       dimensions=[Dimension(start="4")], start=self.gain))
+        self.register_variable(Float64("y", causality=Fmi3Causality.output, variability=Fmi3Variability.continuous,
+                                       dimensions=[Dimension(start="4")]))
+        self.register_variable(Float64("x", causality=Fmi3Causality.output, variability=Fmi3Variability.continuous))
+        self.register_variable(Int32("n", causality=Fmi3Causality.output, variability=Fmi3Variability.discrete))
+
+    def do_step(self, current_time, step_size):
+        self.x += self.u * step_size
+        self.n += 1
+        self.y = self.gain * self.u
+        return True
+'''
+GAIN = [1.0, -2.0, 0.5, 3.0]
+U_T, U = [0.0, 0.45, 1.0], [1.0, 3.0, -1.0]          # the input: a ramp up, then down
+H = 0.1
+
+
+@pytest.fixture(scope="module")
+def python_fmu(tmp_path_factory):
+    """Scaled.fmu built by pythonfmu3 (the test extra; skipped without it)"""
+    pytest.importorskip("pythonfmu3", reason="pythonfmu3 (pyproject's test extra) is not installed")
+    d = tmp_path_factory.mktemp("pythonfmu3")
+    (d / "Scaled.py").write_text(PYTHON_FMU.replace("GAIN", repr(GAIN)))
+    p = subprocess.run([sys.executable, "-m", "pythonfmu3", "build", "-f", str(d / "Scaled.py"), "-d", str(d)],
+                       capture_output=True, text=True, cwd=d)
+    assert p.returncode == 0 and (d / "Scaled.fmu").is_file(), p.stderr
+    return d / "Scaled.fmu"
+
+
+def python_fmu_expected(t):
+    """Scaled's outputs at the points t by its own equations, u from the input table held over
+    each step (the value at the step's start): y(t_k) = gain u(t_{k-1}), x(t_k) = H sum_{j<k} u(t_j),
+    n(t_k) = k; at t0 the start values (0)."""
+    u_prev = np.interp(t[:-1], U_T, U)
+    y = np.vstack([np.zeros(4), np.outer(u_prev, GAIN)])
+    x = np.r_[0.0, H * np.cumsum(u_prev)]
+    return y, x, np.arange(len(t))
+
+
+def test_a_pythonfmu3_fmu_with_an_array_output_as_fmpy_runs_it(python_fmu, tmp_path):
+    inp = tmp_path / "in.csv"
+    inp.write_text("time,u\n" + "".join(f"{a},{b}\n" for a, b in zip(U_T, U)))
+    out = tmp_path / "ours.csv"
+    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(python_fmu), "--stop-time", "1",
+                        "--output-interval", str(H), "--input-file", str(inp), "-o", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    theirs = fmpy.simulate_fmu(str(python_fmu), stop_time=1.0, output_interval=H, input=read_csv(str(inp)),
+                               output=["y", "x", "n"])
+    assert len(ours) == len(theirs) == 11
+    y, x, n = python_fmu_expected(ours["time"])
+    for k in range(4):
+        np.testing.assert_allclose(ours[f"y[{k + 1}]"], theirs["y"][:, k], rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(ours[f"y[{k + 1}]"], y[:, k], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(ours["x"], theirs["x"], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(ours["x"], x, rtol=1e-9, atol=1e-12)
+    assert list(ours["n"]) == list(theirs["n"]) == list(n)
+
+
+def test_a_pythonfmu3_fmu_in_a_bench_driven_by_an_input_file(python_fmu, tmp_path):
+    import zipfile
+    ns = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+          'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"')
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {ns} version="1.0" name="py">'
+           '<ssd:System name="py"><ssd:Elements><ssd:Component name="P" source="resources/Scaled.fmu">'
+           '<ssd:Connectors><ssd:Connector name="u" kind="input"/><ssd:Connector name="x" kind="output"/>'
+           '<ssd:Connector name="n" kind="output"/></ssd:Connectors></ssd:Component></ssd:Elements></ssd:System>'
+           '<ssd:DefaultExperiment startTime="0" stopTime="1"/></ssd:SystemStructureDescription>')
+    bench = tmp_path / "py.ssp"
+    with zipfile.ZipFile(bench, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        z.write(python_fmu, "resources/Scaled.fmu")
+    inp = tmp_path / "in.csv"
+    inp.write_text("time,P.u\n" + "".join(f"{a},{b}\n" for a, b in zip(U_T, U)))
+    out = tmp_path / "bench.csv"
+    p = subprocess.run([sys.executable, "-m", "artibus", "run", str(bench), "--step", str(H), "--input-file", str(inp),
+                        "-o", str(out)], capture_output=True, text=True)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    _, x, n = python_fmu_expected(ours["time"])
+    assert len(ours) == 11
+    np.testing.assert_allclose(ours["P.x"], x, rtol=1e-9, atol=1e-12)
+    assert list(ours["P.n"]) == list(n)

@@ -238,3 +238,38 @@ def test_omsimulator3_version_2_on_ssp1_content_reads_as_ssp1_with_a_warning(tmp
     text = "\n".join(lines)
     assert 'says version="2.0" but holds SSP 1.0 content only' in text, text
     assert "LS-BUS network" not in text.replace("no FMI-LS-BUS network", ""), text
+
+
+def test_omsimulator3_version_2_parameter_files_read_as_ssp1_with_a_warning(tmp_path, capfd):
+    """.ssv and .ssm files of version="2.0" on SSP 1.0 content (OMSimulator 3.x): bound through
+    the mapping with the stated result, a warning naming each file; the same .ssv given to
+    --ssv reads too."""
+    from artibus.bench.parameters import read_parameters
+    folder = corpus("omsimulator3_files", tmp_path, {"resources/Feedthrough.fmu": reference_fmu("Feedthrough")})
+    ssp = packed(folder)
+    with Simulation(ssp, step=0.5, record=[OUT_A, OUT_B, "A.Float64_fixed_parameter"]) as sim:
+        r = sim.run()
+        assert sim.bench.system_values == {"unused": 42.0}
+    np.testing.assert_array_equal(r[OUT_A], 1.5)            # 2 * 0.75, the .ssm's factor on the .ssv's value
+    np.testing.assert_array_equal(r[OUT_B], 1.5)
+    np.testing.assert_array_equal(r["A.Float64_fixed_parameter"], 0.25)
+    err = capfd.readouterr().err
+    for member, root in (("parameters.ssv", "ParameterSet"), ("mapping.ssm", "ParameterMapping")):
+        assert re.search(rf'warning: .*resources/{re.escape(member)}:\d+: <{root} version="2\.0">: SSP 1\.0 '
+                         rf'content only.*read as SSP 1\.0', err), err
+    ssv = folder / "resources" / "parameters.ssv"
+    assert read_parameters(str(ssv)) == {"in": 0.75, "b": 0.25, "u": 42.0}
+
+
+def test_version_2_parameter_file_of_ssp2_content_is_refused_naming_file_and_line(tmp_path):
+    """A version="2.0" .ssv holding an SSP 2.0 type (ssv:Float32, SSP 2.0 6) is not SSP 1.0
+    content: refused, naming the file and the line of the element SSP 1.0 does not know."""
+    folder = corpus("omsimulator3_files", tmp_path, {"resources/Feedthrough.fmu": reference_fmu("Feedthrough")})
+    ssv = folder / "resources" / "parameters.ssv"
+    text = ssv.read_text().replace('<ssv:Real value="0.25"/>', '<ssv:Float32 value="0.25"/>')
+    ssv.write_text(text)
+    line = next(k for k, s in enumerate(text.splitlines(), 1) if "Float32" in s)
+    with pytest.raises(ArtibusError) as e:
+        with Simulation(packed(folder), step=0.5) as sim:
+            sim.run()
+    assert re.search(rf"resources/parameters\.ssv:{line}: .*Float32", str(e.value)), str(e.value)

@@ -9,18 +9,17 @@ it needs) in one FMI 3.0 container, the nodes' terminals linked to the bus's Nod
 
 What works: the toolbox reads our terminals and manifests (the four members of each
 terminal linked crosswise, CanBus's countdown Tx_Clocks scheduled by the container) and
-the container runs without an error.
-What does not: no frame reaches the bus. The container schedules only countdown input
-clocks (the bus's Tx_Clock, by fmi3GetIntervalDecimal) and triggered output clocks
-(fmi3GetClock, as the fmi-ls-bus-examples node has); our nodes' Tx_Clock is a periodic
-input clock (intervalVariability="constant", 10 ms), which FMI-LS-BUS 1.0 allows and
-recommends (4____network_abstraction.adoc: a time-based Tx_Clock is an input, the importer
-is its clock source), and which the container never activates (fmu_manipulation_toolbox
-2.0 container/builder.py: only `interval_variability == "countdown"` enters its ClockList;
-its runtime container.c sets no other input clock). So the ECU sees no frame and goes
-stale after nStale = 3 cycles. The test of the frames is a strict xfail with that reason:
-it fails today, and turns into a failure to look at the day the toolbox schedules them.
-Without the package the tests are skipped."""
+the container runs without an error. The container schedules only countdown input clocks
+(the bus's Tx_Clock, by fmi3GetIntervalDecimal) and triggered output clocks (fmi3GetClock,
+as the fmi-ls-bus-examples node has): our nodes' default, periodic input Tx_Clock
+(intervalVariability="constant", 10 ms, which FMI-LS-BUS 1.0 allows) it never activates
+(fmu_manipulation_toolbox 2.0 container/builder.py: only `interval_variability ==
+"countdown"` enters its ClockList). So the container runs the nodes in the Tx clock's
+triggered form (fmus/fmi3/lsbus-triggered/, issue 39), whose frames reach the bus every
+cycle. The container steps 0 s to serve a countdown clock due now (FMI 3.0.2, 4.2 wants a
+step > 0): our nodes take it as no step, with a warning.
+What does not: the bus's frames reaching the ECU: the container does not activate CanBus's
+countdown Tx clocks (the strict xfail's reason). Without the package the tests are skipped."""
 import shutil
 import zipfile
 
@@ -37,11 +36,21 @@ STEP = 1e-4          # the container's internal step: the wire time of a frame i
 INPUTS = {"gamma1": 0.12, "dPsi[1]": 0.21, "dPsi[2]": -0.13, "gammaA6": 0.05, "vVehicle": 3.0}
 
 
+def triggered(name):
+    """the node in the Tx clock's triggered form (fmus/fmi3/lsbus-triggered/, issue 39)"""
+    from pathlib import Path
+    path = Path(fmu3("CanBus")).parent / "lsbus-triggered" / f"{name}_Triggered.fmu"
+    if not path.is_file():
+        pytest.fail(f"{path} not built")
+    return path
+
+
 @pytest.fixture(scope="module")
 def container(tmp_path_factory):
     d = tmp_path_factory.mktemp("lsbus_container")
-    for name in ("CanBus", "SteeringSensors_LSBUS", "SteeringECU_LSBUS"):
-        shutil.copy(fmu3(name), d / f"{name}.fmu")
+    shutil.copy(fmu3("CanBus"), d / "CanBus.fmu")
+    for name in ("SteeringSensors_LSBUS", "SteeringECU_LSBUS"):      # the container's file names, our nodes'
+        shutil.copy(triggered(name), d / f"{name}.fmu")
     node = AssemblyNode("LsBusContainer.fmu", step_size=STEP, auto_local=True)
     node.add_fmu("CanBus.fmu")
     for fmu, terminal in NODES.items():
@@ -88,10 +97,25 @@ def test_the_toolbox_links_our_terminals_and_schedules_the_bus_clocks(container)
     assert 'isBusSimulationFMU' not in md          # the container itself is no bus simulation
 
 
+def test_the_nodes_frames_reach_the_bus_every_cycle(container):
+    """the nodes in the triggered form (their Tx_Clock an output triggered clock, which the
+    container reads with fmi3GetClock after an eventHandlingNeeded): every 10 ms from t = 0 the
+    sensors' four frames and the tractor ECU's two (TractorECU_State, ECU1_SteerCmd: ssp/can/
+    Bus36m.dbc's senders) are put on CanBus's wire: 6 (k + 1) frames after tick k, closed form"""
+    r, log = simulate(container, 0.05)
+    assert not [m for m in log if "rror" in m and "stale" not in m and "no previous interval" not in m], log
+    assert r["time"][-1] == pytest.approx(0.05)
+    for t, n in zip(r["time"], r["nFrames"]):
+        k = int((t + 1e-9) // 0.01)          # the last tick at or before t
+        assert n <= 6 * (k + 1) and (t < k * 0.01 + 0.002 or n == 6 * (k + 1)), (t, n)
+
+
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "fmu-manipulation-toolbox 2.0's container activates only countdown input clocks and triggered "
-    "output clocks; our nodes' Tx_Clock is a periodic input clock (10 ms, allowed by FMI-LS-BUS 1.0 "
-    "4____network_abstraction.adoc), never set: no frame reaches CanBus (nFrames 0), the ECU goes stale"))
+    "fmu-manipulation-toolbox 2.0's container does not activate CanBus's countdown NodeK.Tx_Clock: its "
+    "scheduler (container.c, container_get_next_clock_time) stops with 'Clock CanBus.fmu vr=104 has no "
+    "previous interval and fmi3IntervalUnchanged was set' (CanBus answers a still-announced clock with "
+    "fmi3IntervalUnchanged, which the container counts down itself from the last step), so the frames on "
+    "the bus are never delivered to the ECU (gamma1 stays 0); our nodes' side works (the test above)"))
 def test_the_sensors_frames_reach_the_ecu_within_one_cycle(container, db):
     r, log = simulate(container, 0.05)
     assert not [m for m in log if "rror" in m and "stale" not in m], log

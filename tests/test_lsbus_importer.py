@@ -124,7 +124,8 @@ class Unit:
         for key, value in params.items():
             self.set(key, value)
         self.fmu.exitInitializationMode()          # Event Mode (FMI 3.0.2, 4.2.1: eventModeUsed)
-        self.state, self.need, self.flagged, self.next_event = "event", False, False, math.inf
+        # the Event Mode after initialisation is handled as any other: its output clocks read
+        self.state, self.need, self.flagged, self.next_event = "event", False, True, math.inf
         self.query_intervals(t0)
 
     def _logger(self):
@@ -253,17 +254,21 @@ class Importer:
         for _ in range(self.MAX_ROUNDS):
             busy = False
             for u in self.units:
-                if u.flagged:
+                # FMI 3.0.2, 4.2, fmi3EnterEventMode: Event Mode when the FMU's step returned
+                # eventHandlingNeeded or time reached its nextEventTime (a triggered output
+                # clock's tick: fmi-ls-bus 1.0, "Triggered Tx Clocks"); its output clocks read there
+                woke = u.flagged or u.next_event <= self.t + EPS
+                if woke:
                     u.begin_event(self.t)
-                    u.flagged = False
+                    u.flagged, u.next_event = False, math.inf
                 due = u.due_now(self.t0, self.t)
                 rx = {term: pending.pop(term) for term in u.terminals if term in pending}
-                if not due and not rx:
+                if not due and not rx and not woke:
                     continue
                 busy = True
                 for term in due:
                     term.due, term.last = None, self.t
-                ticking = any(term.periodic for term in due)
+                ticking = any(term.periodic for term in due) or woke    # woke: a triggered tick, maybe
                 out = u.event(self.t, due, rx, values.get(u.name, {}) if ticking else {})
                 for term, data in out.items():
                     if data:      # zero size: no Rx clock activated

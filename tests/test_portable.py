@@ -4,6 +4,7 @@ of the bench unchanged, valid against the SSP 1.0 XSDs; our runner gives the
 same results on the portable pack as on the bench with its bindings, files,
 mappings and variant, bit for bit (the same values reach the same FMUs)."""
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -121,3 +122,46 @@ def test_enumerations_are_integers_in_the_pack(tmp_path):
         for n in a.namelist():
             if n != "modelDescription.xml":
                 assert a.read(n) == c.read(n), n
+
+
+def _road_deviation(x, y, road):
+    """(the largest |y - road's y at x| over the road's extent, the largest |y|) of a path"""
+    inside = (x > road[0, 0]) & (x < road[-1, 0])
+    assert inside.sum() > 100, "the front axle never drove along the road"
+    return float(np.max(np.abs(y[inside] - np.interp(x[inside], road[:, 0], road[:, 1])))), float(np.max(np.abs(y)))
+
+
+@pytest.mark.parametrize("master", ["ecos", "libcosim"])
+def test_road_file_goes_into_the_drivers_resources_and_other_masters_follow_it(master, tmp_path):
+    """Bus36m_Slalom's road (a String parameter "resources/Bus36m_Slalom.csv" in the bench) is in
+    the pack's RoadFollowDriver.fmu as resources/Bus36m_Slalom.csv, byte for byte the road of
+    ssp/roads/, and the value is the bare file name (a master hands it to the FMU as written; the
+    FMU reads a relative name in its own resources/). Run in ecos or libcosim (where installed),
+    the front axle A1 follows the road's slalom (±1.5 m, read from the CSV here) within 0.1 m."""
+    import json
+    import subprocess
+    import sys
+    from artibus.base import ROOT
+    road_file = ROOT / "ssp" / "roads" / "Bus36m_Slalom.csv"
+    pack = pack_portable("Bus36m_Slalom", [], out=tmp_path / "p.ssp")
+    with zipfile.ZipFile(pack) as z:
+        assert not [n for n in z.namelist() if n.endswith(".csv")]      # not beside the FMUs any more
+        with zipfile.ZipFile(z.open("resources/RoadFollowDriver.fmu")) as fmu:
+            assert fmu.read("resources/Bus36m_Slalom.csv") == road_file.read_bytes()
+    root, _ = _sets(pack)
+    files = {p.get("name"): s.get("value") for p in root.iter(f"{{{NS['ssv']}}}Parameter")
+             for s in p.findall("ssv:String", NS)}
+    assert files == {"roadFile": "Bus36m_Slalom.csv"}
+    module = {"ecos": "ecospy", "libcosim": "libcosimpy"}[master]
+    pytest.importorskip(module)
+    out = tmp_path / "run.json"
+    names = ["Bus.xAxle[1]", "Bus.yAxle[1]"]
+    p = subprocess.run([sys.executable, str(Path(__file__).parent / "masters_run.py"), master, str(pack), "0.01",
+                        "42.0", str(out), *names], capture_output=True, text=True, timeout=600)
+    assert out.is_file(), f"{master} died (exit {p.returncode}): {p.stderr[-2000:]}"
+    d = json.loads(out.read_text())
+    assert d["ok"], d["error"]
+    rows = np.array(d["rows"])
+    road = np.loadtxt(road_file, delimiter=",", skiprows=1)
+    deviation, swing = _road_deviation(rows[:, 1], rows[:, 2], road)
+    assert swing > 1.4 and deviation < 0.1, (deviation, swing)

@@ -119,6 +119,8 @@ def cmd_run(args):
         _wrong_kind("run", args.bench)
     if args.all and args.variant:
         raise ArtibusError("--variant selects a variant of one BENCH, not of --all")
+    if args.all and args.input_file:
+        raise ArtibusError("--input-file drives the free inputs of one BENCH, not of --all")
     if args.all and args.output:
         raise ArtibusError("-o names one results file: with --all each bench writes <bench>.csv, "
                            "or DIR/<bench>/results.csv with --report DIR")
@@ -130,8 +132,10 @@ def cmd_run(args):
                 user=user, stop_time=args.stop_time, step=args.step, record=args.record,
                 algorithm=args.algorithm, can=args.can, can_log=args.can_log, can_faults=args.can_fault,
                 report=args.report, output=args.output, progress=sys.stderr.isatty(), single_rate=args.single_rate,
-                checked=lambda out: setattr(args, "_out", out), fmi=args.fmi, inputs=_given(args.ssv, "an --ssv file"),
-                fmi_type=_fmi_type(args.fmi_type), relative_tolerance=args.tolerance, me_method=args.me_method)
+                checked=lambda out: setattr(args, "_out", out), fmi=args.fmi,
+                inputs=_given(args.ssv, "an --ssv file") + _given([args.input_file], "the --input-file"),
+                fmi_type=_fmi_type(args.fmi_type), relative_tolerance=args.tolerance, me_method=args.me_method,
+                input_file=args.input_file)
     return 0
 
 
@@ -283,6 +287,7 @@ def cmd_simulate(args):
     messages = [] if args.fmi_logging else None
     try:
         result = simulate(run, parameters=params, inputs=inputs, stop_time=args.stop_time, step=args.step,
+                          outputs=args.record,
                           start_time=args.start_time, output_interval=args.output_interval,
                           tolerance=args.tolerance, logging=args.fmi_logging, messages=messages,
                           events=events, interface=interface, me_method=args.me_method or "bdf")
@@ -394,6 +399,9 @@ def build_parser():
                         "experiment's, else 1e-6)")
     s.add_argument("--me-method", choices=["bdf", "adams"], default=None,
                    help="the Model Exchange FMUs' integrator: CVODE's BDF (default, stiff-safe) or Adams")
+    s.add_argument("--input-file", metavar="CSV",
+                   help="drive the bench's free (unconnected) inputs: a time column, a column per input "
+                        "COMPONENT.VARIABLE (as simulate's --input-file)")
     add_fmi_option(s, "run")
     s.set_defaults(func=cmd_run)
     s = sub.add_parser("plot", help="a PNG of signals of a results CSV, a panel per unit")

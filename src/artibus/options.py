@@ -19,6 +19,8 @@ words they know. Ours first, then theirs:
   --fmi-type           FMPy CoSimulation|ModelExchange; fmusim --interface-type cs|me
   --fmi-logging        FMPy --fmi-logging and --debug-logging, fmusim --log-fmi-calls: the FMU
                        logs (loggingOn) and its messages are printed to stderr
+  --record NAME ...    FMPy --output-variables: the variables recorded (default: every output
+                       but Binary and Clock ones; a Binary as hex text)
 """
 import argparse
 import sys
@@ -77,6 +79,9 @@ def add_simulate_options(s):
                    help="the FMU logs (loggingOn): its messages printed to stderr")
     s.add_argument("-o", "--output", "--output-file", metavar="FILE", dest="output",
                    help="results: .csv, .parquet, .mf4 or .mat, by the extension (default: <FMU>.csv)")
+    s.add_argument("--record", "--output-variables", action="extend", nargs="+", metavar="NAME", dest="record",
+                   help="the variables recorded (default: every output but Binary and Clock ones); a Binary "
+                        "as hex text, a clocked variable at its clock's ticks")
 
 
 def start_values(args):

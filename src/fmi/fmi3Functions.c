@@ -636,7 +636,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 #ifdef MODEL_LSBUS
     /* a network node: the operations received (Rx_Clock) and those to send (Tx_Clock) */
     if (core_refresh(comp) > Warning) return leave(comp, Error);
-    status = (Status)lsnode_update(comp);
+    status = (Status)lsnode_update(comp, &tNext);   /* a triggered Tx_Clock's next tick */
     if (status > Warning) return leave(comp, status);
 #endif
 #ifdef MODEL_NX
@@ -679,10 +679,21 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return leave(comp, log_error(comp, "fmi3DoStep: NULL argument"));
 #ifdef MODEL_LSBUS
     lsnode_step(comp);              /* the bus's operations of the last event are done */
+    if (communicationStepSize == 0.0 && fabs(currentCommunicationPoint - comp->v.time) <= 1e-9)
+        /* FMI 3.0.2, 4.2 wants communicationStepSize > 0; fmu-manipulation-toolbox 2.0's
+           container steps 0 to serve a countdown clock due now (the bus's interval 0): a
+           network node takes it as no step at all, with a warning (lsbus_node.h) */
+        return ST(lsnode_zero_step(comp, eventHandlingNeeded, terminateSimulation, earlyReturn,
+                                   lastSuccessfulTime));
 #endif
     const Status status = core_do_step(comp, "fmi3DoStep", currentCommunicationPoint, communicationStepSize);
     /* the FMU handles its events (a sample, an end stop) inside the step */
     *eventHandlingNeeded = fmi3False;
+#ifdef MODEL_LSBUS
+    /* a triggered Tx_Clock's tick reached: fmi-ls-bus 1.0, 4____network_abstraction.adoc,
+       "Triggered Tx Clocks" (at the step's end, never by an early return) */
+    *eventHandlingNeeded = status <= Warning && lsnode_event_needed(comp);
+#endif
     *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;
     *lastSuccessfulTime = comp->v.time;

@@ -48,11 +48,41 @@ class NodeError(Exception):
     pass
 
 
+TX_CLOCK_FORMS = ("periodic", "triggered")
+
+
+def _variant_root(path, root):
+    """A variant's node file (<LsBusNode variantOf="<node file>" name= guid= txClock=
+    description=>): the node file it names with those attributes replaced, so that the
+    variables are declared once (the triggered Tx clock form of a node, see read_spec)."""
+    base_path = os.path.join(os.path.dirname(path), root.get("variantOf"))
+    try:
+        base = ET.parse(base_path).getroot()
+    except (OSError, ET.ParseError) as e:
+        raise NodeError(f"{path}: variantOf=\"{root.get('variantOf')}\": {e}") from None
+    if base.get("variantOf"):
+        raise NodeError(f"{path}: variantOf names {base_path}, itself a variant")
+    for k, v in root.attrib.items():
+        if k != "variantOf":
+            base.set(k, v)
+    return base
+
+
 def read_spec(path):
+    """The node file: its attributes, received inputs and own variables. txClock= (default
+    periodic) is the Tx clock's form: "periodic", an input time-based clock ticking every
+    txInterval (fmi-ls-bus 1.0, 4____network_abstraction.adoc, "Time-based Tx Clocks"), or
+    "triggered", an output triggered clock the node activates at those same ticks, signalled
+    by eventHandlingNeeded of fmi3DoStep and nextEventTime ("Triggered Tx Clocks")."""
     root = ET.parse(path).getroot()
     if root.tag != "LsBusNode":
         raise NodeError(f"{path}: the root element is <{root.tag}>, expected <LsBusNode>")
+    if root.get("variantOf"):
+        root = _variant_root(path, root)
     spec = {k: root.get(k) for k in ("name", "base", "guid", "terminal", "txInterval", "description")}
+    spec["txClock"] = root.get("txClock", "periodic")
+    if spec["txClock"] not in TX_CLOCK_FORMS:
+        raise NodeError(f"{path}: txClock=\"{spec['txClock']}\" is none of {', '.join(TX_CLOCK_FORMS)}")
     for k in ("name", "guid", "terminal", "txInterval", "description"):
         if not spec[k]:
             raise NodeError(f"{path}: <LsBusNode> has no {k}=")
@@ -157,7 +187,9 @@ def write_header(spec_path, xml_path, out_h):
         lines.append(f"#define LSBUS_VR_{m.upper()} {vr[m]}u   /* {spec['terminal']}.{m} */")
     lines += [f"#define LSBUS_MAX_SIZE {MAX_SIZE}   /* maxSize of Rx_Data and Tx_Data */",
               f"#define LSBUS_TX_INTERVAL {gen_vars.c_double(repr(spec['txInterval']))}   "
-              "/* s, Tx_Clock's intervalDecimal */", "", "#endif", ""]
+              "/* s, the Tx ticks' interval */",
+              f"#define LSBUS_TX_TRIGGERED {int(spec['txClock'] == 'triggered')}   "
+              "/* 1: Tx_Clock is an output triggered clock (read_spec) */", "", "#endif", ""]
     with open(out_h, "w", encoding="utf-8") as f:
         f.write("\n".join(lines))
 
@@ -190,6 +222,12 @@ def extend_fmi3(md3, spec_path, xml_path, tree):
         "Rx_Clock": "active when the bus has operations for this node (triggered)",
         "Tx_Clock": f"the node's send cycle, periodic every {spec['txInterval']:g} s (the DBC's "
                     "GenMsgCycleTime); the importer activates it"}
+    triggered = spec["txClock"] == "triggered"
+    if triggered:
+        desc["Tx_Clock"] = (f"the node's send cycle, every {spec['txInterval']:g} s from the start (the DBC's "
+                            "GenMsgCycleTime): a triggered output clock, active in the Event Mode at a tick, "
+                            "which fmi3DoStep signals by eventHandlingNeeded (and fmi3UpdateDiscreteStates "
+                            "announces as nextEventTime); read it with fmi3GetClock")
     mv.append(_el("Binary", {
         "name": f"{t}.Rx_Data", "valueReference": str(vr["Rx_Data"]), "description": desc["Rx_Data"],
         "causality": "input", "variability": "discrete", "mimeType": MIME, "maxSize": str(MAX_SIZE),
@@ -203,14 +241,18 @@ def extend_fmi3(md3, spec_path, xml_path, tree):
     mv.append(_el("Clock", {
         "name": f"{t}.Rx_Clock", "valueReference": str(vr["Rx_Clock"]), "description": desc["Rx_Clock"],
         "causality": "input", "variability": "discrete", "intervalVariability": "triggered"}))
-    mv.append(_el("Clock", {
-        "name": f"{t}.Tx_Clock", "valueReference": str(vr["Tx_Clock"]), "description": desc["Tx_Clock"],
-        "causality": "input", "variability": "discrete", "intervalVariability": "constant",
-        "intervalDecimal": repr(spec["txInterval"])}, "\n  "))
+    # fmi-ls-bus 1.0, 4____network_abstraction.adoc, "Time-based Tx Clocks" / "Triggered Tx Clocks"
+    tx = ({"causality": "output", "variability": "discrete", "intervalVariability": "triggered"} if triggered else
+          {"causality": "input", "variability": "discrete", "intervalVariability": "constant",
+           "intervalDecimal": repr(spec["txInterval"])})
+    mv.append(_el("Clock", {"name": f"{t}.Tx_Clock", "valueReference": str(vr["Tx_Clock"]),
+                            "description": desc["Tx_Clock"], **tx}, "\n  "))
     ms = md3.find("ModelStructure")
     first_other = next((i for i, e in enumerate(ms) if e.tag != "Output"), len(ms))
     out = _el("Output", {"valueReference": str(vr["Tx_Data"]), "dependencies": str(vr["Rx_Data"])})
     ms.insert(first_other, out)
+    if triggered:     # FMI 3.0.2, 2.4.8 <Output>: every output, output clocks too; its activation: time only
+        ms.insert(first_other + 1, _el("Output", {"valueReference": str(vr["Tx_Clock"]), "dependencies": ""}))
     ms[-1].tail = "\n  "
 
     ti = ET.Element("fmiTerminalsAndIcons", {"fmiVersion": "3.0"})

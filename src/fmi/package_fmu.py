@@ -743,8 +743,11 @@ def described_by(xml, lsbus, root):
     if not lsbus:
         return [xml]
     md = os.path.join(root, "modelDescription")
+    nodes = os.path.join(md, "lsbus")          # a variant's node file names another (lsbus_node.read_spec)
+    node_files = sorted(os.path.join(nodes, f) for f in os.listdir(nodes) if f.endswith(".xml")) \
+        if os.path.isdir(nodes) else []
     return [lsbus, os.path.join(root, "src", "fmi", "lsbus_node.py")] + sorted(
-        os.path.join(md, f) for f in os.listdir(md) if f.endswith(".xml"))
+        os.path.join(md, f) for f in os.listdir(md) if f.endswith(".xml")) + node_files
 
 
 def add_binaries(tree, name, platform_dirs, fmi_version="2", inputs=(), root=""):

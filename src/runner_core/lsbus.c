@@ -362,9 +362,11 @@ static int bus_send(ac_lsbus *n) {
 /* --- the nodes --- */
 
 /* Network._node_event: one Event Mode of node i: its Float64 inputs (inputs), its
- * clocks (the Tx clock if ticking, the Rx clock if data arrived), Rx_Data,
- * fmi3UpdateDiscreteStates while it asks, Tx_Data copied into its bus terminal's
- * batch (ticking) */
+ * clocks (the Tx clock if ticking, the Rx clock if data arrived), Rx_Data, a triggered
+ * output Tx clock read (fmi3GetClock), Tx_Data of an active Tx clock copied into its bus
+ * terminal's batch while the clock is active, then fmi3UpdateDiscreteStates while it asks
+ * (FMI 3.0.2, 2.2.8 "Getting and Setting Variable Values", 2.3: the update ends the
+ * activation) */
 static int node_event(ac_lsbus *n, int i, int ticking, int inputs) {
     ac_ls_fmu *f = &n->fmus[i];
     ac_ls_terminal *q = &f->terms[0];
@@ -387,17 +389,23 @@ static int node_event(ac_lsbus *n, int i, int ticking, int inputs) {
         CALL(n, i, "fmi3SetBinary", f->setBinary(f->instance, &q->rx_data, 1, &size, &data, 1));
         q->len = 0;
     }
-    TRY(settle(n, i));
-    if (!ticking)
-        return 0;
-    size_t size = 0;
-    fmi3Binary data = NULL;
-    CALL(n, i, "fmi3GetBinary", f->getBinary(f->instance, &q->tx_data, 1, &size, &data, 1));
-    if (size && !data)               /* the FMU's own error: refused, never read */
-        return refuse(n, i, "fmi3GetBinary gave a NULL value of size > 0");
-    if (!size || q->peer < 0)        /* zero-size Tx_Data: no Rx clock (4____network_abstraction.adoc) */
-        return 0;
-    return append(n, bus_index(n), &n->fmus[bus_index(n)].terms[q->peer], data, size);
+    int sending = ticking;
+    if (q->tx_output) {              /* fmi-ls-bus 1.0, "Triggered Tx Clocks" */
+        fmi3Clock active = fmi3ClockInactive;
+        CALL(n, i, "fmi3GetClock", f->getClock(f->instance, &q->tx_clock, 1, &active));
+        sending = sending || active;
+    }
+    if (sending) {
+        size_t size = 0;
+        fmi3Binary data = NULL;
+        CALL(n, i, "fmi3GetBinary", f->getBinary(f->instance, &q->tx_data, 1, &size, &data, 1));
+        if (size && !data)           /* the FMU's own error: refused, never read */
+            return refuse(n, i, "fmi3GetBinary gave a NULL value of size > 0");
+        /* zero-size Tx_Data: no Rx clock (4____network_abstraction.adoc); copied before the update */
+        if (size && q->peer >= 0)
+            TRY(append(n, bus_index(n), &n->fmus[bus_index(n)].terms[q->peer], data, size));
+    }
+    return settle(n, i);
 }
 
 /* Network._instant: every event at n->t, in the order of lsbus.py's docstring */
@@ -408,9 +416,12 @@ static int instant(ac_lsbus *n) {
     for (int i = 0; i < n->n_nodes; i++) {            /* 2. the nodes in their order */
         ac_ls_fmu *f = &n->fmus[i];
         const int ticking = ticks_at(&f->terms[0], n->t0, n->t);
-        if (!ticking && !f->terms[0].seq && f->mode != AC_LS_EVENT)
+        /* FMI 3.0.2, 4.2, fmi3EnterEventMode: after eventHandlingNeeded or at its nextEventTime */
+        const int woke = f->flagged || f->next_event <= n->t + EPS;
+        f->flagged = 0;
+        if (!ticking && !f->terms[0].seq && !woke && f->mode != AC_LS_EVENT)
             continue;
-        TRY(node_event(n, i, ticking, ticking || f->mode == AC_LS_EVENT));
+        TRY(node_event(n, i, ticking, ticking || woke || f->mode == AC_LS_EVENT));
     }
     int batch = 0;                                    /* 3. the instant's Tx_Data to the bus */
     for (int k = 0; k < n->fmus[bus].n_terms; k++)
@@ -449,6 +460,10 @@ static double next_point(const ac_lsbus *n, double stop) {
                 const double tk = next_tick(q, n->t0, n->t);
                 t_next = tk < t_next ? tk : t_next;
             }
+            /* a triggered output Tx clock's next tick, announced as nextEventTime */
+            const double te = n->fmus[i].next_event;
+            if (q->tx_output && te > n->t + EPS && te < t_next)
+                t_next = te;
         }
     const ac_ls_fmu *b = &n->fmus[bus_index(n)];
     if (b->next_event > n->t + EPS && b->next_event < t_next)
@@ -474,6 +489,8 @@ static int step_all(ac_lsbus *n, double t_next) {
             return refuse(n, i, "asked to terminate the simulation");
         if (i == bus_index(n) && event)
             n->bus_flagged = 1;
+        else if (event)
+            f->flagged = 1;
     }
     n->t = t_next;
     return 0;

@@ -34,6 +34,7 @@ typedef struct {
     fmi3ValueReference rx_data, tx_data, rx_clock, tx_clock;
     double period, shift;
     int countdown;                  /* 1: the Tx clock is a countdown clock (read with fmi3GetIntervalDecimal) */
+    int tx_output;                  /* 1: the Tx clock is a triggered output clock (read with fmi3GetClock) */
     int peer;                       /* a node's terminal: its bus terminal's index; a bus terminal: its node's, -1 none */
     /* a bus countdown tick announced (Network.bus_ticks): its time and its place in the
      * dict's insertion order (seq 0: none) */
@@ -55,6 +56,7 @@ typedef struct {
     fmi3SetClockTYPE *setClock;
     fmi3SetBinaryTYPE *setBinary;
     fmi3GetBinaryTYPE *getBinary;
+    fmi3GetClockTYPE *getClock;
     fmi3GetIntervalDecimalTYPE *getIntervalDecimal;
     fmi3SetFloat64TYPE *setFloat64;
     fmi3GetFloat64TYPE *getFloat64;
@@ -64,6 +66,7 @@ typedef struct {
     int mode, need;
     double next_event;              /* nextEventTime of its last update, INFINITY: none */
     long n_events;                  /* Event Mode entries (fmi3EnterEventMode) */
+    int flagged;                    /* a node's last fmi3DoStep returned eventHandlingNeeded */
 } ac_ls_fmu;
 
 /* an input set at the node's Tx ticks: the plant's output (src), or, src NULL, another

@@ -12,6 +12,16 @@ from artibus.base import ArtibusError
 from artibus.bench.rules import ssv_value
 from artibus.bench.ssd import MAPPINGS, NS, _number, map_transformation
 from artibus.bench.units import ssp_units
+from artibus.bench.versions import parameter_root
+
+
+def member_root(ssp, ref, file):
+    """parameter_root of the member ``ref`` of the .ssp ``ssp`` (``file`` names the reference)."""
+    with zipfile.ZipFile(ssp) as z:
+        if ref not in z.namelist():
+            raise ArtibusError(f"{file}: \"{ref}\" is not in the .ssp")
+        data = z.read(ref)
+    return parameter_root(data, f"{ssp}/{ref}")
 
 
 @dataclass
@@ -22,18 +32,18 @@ class Pack:
     units: dict                    # the .ssd's own unit definitions (artibus.bench.units.ssp_units)
 
 
-def bound_values(pack, element, xml_element, what, origins=None, units=None):
-    """The values {name: value, as its file types it} the ParameterBindings of ``element``
-    (FMPy's Component or System of the .ssp ``pack``; ``xml_element``: its lxml element) bind,
-    later bindings over earlier ones; ``what`` names it in messages.
+def bound_values(pack, xml_element, what, origins=None, units=None):
+    """The values {name: value, as its file types it} the ParameterBindings of ``xml_element``
+    (a Component or System of the .ssp ``pack``) bind, later bindings over earlier ones;
+    ``what`` names it in messages.
     origins: filled with {name: where its value comes from (file:line, mapping)};
     units: with {name: (unit, the file's unit definitions, a mapping's
     LinearTransformation to apply after the conversion or None, origin)} of
     the values given with a unit (converted to the FMU's unit at the end)."""
     values = {}
     xml_bindings = xml_element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS)
-    for b, xb in zip(element.parameterBindings, xml_bindings):
-        prefix = b.prefix or ""
+    for xb in xml_bindings:
+        prefix = xb.get("prefix") or ""
         source, given, lines = {}, {}, {}
         file = f"{pack.ssp}/{xb.get('source')}" if xb.get("source") else pack.where
         if xb.get("source"):
@@ -46,7 +56,7 @@ def bound_values(pack, element, xml_element, what, origins=None, units=None):
             m = xb.find("ssd:ParameterMapping", NS)
             suffix = (f" mapped by {pack.ssp}/{m.get('source')}" if m.get("source")
                       else f" mapped at {pack.where}:{m.sourceline}")
-        for px in pset_xml:          # (FMPy's reader has validated them; it drops SSP 2.0's types)
+        for px in pset_xml:          # (read_ssd has validated them: parameter_root)
             defs = {**pack.units, **ssp_units(px, file)}
             for q in px.iterfind("ssv:Parameters/ssv:Parameter", NS):
                 name = prefix + q.get("name")
@@ -85,7 +95,7 @@ def mapped(pack, source, mapping, what, given=()):
         file, root_m = pack.where, mapping.find("ssm:ParameterMapping", NS)
         entries = [] if root_m is None else root_m.findall("ssm:MappingEntry", NS)
     else:
-        file = f"{pack.ssp}/{ref}"    # there: FMPy's reader has read and validated it
+        file = f"{pack.ssp}/{ref}"    # there: read_ssd has validated it (parameter_root)
         with zipfile.ZipFile(pack.ssp) as z:
             entries = etree.fromstring(z.read(ref)).findall("ssm:MappingEntry", NS)
     out, then = {}, {}

@@ -37,13 +37,16 @@ def read_parameters(ssv, fmu=None, converted=None, keep_units=False):
     unit, converted value, the variable's unit)} of those converted). Without
     an FMU a value with a unit is the number given (``keep_units``: a
     Quantity, converted where the variable is known, as ``artibus run --ssv``)."""
-    from lxml import etree
     from artibus.bench.units import Quantity, declared_unit, ssp_units, with_unit
+    from artibus.bench.versions import parameter_root
     path = find_ssv(ssv)
     try:
-        pset = read_ssv(str(path), validate=True)
-        root = etree.parse(str(path)).getroot()
-    except Exception as e:  # lxml / XSD errors carry the line
+        # version="2.0" on SSP 1.0 content (OMSimulator 3.x): read as 1.0, with a warning
+        root = parameter_root(path.read_bytes(), str(path), "ParameterSet")
+        pset = read_ssv(str(path), validate=False)
+    except ArtibusError as e:
+        raise ArtibusError(f"{e} (not a valid SSP parameter-value file)") from None
+    except Exception as e:  # lxml errors carry the line
         raise ArtibusError(f"{path}: not a valid SSP parameter-value file: {e}") from None
     defs = ssp_units(root, str(path))
     # each value's line, by its name (the last of a name is the one that counts, as in FMPy's list)

@@ -182,7 +182,7 @@ def artibus_specific(ssp, bench=None):
             for r in etree.fromstring(z.read(f"{VARIANT_DIR}/{n}.ssv")).iterfind(f".//artibus:{REBIND}", NS):
                 out.append((f"variant {n} rebinds {r.get('from')} to {r.get('to')}",
                             "binds the parameter set the .ssd names"))
-    if bench.read_as == "2.0":      # (version="2.0" on SSP 1.0 content is read as SSP 1.0: artibus.bench.ssp._version)
+    if bench.read_as == "2.0":      # (version="2.0" on SSP 1.0 content is read as SSP 1.0: artibus.bench.versions.ssd_version)
         out.append(("an SSP 2.0 system structure (its FMI-LS-BUS network: ssc:Binary and ssc:Clock connectors, "
                     "artibus.bench.ssp2)", "reads SSP 1.0 only (ecos, libcosim, fmpy.ssp): not this bench; an "
                     "SSP 2.0 master with FMI 3.0 clocks and Event Mode runs its network"))

@@ -13,7 +13,8 @@ variants, later ones winning), typed as the FMU declares the variable, in the
 FMU variable's own unit. The components, connectors, connections (with their
 transformations), units and annotations are those of the bench; the .ssv and
 .ssm files and variants/ are left out (resolved); the FMUs and every other
-resource stay. Each component's communication step is written where the Open
+resource stay, but a file a String parameter names goes into the FMU that reads
+it, the value its bare name (_files_into_fmus). Each component's communication step is written where the Open
 Simulation Platform's libcosim reads it (an ``osp:StepSizeHint`` annotation,
 and the base step as the DefaultExperiment's ``osp:FixedStepAlgorithm``),
 besides our own annotation. The pack is validated against the SSP 1.0 XSDs
@@ -132,8 +133,6 @@ def pack_portable(bench, variants=None, out=None):
     """The bench (a name or an .ssp) with its variants resolved into a portable
     pack (see the module's docstring), written to ``out`` (default
     portable_path). Returns its path."""
-    from artibus.bench.names import expand_all
-    from artibus.files import atomic_path
     src = ssp_mod.ssp_path(bench)
     variants = list(variants or [])
     b = ssp_mod.read(src)
@@ -146,9 +145,21 @@ def pack_portable(bench, variants=None, out=None):
                  and not n.startswith(f"{ssp_mod.VARIANT_DIR}/")}
     files = {n: integer_view(data) if n.endswith(".fmu") else data for n, data in files.items()}
     where = f"{src}/SystemStructure.ssd"
-    values = {p: dict(c.parameters) for p, c in b.components.items()}
-    overrides = ssp_mod.variant_overrides(src, variants)
     variables = {p: mds[c.source] for p, c in b.components.items()}
+    values = _values(b, ssp_mod.variant_overrides(src, variants), variables, where)
+    _portable_or_refused(b, where)
+    _files_into_fmus(b, values, files)
+    _rewrite_ssd(root, b, values, variables, steps, ssp_mod.variant_stop_time(src, variants))
+    ssd = etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+    return _write(Path(out) if out is not None else portable_path(bench, variants), bench, ssd, files)
+
+
+def _values(bench, overrides, variables, where):
+    """{component path: {variable: value}}: the values our runner resolves for each component
+    (its bindings, files, mappings, system-level bindings), the variants' ``overrides`` on top
+    (array names expanded: artibus.bench.names.expand_all)"""
+    from artibus.bench.names import expand_all
+    values = {p: dict(c.parameters) for p, c in bench.components.items()}
 
     def variables_of(full):
         comp = full.split("[", 1)[0].rpartition(".")[0]
@@ -158,6 +169,11 @@ def pack_portable(bench, variants=None, out=None):
         if comp not in values:
             raise ArtibusError(f"--variant: parameter '{full}': no component '{comp}' in {where}")
         values[comp][var] = value
+    return values
+
+
+def _portable_or_refused(b, where):
+    """an ArtibusError for a bench no other master runs: SSP 2.0 (an FMI-LS-BUS network), CAN routing"""
     if b.version != "1.0":
         raise ArtibusError(f"{where}: an SSP {b.version} system structure (an FMI-LS-BUS network, artibus.bench.ssp2): "
                            "the other masters (ecos, libcosim, fmpy.ssp) read SSP 1.0 only; a portable pack holds "
@@ -166,8 +182,12 @@ def pack_portable(bench, variants=None, out=None):
         raise ArtibusError(f"{where}: the bench routes connections over CAN (artibus.can, an annotation of "
                            f"ours): no other master runs that network; a portable pack holds CAN-free benches")
 
-    # the SSD: system-level bindings out (read() gave their values to the components),
-    # each component's bindings replaced by its one inline set
+
+def _rewrite_ssd(root, b, values, variables, steps, stop):
+    """The .ssd's tree made portable in place: system-level bindings out (read() gave their
+    values to the components), each component's bindings replaced by its one inline set, the
+    OSP step-size hints and base step, the variants' stop time, the prefixes other masters'
+    readers expect declared once at the top (libcosim reads "ssd:", "ssv:" and "osp:" as written)"""
     for bindings in root.iterfind(".//ssd:System/ssd:ParameterBindings", NS):
         bindings.getparent().remove(bindings)
 
@@ -189,16 +209,15 @@ def pack_portable(bench, variants=None, out=None):
             de = etree.SubElement(root, f"{{{SSD}}}DefaultExperiment")
         _osp_annotation(de, "Algorithm").append(etree.Element(f"{{{OSP_NS}}}FixedStepAlgorithm",
                                                                baseStepSize=repr(base)))
-    stop = ssp_mod.variant_stop_time(src, variants)
     if stop is not None:
         root.find("ssd:DefaultExperiment", NS).set("stopTime", repr(stop))
-    # the prefixes other masters' readers expect, declared once at the top (libcosim
-    # reads "ssd:", "ssv:" and "osp:" as they are written)
     etree.cleanup_namespaces(root, top_nsmap={"ssd": SSD, "ssc": SSC, "ssv": SSV, "osp": OSP_NS})
     etree.indent(root, space="  ")
-    ssd = etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
 
-    out = Path(out) if out is not None else portable_path(bench, variants)
+
+def _write(out, bench, ssd, files):
+    """The pack written to ``out`` (a temporary name, renamed), read back before it is handed out"""
+    from artibus.files import atomic_path
     out.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(out, fsync=False) as tmp:
         with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
@@ -210,6 +229,44 @@ def pack_portable(bench, variants=None, out=None):
         except ArtibusError as e:
             raise ArtibusError(f"{out}: the portable pack of {bench} is not valid: {e}") from None
     return out
+
+
+def _files_into_fmus(bench, values, files):
+    """Each file a String parameter names in the pack ("resources/<file>": a road CSV, a DBC) moved
+    into the FMU of the component that reads it, at resources/<file> inside that FMU, and the value
+    made the bare <file>. Why: other masters hand the value to the FMU as written, and our FMUs
+    read a relative file name in their own resources folder (FMI 2.0.4 2.3 and FMI 3.0 2.5 "FMU
+    Distribution": its path given to fmi2Instantiate/fmi3Instantiate): "resources/<file>" was
+    looked for in the FMU's resources/resources/ (issue 40: ecos ran Bus36m_Slalom with the
+    Driver in its error state and the bus driving straight). Our runner finds the bare name the same way. ``values`` ({path:
+    {var: value}}) and ``files`` ({member: bytes}) are changed in place."""
+    extra, moved = {}, set()
+    for path, vals in values.items():
+        for var, value in vals.items():
+            if isinstance(value, str) and value.startswith("resources/") and value in files \
+                    and not value.endswith(".fmu"):
+                bare = value[len("resources/"):]
+                extra.setdefault(bench.components[path].source, {})[bare] = files[value]
+                vals[var] = bare
+                moved.add(value)
+    for source, added in extra.items():
+        files[source] = _with_resources(files[source], added)
+    for ref in moved:
+        del files[ref]
+
+
+def _with_resources(fmu, added):
+    """The FMU ``fmu`` (bytes) with {name: bytes} written as resources/<name> (in place of any
+    file of that name there); every other entry as it was."""
+    import io
+    out = io.BytesIO()
+    with zipfile.ZipFile(io.BytesIO(fmu)) as z, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as o:
+        for info in z.infolist():
+            if info.filename not in {f"resources/{n}" for n in added}:
+                o.writestr(info, z.read(info))
+        for name, data in sorted(added.items()):
+            o.writestr(f"resources/{name}", data)
+    return out.getvalue()
 
 
 def _rewrite_component(el, values, md, step):

@@ -25,10 +25,11 @@ every value is checked against its FMU and every input has one source, by the
 rule of SSP 1.0 and 2.0 benches alike (artibus.bench.rules), so that `artibus
 check` refuses what `artibus run` refuses.
 
-Reading uses FMPy's SSD reader (validated against the SSP XSDs FMPy ships; an SSP 2.0
-.ssd against the SSP 2.0 XSDs, its FMI-LS-BUS network left out: artibus.bench.ssp2);
-what it leaves out (default experiment, per-component step sizes in our
-annotation, connector units) is read here with lxml from the same file.
+Reading validates the .ssd against the SSP XSDs FMPy ships (an SSP 2.0 .ssd against the
+SSP 2.0 XSDs, its FMI-LS-BUS network left out: artibus.bench.ssp2.read_ssd) and the parameter
+files it binds (artibus.bench.versions.parameter_root), then reads that one lxml tree in small
+steps (read, _Reading): systems, components, connectors, bindings, connections, units, each
+record keeping its source line.
 """
 import math
 import tempfile
@@ -39,13 +40,14 @@ from pathlib import Path
 from lxml import etree
 
 from artibus.base import ROOT, ArtibusError, fmu_dir, parse_real
-from artibus.bench.bindings import Pack, bound_values
+from artibus.bench.bindings import Pack, bound_values, parameter_root
 from artibus.bench.fmi import build_of, fmi_choice, pack_file
 from artibus.bench.ssp2 import clocked   # an FMI-LS-BUS component keeps its FMI 3.0 build
 from artibus.bench.ssd import (MAPPINGS, NS, _component_sources, _compose, _depth,  # noqa: F401
                                _number, origin, _sources_inside_components, map_transformation,
                                model_description)
 from artibus.bench.packs import pack_unpacked, write_pack
+from artibus.bench.versions import ssd_version
 from artibus.bench.rules import bind_component, one_source
 from artibus.bench.units import declared_unit, fmu_units, ssp_units, to_unit
 
@@ -202,7 +204,10 @@ def variant_overrides(ssp, names):
             f = Path(tmp) / f"{name}.ssv"
             f.write_bytes(z.read(f"{VARIANT_DIR}/{name}.ssv"))
             try:
-                pset = read_ssv(str(f), validate=True)
+                parameter_root(f.read_bytes(), where, "ParameterSet")    # (version="2.0": see parameter_root)
+                pset = read_ssv(str(f), validate=False)
+            except ArtibusError as e:
+                raise ArtibusError(f"{e} (not a valid SSP parameter-value file)") from None
             except Exception as e:
                 raise ArtibusError(f"{where}: not a valid SSP parameter-value file: {e}") from None
         with zipfile.ZipFile(ssp) as z:
@@ -276,7 +281,6 @@ def _rebound(ssp, old, new, where):
 class Component:
     path: str                      # e.g. "Bus" or "Sub.Bus"
     source: str                    # resources/X.fmu inside the .ssp
-    element: object                # fmpy.ssp.ssd.Component
     line: int                      # line in SystemStructure.ssd
     step: float | None = None      # communication step from our annotation
     parameters: dict = field(default_factory=dict)  # name -> value from bindings
@@ -308,7 +312,7 @@ class Bench:
     stop_time: float | None = None
     can: dict | None = None        # the CAN network: {"source" (DBC in the .ssp), "period", "line"}
     version: str = "1.0"           # the .ssd's SSP version: "2.0" may hold an FMI-LS-BUS network (ssp2)
-    read_as: str = "1.0"           # the version of its content: "1.0" for version="2.0" on SSP 1.0 content (_version)
+    read_as: str = "1.0"           # the version of its content: "1.0" for version="2.0" on SSP 1.0 content (versions.ssd_version)
     units: dict = field(default_factory=dict)   # unit -> its UnitDef (None: unknown), of the values with one
     system_values: dict = field(default_factory=dict)   # "Sub.connector" -> the value bound to a system
                                                         # connector connected to no FMU variable (SSP 1.0 5.3.5)
@@ -317,48 +321,21 @@ class Bench:
 def read(ssp):
     """A .ssp as components (with their bound parameters) and connections
     resolved through nested systems to component variables: the archive
-    checked, the .ssd read (_Reading's steps), each component's values bound
-    and each input's source checked (artibus.bench.rules)."""
-    from artibus.bench.ssp2 import read_ssd
-
+    checked, the .ssd validated and read as one lxml tree (_Reading's steps:
+    systems, components, connections, system bindings), each component's
+    values bound and each input's source checked (artibus.bench.rules)."""
     ssp = str(ssp)
     where = origin(ssp)
-    from artibus.files import check_archive
-    try:
-        with zipfile.ZipFile(ssp) as z:   # its members checked before any is read (a second .ssd, a link)
-            check_archive(z, ssp)
-            if "SystemStructure.ssd" not in z.namelist():
-                raise ArtibusError(f"{ssp}: no SystemStructure.ssd in it (not an SSP archive)")
-    except (zipfile.BadZipFile, OSError) as e:
-        raise ArtibusError(f"{ssp}: not a readable SSP archive (a zip file): {e}") from None
-    ssd, root = read_ssd(ssp, where)    # SSP 1.0, or 2.0 without its FMI-LS-BUS network (artibus.bench.ssp2)
-    with zipfile.ZipFile(ssp) as z:
-        names = set(z.namelist())
-
-    bench = Bench(name=ssd.name, file=where, components={}, connections=[], version=root.get("version"),
-                  read_as=_version(ssp, where))
-    de = root.find("ssd:DefaultExperiment", NS)
-    if de is not None:
-        bench.start_time = _number(de, "startTime", 0.0, where)
-        bench.stop_time = _number(de, "stopTime", None, where)
-
-    xml_systems = {}
-
-    def index_xml(el, prefix):
-        xml_systems[prefix] = el
-        for sub in el.findall("ssd:Elements/ssd:System", NS):
-            index_xml(sub, f"{prefix}.{sub.get('name')}" if prefix else sub.get("name"))
-
-    index_xml(root.find("ssd:System", NS), "")
-    can = root.find(f"ssd:System/ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Can", NS)
-    if can is not None:
-        bench.can = {"source": can.get("source"), "period": can.get("period"), "line": can.sourceline}
-
-    r = _Reading(Pack(ssp, where, ssp_units(root, where)), names, bench, xml_systems)
-    r.walk(ssd.system, "")
-    r.collect_edges(ssd.system)
+    root, names = _open(ssp, where)
+    bench = Bench(name=root.get("name"), file=where, components={}, connections=[], version=root.get("version"),
+                  read_as=ssd_version(ssp, where))
+    _experiment(bench, root, where)
+    bench.can = _can(root)
+    r = _Reading(Pack(ssp, where, ssp_units(root, where)), names, bench, _systems(root.find("ssd:System", NS)))
+    r.walk("")
+    r.collect_edges()
     r.connect()
-    r.system_bindings(ssd.system.name)
+    r.system_bindings(r.xml_systems[""].get("name"))
     for path, c in bench.components.items():
         bind_component(ssp, c, r.given_units[path], bench.units)
     one_source((".".join(c.start), ".".join(c.end),
@@ -367,37 +344,50 @@ def read(ssp):
     return bench
 
 
-#: SSP 1.0's connector types (SSP 1.0 5.3.2 "Connectors"); SSP 2.0 adds Float32, Int8 ... Binary, Clock
-SSP1_TYPES = {"Real", "Integer", "Boolean", "String", "Enumeration"}
-_VERSION_WARNED = set()
-
-
-def _version(ssp, where):
-    """The .ssd's SSP version as it is read (Bench.read_as): "2.0" only for a file with SSP 2.0
-    content (a connector of a type SSP 1.0 does not have: Binary, Clock, Float32, ...). OMSimulator
-    3.x writes version="2.0" on files of SSP 1.0 content in the namespaces both versions share
-    (SSP 2.0 2.2 "Version Mixing"): read as SSP 1.0, with a warning once a process. (The whole file: read_ssd's
-    view of an SSP 2.0 bench leaves its FMI-LS-BUS components out.)"""
+def _open(ssp, where):
+    """(the .ssd's validated lxml root, the .ssp's member names): the archive's members checked
+    before any is read (a second .ssd, a link); SSP 1.0, or 2.0 without its FMI-LS-BUS
+    network (artibus.bench.ssp2.read_ssd)."""
+    from artibus.bench.ssp2 import read_ssd
+    from artibus.files import check_archive
+    try:
+        with zipfile.ZipFile(ssp) as z:
+            check_archive(z, ssp)
+            if "SystemStructure.ssd" not in z.namelist():
+                raise ArtibusError(f"{ssp}: no SystemStructure.ssd in it (not an SSP archive)")
+    except (zipfile.BadZipFile, OSError) as e:
+        raise ArtibusError(f"{ssp}: not a readable SSP archive (a zip file): {e}") from None
+    root = read_ssd(ssp, where)
     with zipfile.ZipFile(ssp) as z:
-        root = etree.fromstring(z.read("SystemStructure.ssd"))
-    if root.get("version") != "2.0" or any(_connector_type(k) not in SSP1_TYPES
-                                           for k in root.iter(f"{{{NS['ssd']}}}Connector")):
-        return root.get("version")
-    if where not in _VERSION_WARNED:
-        import sys
-        _VERSION_WARNED.add(where)
-        print(f"warning: {where}:{root.sourceline}: <SystemStructureDescription version=\"2.0\">: SSP 1.0 "
-              f"content only (no connector of an SSP 2.0 type, no FMI-LS-BUS network; as OMSimulator 3.x "
-              f"writes its files): read as SSP 1.0", file=sys.stderr)
-    return "1.0"
+        return root, set(z.namelist())
 
 
-def _connector_type(connector):
-    """The local name of a Connector's type element (ssc:Real, ...), "Real" when it has none."""
-    for c in connector:
-        if isinstance(c.tag, str) and etree.QName(c).namespace == NS["ssc"]:
-            return etree.QName(c).localname
-    return "Real"
+def _experiment(bench, root, where):
+    """the DefaultExperiment's start and stop time onto ``bench`` (SSP 1.0 5.2)"""
+    de = root.find("ssd:DefaultExperiment", NS)
+    if de is not None:
+        bench.start_time = _number(de, "startTime", 0.0, where)
+        bench.stop_time = _number(de, "stopTime", None, where)
+
+
+def _can(root):
+    """the top system's CAN network (our CAN_ANNOTATION) or None"""
+    can = root.find(f"ssd:System/ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Can", NS)
+    return None if can is None else {"source": can.get("source"), "period": can.get("period"), "line": can.sourceline}
+
+
+def _systems(system, prefix="", out=None):
+    """{system path ("" the root, "Sub", "Sub.Inner"): its element} of ``system`` and its sub-systems"""
+    out = {} if out is None else out
+    out[prefix] = system
+    for sub in system.findall("ssd:Elements/ssd:System", NS):
+        _systems(sub, _join(prefix, sub.get("name")), out)
+    return out
+
+
+def _join(prefix, name):
+    """a hierarchical name: ``name`` inside the system ``prefix`` ("" the root)"""
+    return f"{prefix}.{name}" if prefix else name
 
 
 def _end(element, connector):
@@ -406,96 +396,120 @@ def _end(element, connector):
     return f"{element}.{connector}" if element else connector
 
 
+def _connectors(element, kind=None):
+    """the names of the Connectors an element (Component or System) declares, of ``kind`` if given"""
+    return [k.get("name") for k in element.findall("ssd:Connectors/ssd:Connector", NS)
+            if kind is None or k.get("kind") == kind]
+
+
+def _step(xml_el, path, where):
+    """a component's communication step from our ANNOTATION (<artibus:Simulation stepSize=>), or None"""
+    ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
+    if ann is None or not ann.get("stepSize"):
+        return None
+    step = _number(ann, "stepSize", None, where)
+    if not step > 0:
+        raise ArtibusError(f"{where}:{ann.sourceline}: Component '{path}': "
+                           f"stepSize = {ann.get('stepSize')} must be > 0")
+    return step
+
+
+def _transformation(xc, label, where):
+    """(factor, offset, mapping) of a Connection: its ssc:LinearTransformation (SSP 1.0 5.3.7; FMPy's
+    reader looks for it in the wrong namespace) and its mapping transformation (ssd.map_transformation)"""
+    lt = xc.find("ssc:LinearTransformation", NS)
+    factor = _number(lt, "factor", 1.0, where) if lt is not None else 1.0
+    offset = _number(lt, "offset", 0.0, where) if lt is not None else 0.0
+    return factor, offset, map_transformation(xc, label)
+
+
+def _route(xc):
+    """a Connection's CAN route (our CAN_ANNOTATION: <artibus:Route message= signal=>) or None"""
+    route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
+    if route is None:
+        return None
+    return {"message": route.get("message"), "signal": route.get("signal"), "line": route.sourceline}
+
+
 @dataclass
 class _Reading:
-    """read's steps over one .ssp and what they build up: the components with the values
+    """read's steps over one .ssd tree and what they build up: the components with the values
     bound on them (walk), the connections resolved through the systems' connectors to
     component variables (collect_edges, connect), the values bound at system level
     (system_bindings)"""
     pack: Pack                     # the .ssp (artibus.bench.bindings)
     names: set                     # the .ssp's members
     bench: Bench                   # being filled
-    xml_systems: dict              # system path ("" the root, "Sub", "Sub.Inner") -> its lxml element
+    xml_systems: dict              # system path ("" the root, "Sub", "Sub.Inner") -> its lxml element (_systems)
     inherited: list = field(default_factory=list)    # (prefix, values, origins, units, xml) of each system
     given_units: dict = field(default_factory=dict)  # component path -> {var: (unit, defs, then, origin)}
     edges: list = field(default_factory=list)        # (a, b, factor, offset, line, route, mapping)
     outgoing: dict = field(default_factory=dict)     # node -> [(b, factor, offset, line, route, mapping)]
 
-    def walk(self, system, prefix):
-        """the components of ``system`` (FMPy's) and its sub-systems, with the values bound on
-        them; the system's own bindings kept for system_bindings"""
-        from fmpy.ssp.ssd import Component as SsdComponent, System
-        where, xml = self.pack.where, self.xml_systems[prefix]
+    def walk(self, prefix):
+        """the components of the system ``prefix`` and of its sub-systems (its components
+        first, then each sub-system's, in the file's order), with the values bound on them;
+        the system's own bindings kept for system_bindings"""
+        xml = self.xml_systems[prefix]
         sys_origins, sys_units = {}, {}
-        self.inherited.append((prefix, bound_values(self.pack, system, xml, f"System '{system.name}'", sys_origins,
-                                                    sys_units), sys_origins, sys_units, xml))
-        for el in system.elements:
-            path = f"{prefix}.{el.name}" if prefix else el.name
-            if isinstance(el, SsdComponent):
-                xml_el = xml.find(f"ssd:Elements/ssd:Component[@name='{el.name}']", NS)
-                if el.source not in self.names:
-                    raise ArtibusError(f"{where}:{xml_el.sourceline}: Component '{path}': source "
-                                       f"\"{el.source}\" is not in the .ssp")
-                c = Component(path=path, source=el.source, element=el, line=xml_el.sourceline)
-                self.given_units[path] = {}
-                c.parameters = bound_values(self.pack, el, xml_el, f"Component '{path}'", c.origins,
-                                            self.given_units[path])
-                c.outputs = [k.name for k in el.connectors if k.kind == "output"]
-                c.connectors = [k.name for k in el.connectors]
-                ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
-                if ann is not None and ann.get("stepSize"):
-                    c.step = _number(ann, "stepSize", None, where)
-                    if not c.step > 0:
-                        raise ArtibusError(f"{where}:{ann.sourceline}: Component '{path}': "
-                                           f"stepSize = {ann.get('stepSize')} must be > 0")
-                self.bench.components[path] = c
-            elif isinstance(el, System):
-                self.walk(el, path)
+        values = bound_values(self.pack, xml, f"System '{xml.get('name')}'", sys_origins, sys_units)
+        self.inherited.append((prefix, values, sys_origins, sys_units, xml))
+        for el in xml.findall("ssd:Elements/ssd:Component", NS):
+            self.component(el, _join(prefix, el.get("name")))
+        for el in xml.findall("ssd:Elements/ssd:System", NS):
+            self.walk(_join(prefix, el.get("name")))
+
+    def component(self, xml_el, path):
+        """one Component: its source in the .ssp, its connectors, step and bound values"""
+        where, source = self.pack.where, xml_el.get("source")
+        if source not in self.names:
+            raise ArtibusError(f"{where}:{xml_el.sourceline}: Component '{path}': source "
+                               f"\"{source}\" is not in the .ssp")
+        c = Component(path=path, source=source, line=xml_el.sourceline)
+        self.given_units[path] = {}
+        c.parameters = bound_values(self.pack, xml_el, f"Component '{path}'", c.origins, self.given_units[path])
+        c.outputs = _connectors(xml_el, "output")
+        c.connectors = _connectors(xml_el)
+        c.step = _step(xml_el, path, where)
+        self.bench.components[path] = c
 
     def _node(self, prefix, element, connector):
         if not element:            # a connector of the system itself (no startElement/endElement, or "" as
                                    # OMSimulator writes it: SSP 1.0 5.3.7, the enclosing system)
             return ("sys", prefix, connector)
-        path = f"{prefix}.{element}" if prefix else element
+        path = _join(prefix, element)
         if path in self.bench.components:
             return ("comp", path, connector)
         return ("sys", path, connector)
 
-    def _raw(self, system, prefix=""):
-        """(system prefix, FMPy's Connection, its lxml element) of every system's connections"""
-        from fmpy.ssp.ssd import System
-        xml_conns = self.xml_systems[prefix].findall("ssd:Connections/ssd:Connection", NS)
-        yield from ((prefix, conn, xc) for conn, xc in zip(system.connections, xml_conns))
-        for el in system.elements:
-            if isinstance(el, System):
-                yield from self._raw(el, f"{prefix}.{el.name}" if prefix else el.name)
+    def _connections(self):
+        """(system prefix, Connection element) of every system's connections, a system's own
+        before its sub-systems' (the order of _systems)"""
+        for prefix, xml in self.xml_systems.items():
+            for xc in xml.findall("ssd:Connections/ssd:Connection", NS):
+                yield prefix, xc
 
-    def collect_edges(self, system):
+    def _check_end(self, n, label):
+        """an error unless node n's element exists and declares its connector"""
+        if n[0] == "sys" and n[1] not in self.xml_systems:
+            raise ArtibusError(f"{label}: no element '{n[1]}'")
+        declared = (self.bench.components[n[1]].connectors if n[0] == "comp" else _connectors(self.xml_systems[n[1]]))
+        if n[2] not in declared:
+            raise ArtibusError(f"{label}: '{n[1] or 'the system'}' declares no connector '{n[2]}'")
+
+    def collect_edges(self):
         """every connection of every system as an edge between nodes (a component's or a
         system's connector), each end checked to be declared"""
-        where, xml_systems = self.pack.where, self.xml_systems
-        for prefix, conn, xc in self._raw(system):
-            line = xc.sourceline
-            a = self._node(prefix, conn.startElement, conn.startConnector)
-            b = self._node(prefix, conn.endElement, conn.endConnector)
-            label = (f"{where}:{line}: Connection {_end(conn.startElement, conn.startConnector)}"
-                     f" -> {_end(conn.endElement, conn.endConnector)}")
+        where = self.pack.where
+        for prefix, xc in self._connections():
+            start = (xc.get("startElement"), xc.get("startConnector"))
+            end = (xc.get("endElement"), xc.get("endConnector"))
+            a, b = self._node(prefix, *start), self._node(prefix, *end)
+            label = f"{where}:{xc.sourceline}: Connection {_end(*start)} -> {_end(*end)}"
             for n in (a, b):
-                if n[0] == "sys" and n[1] not in xml_systems:
-                    raise ArtibusError(f"{label}: no element '{n[1]}'")
-                declared = (self.bench.components[n[1]].connectors if n[0] == "comp" else
-                            [k.get("name") for k in xml_systems[n[1]].findall("ssd:Connectors/ssd:Connector", NS)])
-                if n[2] not in declared:
-                    raise ArtibusError(f"{label}: '{n[1] or 'the system'}' declares no connector '{n[2]}'")
-            # (FMPy's reader looks for the transformation in the wrong namespace: read it here)
-            lt = xc.find("ssc:LinearTransformation", NS)
-            factor = _number(lt, "factor", 1.0, where) if lt is not None else 1.0
-            offset = _number(lt, "offset", 0.0, where) if lt is not None else 0.0
-            mapping = map_transformation(xc, label)
-            route = xc.find(f"ssd:Annotations/ssc:Annotation[@type='{CAN_ANNOTATION}']/artibus:Route", NS)
-            if route is not None:
-                route = {"message": route.get("message"), "signal": route.get("signal"), "line": route.sourceline}
-            self.edges.append((a, b, factor, offset, line, route, mapping))
+                self._check_end(n, label)
+            factor, offset, mapping = _transformation(xc, label, where)
+            self.edges.append((a, b, factor, offset, xc.sourceline, _route(xc), mapping))
         for a, b, f, o, line, route, mp in self.edges:
             self.outgoing.setdefault(a, []).append((b, f, o, line, route, mp))
 
@@ -518,6 +532,16 @@ class _Reading:
                 self.bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
                                                          factor=f2, offset=o2, line=l2, can=r2, mapping=mp2))
 
+    def _connector_targets(self, full):
+        """the component variables the system connector ``full`` ("Sub.connector") reaches, either
+        way along its connections; None when ``full`` is not a system connector"""
+        sys_path, _, conn = full.rpartition(".")
+        if sys_path not in self.xml_systems or conn not in _connectors(self.xml_systems[sys_path]):
+            return None
+        node = ("sys", sys_path, conn)
+        return ([(n[1], n[2]) for n, *_ in self.ends(node, 1.0, 0.0, 0, None, None, frozenset())]
+                + [(a[1], a[2]) for a, b, *_ in self.edges if b == node and a[0] == "comp"])
+
     def system_bindings(self, root_name):
         """the values bound on systems (SSP 1.0, 5.3.5): a higher level takes precedence over a
         lower one (the deepest sub-system's applied first, the root's last), a later binding
@@ -525,29 +549,30 @@ class _Reading:
         its system) is a component's variable by its hierarchical name or a system connector
         ("Sub.connector", "connector"), which applies to the component variables it is
         connected to; applied after the components' own"""
-        where, components = self.pack.where, self.bench.components
         for prefix, values, sys_origins, sys_units, xml in sorted(self.inherited, key=lambda i: -_depth(i[0])):
             for name, value in values.items():
-                full = f"{prefix}.{name}" if prefix else name
-                targets = [(p, full[len(p) + 1:]) for p in components if full.startswith(p + ".")]
-                sys_path, _, conn = full.rpartition(".")
-                if sys_path in self.xml_systems and conn in [
-                        k.get("name") for k in self.xml_systems[sys_path].findall("ssd:Connectors/ssd:Connector", NS)]:
-                    node_ = ("sys", sys_path, conn)
-                    targets += [(n[1], n[2]) for n, *_ in self.ends(node_, 1.0, 0.0, 0, None, None, frozenset())]
-                    targets += [(a[1], a[2]) for a, b, *_ in self.edges if b == node_ and a[0] == "comp"]
-                    if not targets:        # a system connector connected to no FMU: the value stays its own
-                        self.bench.system_values[full] = value
-                        continue
-                if not targets:
-                    raise ArtibusError(f"{sys_origins.get(name, where)}: parameter '{name}' = {value!r} bound at "
-                                       f"system '{prefix or root_name}': no component variable or system "
-                                       f"connector of that name (components: {', '.join(components)})")
-                for comp_path, var in dict.fromkeys(targets):
-                    c = components[comp_path]
-                    c.parameters[var] = value
-                    c.origins[var] = sys_origins.get(name, where)
-                    if name in sys_units:
-                        self.given_units[comp_path][var] = sys_units[name]
-                    else:
-                        self.given_units[comp_path].pop(var, None)
+                self._system_value(prefix, name, value, sys_origins, sys_units, root_name)
+
+    def _system_value(self, prefix, name, value, sys_origins, sys_units, root_name):
+        """one value bound at the system ``prefix`` onto the component variables it names"""
+        components = self.bench.components
+        full = _join(prefix, name)
+        targets = [(p, full[len(p) + 1:]) for p in components if full.startswith(p + ".")]
+        through = self._connector_targets(full)
+        if through is not None:
+            targets += through
+            if not targets:        # a system connector connected to no FMU: the value stays its own
+                self.bench.system_values[full] = value
+                return
+        if not targets:
+            raise ArtibusError(f"{sys_origins.get(name, self.pack.where)}: parameter '{name}' = {value!r} bound at "
+                               f"system '{prefix or root_name}': no component variable or system "
+                               f"connector of that name (components: {', '.join(components)})")
+        for comp_path, var in dict.fromkeys(targets):
+            c = components[comp_path]
+            c.parameters[var] = value
+            c.origins[var] = sys_origins.get(name, self.pack.where)
+            if name in sys_units:
+                self.given_units[comp_path][var] = sys_units[name]
+            else:
+                self.given_units[comp_path].pop(var, None)

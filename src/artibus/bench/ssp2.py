@@ -10,11 +10,12 @@ SSV and SSM schemas at once so that inline parameter sets are validated as well.
 
 What reads what:
 
-- ``read_ssd(ssp, where)``: FMPy's SSD reader for SSP 1.0 (validated against FMPy's SSP 1.0
-  XSDs); for SSP 2.0 the file validated against the SSP 2.0 XSDs, then its *plant view* read by
-  FMPy's system reader: the .ssd without the FMI-LS-BUS components (those with an ssc:Binary or
-  ssc:Clock connector) and without every connection to them. artibus.bench.ssp reads that view
-  as it reads every SSP 1.0 bench; the network is the runner's (artibus.runner.lsbus_bench).
+- ``read_ssd(ssp, where)``: the .ssd's lxml tree, SSP 1.0 validated against FMPy's SSP 1.0
+  XSDs; for SSP 2.0 the file validated against the SSP 2.0 XSDs, then its *plant view*: the
+  .ssd without the FMI-LS-BUS components (those with an ssc:Binary or ssc:Clock connector) and
+  without every connection to them; the parameter files it binds validated too. artibus.bench.ssp
+  reads that tree as it reads every SSP 1.0 bench; the network is the runner's
+  (artibus.runner.lsbus_bench).
 - ``read_network(root, where, fmu)``: the network of the LS-BUS components: the bus simulation
   FMU (its fmi-ls-manifest.xml says isBusSimulationFMU="true"), the nodes, their parameters
   (inline parameter values), the Real connections between the plant and the nodes, and the
@@ -128,31 +129,35 @@ def plant_view(root):
 
 
 def read_ssd(ssp, where):
-    """(FMPy's SystemStructureDescription, the lxml root it is read from) of the .ssp's .ssd:
-    SSP 1.0 as FMPy reads it; SSP 2.0 validated here, then its plant view"""
-    from fmpy.ssp.ssd import SystemStructureDescription, add_tree_info, handle_system
-    from fmpy.ssp.ssd import read_ssd as fmpy_read_ssd
+    """The lxml root artibus.bench.ssp reads of the .ssp's .ssd, validated: SSP 1.0 against the
+    SSP 1.0 XSDs FMPy ships; SSP 2.0 against the SSP 2.0 XSDs, then its plant view; each
+    parameter set and mapping it binds from a file against SSP 1.0's (versions.parameter_root)."""
+    from fmpy.ssp.ssd import validate_tree
     from artibus.bench.ssd import _sources_inside_components
     try:
         with zipfile.ZipFile(ssp) as z:
             root = etree.fromstring(z.read("SystemStructure.ssd"))
         if root.get("version") != "2.0":
-            return fmpy_read_ssd(ssp, validate=True), root
+            validate_tree(root, "SystemStructureDescription.xsd")
     except Exception as e:
         _sources_inside_components(ssp, where)   # the reason, where it is that
         raise ArtibusError(f"{where}: not a readable SSP system structure: {e}") from None
-    validate(root, where)
+    if root.get("version") == "2.0":
+        validate(root, where)
     _sources_inside_components(ssp, where)
-    view = plant_view(root)
-    ssd = SystemStructureDescription()
-    ssd.version, ssd.name = view.get("version"), view.get("name")
-    try:
-        ssd.system = handle_system(view.find("ssd:System", NS), filename=ssp)
-    except Exception as e:
-        raise ArtibusError(f"{where}: its FMI 2.0 part not readable as SSP 1.0: {e}") from None
-    add_tree_info(ssd.system)
-    ssd.system.parent = None
-    return ssd, view
+    view = root if root.get("version") != "2.0" else plant_view(root)
+    _parameter_files(ssp, view, where)
+    return view
+
+
+def _parameter_files(ssp, root, where):
+    """each .ssv and .ssm a ParameterBinding of ``root`` names, validated (SSP 1.0 5.3.5)"""
+    from artibus.bench.bindings import member_root
+    for b in root.iterfind(".//ssd:ParameterBinding", NS):
+        refs = [(b, b.get("source"))] + [(m, m.get("source")) for m in b.iterfind("ssd:ParameterMapping", NS)]
+        for el, ref in refs:
+            if ref is not None:
+                member_root(ssp, ref, f"{where}:{el.sourceline}: <{etree.QName(el).localname} source=\"{ref}\">")
 
 
 # ---- the network ----------------------------------------------------------------------------
@@ -472,16 +477,26 @@ def _same_number(a, b):
 
 
 def _period(net, fmus, where):
-    """the runner's tick: the nodes' time-based Tx clocks' interval, one for all"""
-    periods = {}
+    """the runner's tick: the nodes' time-based Tx clocks' interval, one for all; a node whose
+    Tx_Clock is a triggered output clock (fmi-ls-bus 1.0, "Triggered Tx Clocks") ticks itself
+    and is served within the tick (artibus.runner.lsbus), so at least one other node gives it"""
+    periods, triggered = {}, []
     for name, (term, _) in net.terminals.items():
         tx = fmus[name].variables[fmus[name].terminals[term]["Tx_Clock"]]
+        if tx.get("causality") == "output" and tx.get("intervalVariability") == "triggered":
+            triggered.append(name)
+            continue
         try:
             if tx.get("intervalVariability") in ("constant", "fixed"):
                 periods[name] = parse_real(tx.get("intervalDecimal"))
         except (TypeError, ValueError):
             pass
-    if len(set(periods.values())) != 1 or len(periods) != len(net.nodes) or not min(periods.values()) > 0:
+    if triggered and not periods:
+        raise ArtibusError(f"{where}: every node's Tx_Clock is a triggered output clock ({', '.join(triggered)}): "
+                           "the runner ticks the network with the interval of the nodes' time-based (constant or "
+                           "fixed) Tx_Clock, and none has one")
+    if len(set(periods.values())) != 1 or len(periods) + len(triggered) != len(net.nodes) \
+            or not min(periods.values()) > 0:
         raise ArtibusError(f"{where}: the nodes' Tx_Clock periods {periods or 'none'}: the runner ticks the network "
                            "with one period, every node's time-based (constant or fixed) Tx_Clock interval")
     return next(iter(periods.values()))

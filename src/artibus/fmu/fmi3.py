@@ -43,7 +43,9 @@ class Calls:
     """The FMI 3.0 calls of one Co-Simulation instance (``slave``: FMPy's FMU3Slave) and,
     with Event Mode, where it is: ``mode`` "step", "event" (before fmi3UpdateDiscreteStates)
     or "updated" (after it; ``need``: it asked for another iteration); ``next_event`` the
-    nextEventTime of the last update (inf: none)."""
+    nextEventTime of the last update (inf: none); ``on_event(t)``: None, or what handles an
+    event a step met in place of handle_event's plain Event Mode (a lone FMU's clocks,
+    artibus.fmu.simulate)."""
     fmi = 3
 
     def __init__(self, model, unzip_dir, instance_name):
@@ -54,6 +56,7 @@ class Calls:
         self.event_mode_used = False
         self.messages = []                 # (status, category, message) of each log message
         self.mode, self.need, self.next_event, self.n_events = "init", False, math.inf, 0
+        self.on_event = None
 
     def instantiate(self, log, logging=False, event_mode=False):
         """fmi3InstantiateCoSimulation; with ``event_mode`` (eventModeUsed) the FMU's events
@@ -112,7 +115,7 @@ class Calls:
         if terminate:
             return last
         if event and self.event_mode_used:
-            self.handle_event()
+            self.on_event(t + h) if self.on_event is not None else self.handle_event()
         return None
 
     def handle_event(self):

@@ -100,6 +100,25 @@ _ELEMENT = re.compile(r"(.+)\[(\d+(?:,\d+)*)\]")
 
 def read_input_file(path, model):
     """The InputTable of the CSV file ``path`` for the FMU ``model`` (artibus.fmu.model)."""
+    return read_inputs(path, [v for v in model.modelVariables if v.causality == "input"], model.modelName)
+
+
+class Named:
+    """A Variable under the name a bench gives it ("COMPONENT.VARIABLE"): two components of
+    one FMU share its Variables, a bench's input file tells them apart by this name."""
+
+    def __init__(self, name, variable):
+        self.name, self.variable = name, variable
+
+    def __getattr__(self, attribute):      # kind, type, shape, size, variability, ...
+        if attribute == "variable":
+            raise AttributeError(attribute)
+        return getattr(self.variable, attribute)
+
+
+def read_inputs(path, inputs, owner):
+    """The InputTable of the CSV file ``path`` for the input Variables ``inputs`` (each by its
+    ``name``: a bench's as Named) of ``owner`` (the FMU's or the bench's name, for the errors)."""
     try:
         with open(path, newline="", encoding="utf-8-sig") as f:
             rows = [(k + 1, r) for k, r in enumerate(csv.reader(f)) if r and any(c.strip() for c in r)]
@@ -113,7 +132,7 @@ def read_input_file(path, model):
     header = [h.strip() for h in header]
     if header[0].lower() != "time":
         raise ArtibusError(f"{path}:1: the first column is {header[0]!r}, expected 'time'")
-    places = _columns(path, header, model)
+    places = _columns(path, header, {v.name: v for v in inputs}, owner)
     values = _numbers(path, header, body)
     time = np.array([float(r[0]) for r in values])
     back = np.flatnonzero(np.diff(time) < 0)
@@ -129,13 +148,13 @@ def read_input_file(path, model):
                                f"{', '.join(absent)}")
         rows = [[r[i] for i in idx] for r in values]
         columns[v] = np.array(rows, dtype=float) if _continuous(v) else rows
-    missing = [v.name for v in model.modelVariables if v.causality == "input" and v not in columns]
+    missing = [v.name for v in inputs if v not in columns]
     return InputTable(time, columns, missing)
 
 
-def _columns(path, header, model):
-    """{Variable: [column index per element]} of the header's input columns"""
-    inputs = {v.name: v for v in model.modelVariables if v.causality == "input"}
+def _columns(path, header, inputs, owner):
+    """{Variable: [column index per element]} of the header's input columns (``inputs``: {name:
+    Variable})"""
     places = {}
     for j, name in enumerate(header[1:], start=1):
         v, k = inputs.get(name), 0
@@ -145,7 +164,7 @@ def _columns(path, header, model):
             k = _flat_index(path, name, [int(x) for x in m.group(2).split(",")], v.shape)
         if v is None:
             known = ", ".join(inputs) or "none"
-            raise ArtibusError(f"{path}:1: column {j + 1} {name!r} is no input of {model.modelName} "
+            raise ArtibusError(f"{path}:1: column {j + 1} {name!r} is no input of {owner} "
                                f"(its inputs: {known})")
         if v.kind in ("String", "Binary", "Clock"):
             raise ArtibusError(f"{path}:1: column {name!r}: {v.name} is a {v.type}; an input file gives numbers")

@@ -3,7 +3,9 @@ recorded at every communication point. If the FMU fails midway the result up
 to the failure is kept and handed over with the error and the FMU's log. An
 FMU that ends the simulation itself (fmi2Discard with fmi2Terminated, as the
 Reference-FMUs' Stair does at t = 9 s) ends the run there as a normal end:
-the result up to its last successful time, with ``Result.terminated``."""
+the result up to its last successful time, with ``Result.terminated``. A clocked FMI 3.0
+FMU runs with Event Mode, its time-based input Clocks activated when they are due
+(artibus.fmu.clocks; _event)."""
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
@@ -80,10 +82,22 @@ def needs_event_mode(path):
                 and any(v.kind == "Clock" for v in md.modelVariables))
 
 
+#: the kinds recorded as text (Result.strings): a String as it is, a Binary as hex digits
+TEXTS = ("String", "Binary")
+
+
 def _row(values, kinds):
     """A recorded row as floats: a Boolean as 0/1, an Integer or Enumeration
-    as its number, a String as NaN (its text goes to Result.strings)."""
-    return [float("nan") if k == "String" else float(x) for x, k in zip(values, kinds)]
+    as its number, a String or Binary as NaN (its text goes to Result.strings), a
+    value not read (a clocked variable whose Clock is inactive) as NaN."""
+    return [float("nan") if k in TEXTS or x is None else float(x) for x, k in zip(values, kinds)]
+
+
+def _text(x, kind):
+    """A String's or Binary's (hex digits) text; "" for a value not read."""
+    if x is None:
+        return ""
+    return x.hex() if kind == "Binary" else x
 
 
 def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
@@ -94,7 +108,8 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     parameters: {name: value} set in initialization mode (checked against
     each variable's type, see artibus.bench.parameters.coerce).
     inputs: {name: f(t)} evaluated at each communication point (held over the step).
-    outputs: names to record, of any type (default: every output).
+    outputs: names to record, of any type (default: every output but Binary and Clock ones;
+    a Binary asked for is recorded as hex text, a clocked variable only at its Clock's ticks).
     Without stop_time/step: the default experiment's, else DEFAULT_STOP_TIME
     and (stop - start) / DEFAULT_STEPS. output_interval: the results every so many
     seconds, a whole number of steps (without step: the step, as FMPy's simulate_fmu
@@ -115,7 +130,8 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     parameters = dict(parameters or {})
     inputs = inputs or {}
     me = interface == "me"           # Model Exchange: integrated by the ME facade (artibus.fmu.me)
-    with Fmu(path, event_mode=not me and needs_event_mode(path), logging=logging, interface=interface) as fmu:
+    event_mode = not me and needs_event_mode(path)
+    with Fmu(path, event_mode=event_mode, logging=logging, interface=interface) as fmu:
         claim_logger_proxy()
         fmu.configure({n: parameters.pop(n) for n in list(parameters)       # (FMI 3.0: they size arrays)
                        if n in fmu.vars and fmu.vars[n].causality == "structuralParameter"})
@@ -129,6 +145,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         check_room(n + 1, sum(v.size for v in variables) + 1, path)
         check_steps(n, path)
         result, record = _recorder(fmu, variables)
+        clocks = _schedule(fmu, path) if event_mode else None
         if me:                           # CVODE's method; no input changes: CVODE steps freely
             fmu.calls.facade.use_method(me_method)
             if not inputs:
@@ -137,12 +154,16 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             fmu.calls.enter_initialization(start_time, tolerance=tolerance)
             fmu.set_values(parameters)
             fmu.set_values({n: f(start_time) for n, f in inputs.items()})
+            if clocks is not None:
+                clocks.start(start_time)        # (intervals asked in Initialization Mode, FMI 3.0 2.2)
             fmu.calls.exit_initialization()
-            if getattr(fmu.calls, "mode", None) == "event":   # eventModeUsed: Event Mode first (FMI 3.0 4.2.1)
-                fmu.calls.leave_event_mode()
-            record(start_time)
+            if clocks is not None:              # eventModeUsed: Event Mode first (FMI 3.0 4.2.1)
+                _event(fmu, clocks, start_time, record, asked=True)
+            else:
+                record(start_time)
             cut = events if me or fmu.md.coSimulation.canHandleVariableCommunicationStepSize else ()
-            _steps(fmu, n, start_time, step, inputs, record, result, every, [e for e in cut if e < stop_time])
+            _steps(fmu, n, start_time, step, inputs, record, result, every, [e for e in cut if e < stop_time],
+                   clocks)
         except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the rows so far go with it
             n_rows = min([len(result.rows)] + [len(c) for c in result.strings.values()])
             del result.rows[n_rows:]     # (a row whose texts were not all taken)
@@ -183,15 +204,21 @@ def _experiment(fmu, start_time, stop_time, step, path):
 
 
 def _recorded(fmu, outputs, path):
-    """The recorded Variables: those asked for, else every output (a Binary or a Clock is no
-    number for the table: not recorded, refused if asked for)."""
+    """The recorded Variables: those asked for, else every output but the Binary and Clock ones
+    (no numbers: a Binary asked for is recorded as hex text; a Clock is refused, its ticks are
+    not values)."""
     if outputs is None:
         return [v for v in fmu.md.modelVariables if v.causality == "output" and v.kind not in NOT_NUMBERS]
     variables = [fmu.var(n) for n in outputs]
     for v in variables:
-        if v.kind in NOT_NUMBERS:
-            raise ArtibusError(f"{path}: {v.name} is an FMI 3.0 {v.type}: not a number a result table can hold")
+        if v.kind == "Clock":
+            raise ArtibusError(f"{path}: {v.name} is an FMI 3.0 Clock: not a value a result table can hold")
     return variables
+
+
+def _clocks_of(v):
+    """The value references of the Clocks of a clocked variable (FMI 3.0 attribute clocks), else empty"""
+    return frozenset(c.valueReference for c in (getattr(v, "clocks", None) or ()))
 
 
 def columns(v):
@@ -205,57 +232,78 @@ def columns(v):
 
 
 def _recorder(fmu, variables):
-    """(the Result, record(t): a row of the variables' values at t, an array's elements in
-    columns of their own, Strings in Result.strings)."""
+    """(the Result, record(t, active): a row of the variables' values at t, an array's elements
+    in columns of their own, Strings and Binaries in Result.strings; a clocked variable read
+    only while one of its Clocks is among the ``active`` ones (FMI 3.0 2.2, "Model Partitions
+    and Clocked Variables": "can be queried only when their Clock is active"), else NaN/"")."""
     names = [c for v in variables for c in columns(v)]
     result = Result(["time"] + names)
-    strings = [c for v in variables if v.kind == "String" for c in columns(v)]
+    strings = [c for v in variables if v.kind in TEXTS for c in columns(v)]
     result.strings = {c: [] for c in strings}
     result.units = {"time": "s", **{c: unit_of(v) for v in variables for c in columns(v)}}
     result.descriptions = {"time": "simulation time",
                            **{c: getattr(v, "description", None) or "" for v in variables for c in columns(v)}}
     kinds = [v.kind for v in variables for _ in columns(v)]
+    clocked = [_clocks_of(v) for v in variables]
 
-    def record(t):
-        values = fmu.calls.get(variables)
-        flat = [x for v, x in zip(variables, values) for x in (x if v.shape else [x])]
+    def record(t, active=()):
+        readable = [v for v, c in zip(variables, clocked) if not c or c & set(active)]
+        got = dict(zip(map(id, readable), fmu.calls.get(readable) if readable else ()))
+        values = [got.get(id(v)) for v in variables]
+        flat = [x for v, x in zip(variables, values)
+                for x in ((x if x is not None else [None] * v.size) if v.shape else [x])]
         result.rows.append([t] + _row(flat, kinds))
         for c, x, kind in zip(names, flat, kinds):
-            if kind == "String":
-                result.strings[c].append(x)
+            if kind in TEXTS:
+                result.strings[c].append(_text(x, kind))
     return result, record
 
 
-def _points(start_time, step, n, events):
-    """(t, i) of each communication point: the regular ones start + (i + 1) step, and between
-    them the input events (i None; one within 1e-9 relative of a regular point is that point,
-    as FMPy's simulate_fmu takes it)."""
+def _points(start_time, step, n, events, ticks=None):
+    """(t, i, kind) of each communication point: the regular ones start + (i + 1) step (kind
+    "step"), and between them the input events (i None, kind "event"; one within 1e-9 relative
+    of a regular point is that point, as FMPy's simulate_fmu takes it) and the Clocks' ticks
+    (kind "tick"; ``ticks()``: the next one's time, asked again after each point is taken)."""
     import math
-    ev = iter(sorted(e for e in events if e > start_time))
-    e = next(ev, None)
-    last = start_time
+    ev = sorted(e for e in events if e > start_time)
+    k, last = 0, start_time
     for i in range(n):
         t = start_time + (i + 1) * step
-        while e is not None and e < t and not math.isclose(e, t):
-            if not math.isclose(e, last):
-                yield e, None
-                last = e
-            e = next(ev, None)
-        while e is not None and math.isclose(e, t):
-            e = next(ev, None)
-        yield t, i
+        while True:
+            while k < len(ev) and (ev[k] < last or math.isclose(ev[k], last)):
+                k += 1
+            e = ev[k] if k < len(ev) else math.inf
+            c = ticks() if ticks is not None else math.inf
+            c = math.inf if c < last or math.isclose(c, last) else c      # (one at a point: taken there)
+            x = min(e, c)
+            if not x < t or math.isclose(x, t):
+                break
+            yield x, None, "event" if x == e else "tick"
+            last = x
+        yield t, i, "step"
         last = t
 
 
-def _steps(fmu, n, start_time, step, inputs, record, result, every=1, events=()):
-    """n steps from start_time (cut at the input ``events``), each recorded (every
-    ``every``-th regular one, each event), the inputs set after it; an FMU's own end
+def _steps(fmu, n, start_time, step, inputs, record, result, every=1, events=(), clocks=None):
+    """n steps from start_time (cut at the input ``events`` and at the ``clocks``' ticks: a
+    Schedule, artibus.fmu.clocks), each recorded (every ``every``-th regular one, each input
+    event), the inputs set after it (at a tick: in its Event Mode, _event); an FMU's own end
     (FMI 3.0 terminateSimulation, FMI 2.0 fmi2Discard with fmi2Terminated) ends them with
     Result.terminated, its values at its last successful time recorded (getters are
     allowed after fmi2Discard), as FMPy's simulate_fmu records them."""
     from artibus.runner.markers import PIECE, mark
     t = start_time
-    for t_next, i in _points(start_time, step, n, events):
+
+    def set_inputs(t):
+        fmu.set_values({n_: f(t) for n_, f in inputs.items()})
+    asked = []                    # an event a step meets (eventHandlingNeeded): handled after the step
+    if clocks is not None:
+        fmu.calls.on_event = asked.append
+    for t_next, i, point in _points(start_time, step, n, events, clocks and clocks.next_time):
+        if point == "tick" and not fmu.md.coSimulation.canHandleVariableCommunicationStepSize:
+            raise ArtibusError(f"{fmu.path}: a Clock ticks at t = {t_next:g} s, between two communication "
+                               f"points, and {fmu.md.modelName} takes no variable communication step: give a "
+                               "--step that divides its Clocks' intervals")
         try:
             t_end = fmu.do_step(t, t_next - t)
             kind = "terminateSimulation"
@@ -272,11 +320,63 @@ def _steps(fmu, n, start_time, step, inputs, record, result, every=1, events=())
                                  else Termination(fmu.md.modelName, t_end))
             return
         t = t_next
-        if i is None or (i + 1) % every == 0 or i + 1 == n:
-            record(t)
-        fmu.set_values({n_: f(t) for n_, f in inputs.items()})
+        row = point == "event" or (point == "step" and ((i + 1) % every == 0 or i + 1 == n))
+        if clocks is not None and (asked or clocks.due(t)):
+            _event(fmu, clocks, t, record if row else None, set_inputs, bool(asked))
+            asked.clear()
+        else:
+            if row:
+                record(t)
+            set_inputs(t)
         if i is not None and (i + 1) % PIECE == 0 and i + 1 < n:     # for the tests (artibus.runner.markers)
             mark(f"t={t!r}")
+
+
+def _schedule(fmu, path):
+    """The Schedule of the FMU's Clocks (artibus.fmu.clocks); its nextEventTime a point to stop
+    at where it takes variable communication steps"""
+    from artibus.fmu.clocks import Schedule, read_clocks
+    inputs, outputs = read_clocks(path)
+    return Schedule(fmu.calls, inputs, path, outputs, fmu.md.coSimulation.canHandleVariableCommunicationStepSize)
+
+
+def _event(fmu, clocks, t, record=None, set_inputs=None, asked=False):
+    """Event Mode at t (FMI 3.0 2.3, "Event Mode"; 2.2, "Clocks"): the Clocks due at t activated
+    (fmi3SetClock), the row recorded while they are active (a clocked variable is computed and
+    read only then: 2.2, "Model Partitions and Clocked Variables"), the inputs set, the updates
+    until the FMU asks for none (fmi3UpdateDiscreteStates, which deactivates the Clocks), the
+    aperiodic Clocks' new intervals (2.2, "Clock Types": a countdown Clock's "in every Event
+    Mode"); again while a Clock is due at t (an interval of 0: another super-dense instant);
+    then Step Mode. ``record``: None where no row is wanted at t; with no Clock due, the row
+    after the event iteration (as without Clocks). ``asked``: the FMU asked for this Event Mode
+    (eventHandlingNeeded): the output Clocks it activated read first (fmi3GetClock), the row
+    recorded while they are active."""
+    from artibus.fmu.fmi3 import MAX_EVENT_ITERATIONS
+    calls = fmu.calls
+    calls.enter_event_mode()
+    for _ in range(MAX_EVENT_ITERATIONS):
+        vrs = clocks.due(t)
+        if vrs:
+            calls.enter_event_mode()            # (after an update: a further instant)
+            calls.set_clocks(vrs)
+            clocks.ticked(vrs)
+        if asked:
+            vrs, asked = vrs + clocks.active_outputs(), False
+        if record is not None and vrs:
+            record(t, vrs)
+            record = None
+        if set_inputs is not None:
+            set_inputs(t)
+            set_inputs = None
+        calls.settle()
+        clocks.update(t)
+        if not clocks.due(t):
+            calls.leave_event_mode()
+            if record is not None:
+                record(t)
+            return
+    raise ArtibusError(f"{fmu.path}: Clocks due again and again at t = {t:g} s "
+                       f"({MAX_EVENT_ITERATIONS} super-dense instants)")
 
 
 def _failure(fmu, result, record, path, start_time):

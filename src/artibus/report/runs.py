@@ -16,7 +16,7 @@ from artibus.runner.results import check_results_file
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
                 algorithm="gauss-seidel", can=None, can_log=None, can_faults=None, report=None, output=None,
                 progress=False, checked=None, log=print, single_rate=False, fmi=None, inputs=(),
-                fmi_type=None, relative_tolerance=None, me_method=None):
+                fmi_type=None, relative_tolerance=None, me_method=None, input_file=None):
     """Run each bench (names or .ssp paths) with its variants (``variants``: names, as
     ``--variant``), then the user's values (``user``: {"comp.var": value}, from
     --ssv and --set); ``every``: the benches are all of ssp/benches/ (``--all``:
@@ -35,7 +35,8 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     build of the benches' FMUs, None (as each bench's .ssd names them), "2" or
     "3" (--fmi; artibus.bench.fmi); the extra runs use the same. ``fmi_type`` "me" (--fmi-type):
     every FMU that has Model Exchange runs as ME at ``relative_tolerance`` with CVODE's ``me_method``
-    (runner.Simulation). Returns
+    (runner.Simulation). ``input_file``: a CSV driving the benches' free inputs (--input-file,
+    columns COMPONENT.VARIABLE; runner.Simulation). Returns
     [(bench, report directory, KPIs)] of the benches with a report. The drawing
     (artibus.report.pages, comparison: matplotlib) is imported only with ``report``."""
     if report:
@@ -47,6 +48,8 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     settings = dict(step=step, record=record, algorithm=algorithm, can=can, fmi=fmi)
     if fmi_type is not None or relative_tolerance is not None or me_method:      # (Model Exchange, issue 38)
         settings.update(fmi_type=fmi_type, relative_tolerance=relative_tolerance, me_method=me_method or "bdf")
+    if input_file is not None:
+        settings.update(input_file=input_file)
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, variants), **(user or {})}
         guard = list(inputs) + bench_inputs(bench)
@@ -282,12 +285,13 @@ def print_warnings(logs):
 
 
 def fault_free_kpis(bench, overrides, out_dir, kpis, can_faults, step=None, record=None, algorithm="gauss-seidel",
-                    can=None, stop_time=None, log=print, fmi=None):
+                    can=None, stop_time=None, log=print, fmi=None, **more):
     """The same bench without the faults: its KPIs next to the faulty run's,
-    printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free)."""
+    printed and written to OUT/kpi_faults.csv (its own report in OUT/fault-free;
+    ``more``: the run's other settings, as Simulation takes them)."""
     from artibus.report.pages import write_report
     with runner.Simulation(bench, step=step, overrides=overrides, record=record,
-                           algorithm=algorithm, can=can, fmi=fmi) as sim:
+                           algorithm=algorithm, can=can, fmi=fmi, **more) as sim:
         result = sim.run(stop_time=stop_time)
         free = write_report(sim.bench.name, result, out_dir / "fault-free", sim.wall)
     faults = "; ".join(can_faults)

@@ -99,8 +99,9 @@ def measure(sim, result, run_again):
 
 
 def run_single_rate(bench, overrides, stop_time, step=None, record=None, algorithm="gauss-seidel", can=None,
-                    fmi=None):
-    """The bench run with every component at one step (a Result; fmi: its FMUs' build, as Simulation's)."""
+                    fmi=None, **more):
+    """The bench run with every component at one step (a Result; fmi: its FMUs' build, as Simulation's;
+    ``more``: the run's other settings, as Simulation takes them: fmi_type, input_file, ...)."""
     with runner.Simulation(bench, step=step, overrides=overrides, record=record, algorithm=algorithm,
-                           can=can, single_rate=True, fmi=fmi) as sim:
+                           can=can, single_rate=True, fmi=fmi, **more) as sim:
         return sim.run(stop_time=stop_time)

@@ -16,8 +16,15 @@ What it does, with the sections it follows:
   eventHandlingNeeded of its fmi3DoStep brings it into Event Mode at the step's end;
 - the communication steps are cut at the next of these ticks (the next bus communication
   point), so every tick is an event at its exact time;
+- a node's triggered output Tx clock (fmi-ls-bus 1.0, "Triggered Tx Clocks"): the node is taken
+  into Event Mode after an fmi3DoStep that returned eventHandlingNeeded, or when time reaches the
+  nextEventTime it announced (the steps are cut there; FMI 3.0.2, 4.2, fmi3EnterEventMode), and
+  its output clocks read with fmi3GetClock there; an active output clock of no terminal is an
+  error naming the node, the clock and the time (Fmu.active_output_clocks);
 - in each Event Mode the calls go in the standard's order: the Float64 inputs, fmi3SetClock,
-  fmi3SetBinary, fmi3UpdateDiscreteStates, repeated while discreteStatesNeedUpdate; a clock
+  fmi3SetBinary, fmi3GetClock of the output clocks, Tx_Data of the active Tx clocks read (while
+  they are active: FMI 3.0.2, 2.2.8, "Getting and Setting Variable Values"), then
+  fmi3UpdateDiscreteStates, which ends the activation (2.3), repeated while discreteStatesNeedUpdate; a clock
   set after the discrete states that asked for no further iteration is refused here, before
   the FMU sees it (FMI 3.0.2, 5.2.2);
 - the Rx clocks are triggered: a node's Rx_Clock ticks when Tx data arrive for it; a zero-size
@@ -50,125 +57,19 @@ to .blf/.asc with python-can, as the Real-wired benches' --can-log does.
 import contextlib
 import ctypes
 import math
-import xml.etree.ElementTree as ET
-import zipfile
 from collections import defaultdict
 from pathlib import Path
 
 from fmpy.fmi1 import FMICallException
 
 from artibus.base import ArtibusError
+# what an FMU declares (its terminals), the network's error; the CAN operations on the wire, for the log
+from artibus.runner.lsbus_log import can_transmits, write_can_log  # noqa: F401
+from artibus.runner.lsbus_terminals import (EPS, MEMBERS, NETWORK_TERMINAL, LsBusError, Terminal,  # noqa: F401
+                                             check_mime, read_terminals)
 
 CHANGED = 2          # fmi3IntervalChanged (FMI 3.0.2 headers, fmi3FunctionTypes.h)
-EPS = 1e-9           # s: two times this close are one instant
 MAX_ITERATIONS = 100  # event iterations per Event Mode before giving up
-NETWORK_TERMINAL = "org.fmi-ls-bus.network-terminal"
-MEMBERS = ("Rx_Data", "Tx_Data", "Rx_Clock", "Tx_Clock")
-
-
-class LsBusError(ArtibusError):
-    """A bad network, bad input or a refused call; the message names the FMU and the variable
-    (an ArtibusError: the command line says it in one line, no traceback)."""
-
-
-# the CAN operations on the wire, for the log (here as before)
-from artibus.runner.lsbus_log import can_transmits, write_can_log  # noqa: E402,F401
-
-
-
-# ---- what the FMU declares -----------------------------------------------------------------
-
-class Terminal:
-    """One bus terminal of an FMU: the value references of its four members and, for a
-    time-based Tx clock, its period and shift."""
-
-    def __init__(self, fmu_name, name, members, variables, clocks, max_sizes=None):
-        self.name = name
-        missing = [m for m in MEMBERS if m not in members]
-        if missing:
-            raise LsBusError(f"{fmu_name}: terminal {name} has no member {', '.join(missing)}")
-        v = {m: variables[members[m]] for m in MEMBERS}
-        self.rx_data, self.tx_data = v["Rx_Data"].valueReference, v["Tx_Data"].valueReference
-        self.rx_clock, self.tx_clock = v["Rx_Clock"].valueReference, v["Tx_Clock"].valueReference
-        tx = v["Tx_Clock"]
-        self.tx_kind = tx.intervalVariability
-        self.period = self.shift = None
-        if self.tx_kind in ("constant", "fixed"):
-            interval, shift = clocks.get(tx.name, (None, None))
-            try:
-                self.period, self.shift = float(interval), float(shift or 0.0)
-            except (TypeError, ValueError):
-                self.period = None
-            if not self.period or self.period <= 0 or not math.isfinite(self.period):
-                raise LsBusError(f"{fmu_name}: {tx.name} is {self.tx_kind} but has intervalDecimal="
-                                 f"{interval!r}: no period to tick it with")
-        elif self.tx_kind not in ("countdown", "triggered"):
-            raise LsBusError(f"{fmu_name}: {tx.name} has intervalVariability={self.tx_kind!r}; "
-                             "this master ticks constant, fixed, countdown and triggered clocks")
-        self.tx_name = tx.name
-        # Rx_Data's maxSize (FMI 3.0.2, 2.4.7.6, Binary: "maximal size of a value" in bytes), None: unbounded
-        size = (max_sizes or {}).get(v["Rx_Data"].name)
-        self.rx_max = int(size) if size and size.isdigit() else None
-
-    def next_tick(self, t0, t):
-        """the first tick of a periodic Tx clock after the instant t, i.e. later than t + EPS
-        (ticks at t0 + shift + k period), the same instants as ticks_at"""
-        k = math.floor((t + EPS - t0 - self.shift) / self.period) + 1
-        return t0 + self.shift + max(k, 0) * self.period
-
-    def ticks_at(self, t0, t):
-        if self.period is None:
-            return False
-        k = round((t - t0 - self.shift) / self.period)
-        return k >= 0 and abs(t0 + self.shift + k * self.period - t) <= EPS
-
-
-from artibus.bench.ssp2 import CAN_MIME_TYPE as CAN_MIME, is_can_mime   # noqa: E402 (one definition)
-
-
-def check_mime(path, name, mime):
-    """A terminal's Rx_Data/Tx_Data carries CAN operations of FMI-LS-BUS 1.x: the MIME type
-    application/org.fmi-standard.fmi-ls-bus.can with a version parameter of major version 1
-    (fmi-ls-bus v1.0.0 4____network_abstraction.adoc, "MIME Types": the version marks the set
-    of operations and follows semantic versioning, so 1.x keeps 1.0.0's operations). A
-    pre-release of it is taken too: the fmi-ls-bus-examples declare version="1.0.0-beta.1",
-    and their headers (fmi-ls-bus 468127f) lay out every CAN operation as v1.0.0's do.
-    Anything else (another bus, version 2, no version) is an LsBusError naming it."""
-    if not is_can_mime(mime):
-        raise LsBusError(f"{path}: {name} has mimeType {mime!r}; this master connects FMI-LS-BUS CAN "
-                         f'terminals: {CAN_MIME}; version="1.x.y" (1.0.0 or a pre-release of it)')
-
-
-def read_terminals(path, md, fmu_name):
-    """{name: Terminal} of the network terminals in terminalsAndIcons/terminalsAndIcons.xml
-    (FMI 3.0.2, 2.4.9; the terminal kind of 4____network_abstraction.adoc, "Bus Terminal")."""
-    with zipfile.ZipFile(path) as z:
-        try:
-            root = ET.fromstring(z.read("terminalsAndIcons/terminalsAndIcons.xml"))
-        except KeyError:
-            raise LsBusError(f"{path}: no terminalsAndIcons/terminalsAndIcons.xml: not an LS-BUS FMU") from None
-        # the clocks' intervalDecimal and shiftDecimal, the binaries' mimeType (FMPy 0.3 reads neither)
-        md_root = ET.fromstring(z.read("modelDescription.xml"))
-        clocks = {c.get("name"): (c.get("intervalDecimal"), c.get("shiftDecimal")) for c in md_root.iter("Clock")}
-        mimes = {b.get("name"): b.get("mimeType") for b in md_root.iter("Binary")}
-        sizes = {b.get("name"): b.get("maxSize") for b in md_root.iter("Binary")}
-    variables = {v.name: v for v in md.modelVariables}
-    out = {}
-    for t in root.iter("Terminal"):
-        if t.get("terminalKind") != NETWORK_TERMINAL:
-            continue
-        members = {m.get("memberName"): m.get("variableName") for m in t.findall("TerminalMemberVariable")}
-        for m, name in members.items():
-            if name not in variables:
-                raise LsBusError(f"{path}: terminal {t.get('name')} member {m} names {name!r}, "
-                                 "which modelDescription.xml does not declare")
-        for m in ("Rx_Data", "Tx_Data"):
-            if m in members:
-                check_mime(path, members[m], mimes.get(members[m]))
-        out[t.get("name")] = Terminal(fmu_name, t.get("name"), members, variables, clocks, sizes)
-    if not out:
-        raise LsBusError(f"{path}: terminalsAndIcons.xml has no terminal of kind {NETWORK_TERMINAL}")
-    return out
 
 
 # ---- one FMU instance -----------------------------------------------------------------------
@@ -199,6 +100,12 @@ class Fmu:
             raise LsBusError(f"{self.path}: FMU {self.name} is no FMI 3.0 Co-Simulation FMU with hasEventMode")
         self.md, self.vars = md, md.by_name
         self.terminals = read_terminals(self.path, md, self.name)
+        # {vr: name} of every output clock (FMI 3.0.2, 2.2.9: the FMU activates it, read with
+        # fmi3GetClock), and {vr: terminal} of those that are a terminal's Tx_Clock
+        self.out_clocks = {v.valueReference: v.name for v in md.modelVariables
+                           if v.type == "Clock" and v.causality == "output"}
+        self.tx_out = {t.tx_clock: t for t in self.terminals.values() if t.tx_output}
+        self.flagged = False        # its last fmi3DoStep returned eventHandlingNeeded
         self.instance = Instance(self.path, instance_name=self.name, event_mode=True)
         self.calls, self.fmu = self.instance.calls, self.instance.slave
         self.calls.enter_initialization(start_time)
@@ -270,6 +177,24 @@ class Fmu:
     def leave_event_mode(self):
         with _as_lsbus_error():
             self.calls.leave_event_mode()
+
+    def active_output_clocks(self, t):
+        """the terminals whose output Tx clock fmi3GetClock says active (in Event Mode, before
+        the update: FMI 3.0.2, 2.2.9 and 2.3); an active output clock of no terminal stops the
+        run, named with the node and the time: its clocked variables would go unread"""
+        if not self.out_clocks:
+            return []
+        vrs = list(self.out_clocks)
+        with _as_lsbus_error():
+            flags = self.fmu.getClock(vrs)
+        active = [vr for vr, on in zip(vrs, flags) if on]
+        unknown = [vr for vr in active if vr not in self.tx_out]
+        if unknown:
+            raise LsBusError(f"t = {t:.6f} s: node {self.name}: output clock {self.out_clocks[unknown[0]]} "
+                             f"(value reference {unknown[0]}) is active, but it is no Tx_Clock of a network "
+                             f"terminal ({', '.join(self.terminals)}): this master does not know it and would "
+                             "leave its clocked variables unread (FMI 3.0.2, 2.2.9)")
+        return [self.tx_out[vr] for vr in active]
 
     def intervals(self, terminals):
         """{terminal: interval} of the countdown Tx clocks that announce a new interval"""
@@ -450,24 +375,30 @@ class Network:
                 pending[(dst, dterm)].append(data)
 
     def _node_event(self, f, ticking, rx, inputs):
-        """one Event Mode of a node: Float64 inputs, clocks, Rx_Data, fmi3UpdateDiscreteStates
-        (while it asks), Tx_Data copied"""
+        """one Event Mode of a node: Float64 inputs, clocks, Rx_Data, the output Tx clocks
+        (fmi3GetClock), Tx_Data of the active Tx clocks read and copied while they are active,
+        then fmi3UpdateDiscreteStates (while it asks): FMI 3.0.2, 2.2.8 ("Getting and Setting
+        Variable Values": clocked variables only while their clock is active) and 2.3 (the update
+        ends the activation)"""
         f.fresh_event()
         for name, value in inputs.items():
             f.set(name, value)
         f.set_clocks([t.tx_clock for t in ticking] + [t.rx_clock for t in rx])
         if rx:
             f.fmu.setBinary([t.rx_data for t in rx], list(rx.values()))
+        sending = list(ticking) + [t for t in f.active_output_clocks(self.t) if t not in ticking]
+        out = {}
+        if sending:
+            with _as_lsbus_error():
+                data = f.fmu.getBinary([t.tx_data for t in sending])
+            out = {t: bytes(d) for t, d in zip(sending, data)}
         try:
             f.settle()
         except LsBusError as e:       # bounded: a node that never leaves Event Mode, named with its clocks
-            clocks = [t.tx_name for t in ticking] + [f"{t.name}.Rx_Clock" for t in rx]
+            clocks = [t.tx_name for t in sending] + [f"{t.name}.Rx_Clock" for t in rx]
             raise LsBusError(f"t = {self.t:.6f} s: node {f.name} ({', '.join(clocks) or 'no clock'} active): "
                              f"{e}") from None
-        if not ticking:
-            return {}
-        out = f.fmu.getBinary([t.tx_data for t in ticking])
-        return {t: bytes(d) for t, d in zip(ticking, out)}
+        return out
 
     def _instant(self, inputs):
         """every event at self.t, in the order of the module's docstring"""
@@ -479,9 +410,14 @@ class Network:
         for f in self.nodes:
             ticking = [t for t in f.terminals.values() if t.ticks_at(self.t0, self.t)]
             rx = {t: b"".join(pending.pop((f, t))) for t in list(f.terminals.values()) if (f, t) in pending}
-            if not ticking and not rx and f.mode != "event":
+            # FMI 3.0.2, 4.2, fmi3EnterEventMode: Event Mode after an eventHandlingNeeded or at the
+            # nextEventTime the node announced (a triggered output Tx clock's tick)
+            woke = f.flagged or f.next_event <= self.t + EPS
+            f.flagged = False
+            if not ticking and not rx and not woke and f.mode != "event":
                 continue
-            out = self._node_event(f, ticking, rx, values.get(f.name, {}) if ticking or f.mode == "event" else {})
+            out = self._node_event(f, ticking, rx, values.get(f.name, {})
+                                   if ticking or woke or f.mode == "event" else {})
             for term, data in out.items():
                 self._route(f, term, data, pending, batch)
         if batch:
@@ -505,6 +441,8 @@ class Network:
             for term in f.terminals.values():
                 if term.period is not None:
                     t_next = min(t_next, term.next_tick(self.t0, self.t))
+            if f.tx_out and self.t + EPS < f.next_event < t_next:    # a triggered Tx clock's next tick
+                t_next = f.next_event
         if self.bus:
             t_next = min([t_next, self.bus.next_event if self.bus.next_event > self.t + EPS else math.inf]
                          + [tt for tt in self.bus_ticks.values() if tt > self.t + EPS])
@@ -555,6 +493,8 @@ class Network:
                 raise LsBusError(f"FMU {f.name} asked to terminate the simulation at t = {t_next}")
             if f is self.bus and event_needed:
                 self.bus_flagged = True
+            elif event_needed:
+                f.flagged = True
         self.t = t_next
 
     def _run(self, stop_time, inputs, outputs):

@@ -142,6 +142,8 @@ class LsBusSteering:
         for f in net.nodes + [net.bus]:
             if len(f.terminals) > 64:
                 return f"an FMI-LS-BUS FMU of {len(f.terminals)} terminals ({f.name}; the core takes 64)"
+            if set(f.out_clocks) - set(f.tx_out):     # refused by name in Python (Fmu.active_output_clocks)
+                return f"an FMI-LS-BUS FMU with an output clock of no network terminal ({f.name})"
         return None
 
     def core_values(self, fill=True):

@@ -22,7 +22,7 @@ from artibus.runner.corelib import struct
 _MODES = {"event": 0, "updated": 1, "step": 2}
 _NAMES = {v: k for k, v in _MODES.items()}
 _FUNCTIONS = ("EnterEventMode", "EnterStepMode", "UpdateDiscreteStates", "SetClock", "SetBinary", "GetBinary",
-              "GetIntervalDecimal", "SetFloat64", "GetFloat64", "DoStep")
+              "GetClock", "GetIntervalDecimal", "SetFloat64", "GetFloat64", "DoStep")
 MAX_TERMS = 64                 # lsbus.c: terminals of one FMU
 BUFFER = 1 << 16               # bytes routed to one terminal within one instant, at most
 FRAMES_PER_TICK = 64           # the record of the frames on the wire: per tick and node, at most
@@ -103,6 +103,7 @@ class _LsBusCore:
                 q.rx_data, q.tx_data, q.rx_clock, q.tx_clock = t.rx_data, t.tx_data, t.rx_clock, t.tx_clock
                 q.period, q.shift = t.period or 0.0, t.shift or 0.0
                 q.countdown = t.tx_kind == "countdown"
+                q.tx_output = t.tx_output
                 q.peer = k if f is not net.bus else (j if j < len(net.nodes) else -1)
                 q.buf, q.cap = addressof(buf), BUFFER
             self._keep.append(arr)
@@ -111,7 +112,7 @@ class _LsBusCore:
                 setattr(a, name[0].lower() + name[1:], cast(getattr(f.fmu.dll, f"fmi3{name}"), c_void_p).value)
             a.n_terms, a.terms = len(terms), addressof(arr)
             a.mode, a.need = _MODES[f.mode], int(bool(f.need))
-            a.next_event, a.n_events = f.next_event, f.n_events
+            a.next_event, a.n_events, a.flagged = f.next_event, f.n_events, int(f.flagged)
         self._bus_terms = bus_terms
         # the inputs (LsBusSteering.src, its order) and the outputs onto the steering's values
         values, slots = st.core_values()
@@ -167,7 +168,7 @@ class _LsBusCore:
         for a, f in zip(self.fmus, net.nodes + [net.bus]):
             f.mode, f.need = _NAMES[a.mode], bool(a.need)
             f.next_event = a.next_event if a.next_event != math.inf else math.inf
-            f.n_events = a.n_events
+            f.n_events, f.flagged = a.n_events, bool(a.flagged)
         net.t, net.bus_flagged = c.t, bool(c.bus_flagged)
         net.n_instants += c.instants
         ticks = sorted((q.tick_seq, j) for j, q in enumerate(self._barr) if q.tick_seq)

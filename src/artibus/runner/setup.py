@@ -36,9 +36,10 @@ class _Setup:
     (artibus.runner.simulation) runs what it set up."""
 
     def _setup(self, step, overrides, record, where, stimuli, can_interface=None, can_log=None, can_faults=None,
-               cut=frozenset()):
+               cut=frozenset(), input_file=None):
         """The set-up, part by part: units and steps, parameters, connections (and the CAN
-        network), the order, the recording, the stimuli, the value buffers, the columns."""
+        network), the order, the recording, the stimuli (and the input file's), the value
+        buffers, the columns."""
         units = self._units(step, where)
         self._parameters(units, overrides, where)
         self._check_cut(units, cut, where)
@@ -48,6 +49,7 @@ class _Setup:
         self._feedthrough_order(where)
         self._recording(units, record, where)
         self._stimuli(units, stimuli, where)
+        self._input_file(units, input_file, stimuli, where)
         self._buffers()
         self._columns()
 
@@ -252,6 +254,34 @@ class _Setup:
             else:
                 base = float(self.parameters[comp].get(var, v.start))
                 u.stimuli.append((u.input_index(v), f, base))
+
+    def _input_file(self, units, path, stimuli, where):
+        """--input-file of `run` (issue 38): the bench's free inputs (the end of no connection, fed
+        by no stimulus) driven by the file's columns COMPONENT.VARIABLE as `simulate` reads them
+        (artibus.fmu.inputs: a continuous input interpolated, a discrete one held), each a stimulus
+        on a base of 0 (the input is the file's value), sampled at the start of each of its
+        component's steps; a free input that no column and no parameter (--set, a binding)
+        gives is named in a warning."""
+        if path is None:
+            return
+        from artibus.fmu.inputs import Named, read_inputs
+        fed = {f"{c.end[0]}.{c.end[1]}" for c in self.bench.connections} | set(stimuli)
+        owner = {f"{p}.{v.name}": (u, v) for p, u in units.items() for v in u.fmu.md.modelVariables
+                 if v.causality == "input" and f"{p}.{v.name}" not in fed}
+        table = read_inputs(path, [Named(n, v) for n, (_, v) in owner.items()],
+                            f"{where} free to drive (one no connection feeds)")
+        for n in table.columns:
+            if not _in_core(n.variable):
+                raise ArtibusError(f"{path}:1: column {n.name!r}: the input is a{'n array' if n.shape else ''} "
+                                   f"{n.type}; a bench's input file drives its scalar Float64 inputs")
+        for n, f in table.functions().items():
+            u, v = owner[n]
+            u.stimuli.append((u.input_index(v), f, 0.0))
+        missing = [n for n in table.missing if owner[n][1].name not in self.parameters[owner[n][0].path]]
+        if missing:
+            _warn_once(f"--input-file {path} gives no column for the free input{'s' if len(missing) > 1 else ''} "
+                       f"{', '.join(missing)} of {where}: {'they keep their' if len(missing) > 1 else 'it keeps its'} "
+                       "start value")
 
     def _buffers(self):
         """Each unit's calls and value buffers (_RawCalls, _TypedCalls), its sources into

@@ -80,7 +80,7 @@ class Simulation(_Setup):
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
                  stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False, fmi=None,
-                 lsbus_wire_time=None, fmi_type=None, relative_tolerance=None, me_method="bdf"):
+                 lsbus_wire_time=None, fmi_type=None, relative_tolerance=None, me_method="bdf", input_file=None):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
         the start of each of the component's steps. cut: inputs ("comp.input")
@@ -106,7 +106,9 @@ class Simulation(_Setup):
         "me" (every FMU that has Model Exchange runs as ME, integrated by the stepping core's ME
         facade, artibus.fmu.me; the others in Co-Simulation), or {component: "cs" | "me"};
         relative_tolerance: the ME units' (default: their default experiment's, else
-        artibus.fmu.me.BENCH_TOLERANCE); me_method: their CVODE's, "bdf" or "adams"."""
+        artibus.fmu.me.BENCH_TOLERANCE); me_method: their CVODE's, "bdf" or "adams". input_file: a
+        CSV driving the bench's free inputs, columns COMPONENT.VARIABLE (--input-file, as `simulate`
+        reads one: artibus.fmu.inputs; _Setup._input_file)."""
         self.can = self.lsbus = None     # the bench's network: a CAN one, or an FMI-LS-BUS one (network)
         self.single_rate = single_rate
         self.fmi_type, self.relative_tolerance, self.me_method = fmi_type, relative_tolerance, me_method
@@ -139,7 +141,7 @@ class Simulation(_Setup):
                 steering.set_faults(can_faults)       # (injected by its bus simulation FMU)
                 can_faults = None
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
-                        set(cut or ()))
+                        set(cut or ()), input_file)
             if steering is not None:
                 steering.bind(self)
         except BaseException:

@@ -29,6 +29,31 @@ static const char *bus_name(unsigned vr) {
 
 static Status evaluate(ModelInstance *comp);
 
+#define TICK_EPS 1e-9   /* s: a time this close to a tick is the tick (the importers' EPS) */
+
+/* the triggered Tx_Clock's next tick, and whether it is due now (reached or passed) */
+static double tx_tick(const ModelInstance *comp) { return B->t0 + (double)B->txK * LSBUS_TX_INTERVAL; }
+
+static bool tx_due(ModelInstance *comp) {
+    return LSBUS_TX_TRIGGERED && comp->v.time >= tx_tick(comp) - TICK_EPS;
+}
+
+bool lsnode_event_needed(ModelInstance *comp) {
+    ready(comp);
+    return tx_due(comp);
+}
+
+int lsnode_zero_step(ModelInstance *comp, bool *eventHandlingNeeded, bool *terminateSimulation, bool *earlyReturn,
+                     double *lastSuccessfulTime) {
+    if (!B->zeroSteps++)
+        log_warning(comp, "t = %.6g s: fmi3DoStep with communicationStepSize = 0 (FMI 3.0.2, 4.2: it must be > 0): "
+                          "taken as no step (this warning once)", comp->v.time);
+    *eventHandlingNeeded = lsnode_event_needed(comp);
+    *terminateSimulation = *earlyReturn = false;
+    *lastSuccessfulTime = comp->v.time;
+    return OK;
+}
+
 int lsnode_get_binary(ModelInstance *comp, unsigned vr, size_t *size, const uint8_t **value) {
     ready(comp);
     if (vr == LSBUS_VR_TX_DATA) {
@@ -80,7 +105,8 @@ int lsnode_set_binary(ModelInstance *comp, unsigned vr, size_t size, const uint8
 
 int lsnode_get_clock(ModelInstance *comp, unsigned vr, bool *active) {
     if (vr == LSBUS_VR_RX_CLOCK) *active = B->rxClock != 0;
-    else if (vr == LSBUS_VR_TX_CLOCK) *active = B->txClock != 0;
+    else if (vr == LSBUS_VR_TX_CLOCK)   /* an output clock's activation ends with the update (FMI 3.0.2, 2.3) */
+        *active = B->txClock != 0 && !(LSBUS_TX_TRIGGERED && B->updated);
     else
         return log_error(comp, "fmi3GetClock: no Clock has value reference %u (Rx_Clock %u, Tx_Clock %u)", vr,
                          LSBUS_VR_RX_CLOCK, LSBUS_VR_TX_CLOCK);
@@ -96,12 +122,18 @@ int lsnode_set_clock(ModelInstance *comp, unsigned vr, bool active) {
         return log_error(comp, "fmi3SetClock: %s set after fmi3UpdateDiscreteStates in this Event Mode (the "
                                "importer sets the clocks first: FMI 3.0, 5.2.2; enter a new Event Mode)",
                          bus_name(vr));
+    if (vr == LSBUS_VR_TX_CLOCK && LSBUS_TX_TRIGGERED)
+        return log_error(comp, "fmi3SetClock: Tx_Clock is an output clock (triggered: the node activates it at "
+                               "its ticks; read it with fmi3GetClock, FMI 3.0.2, 2.2.9)");
     if (vr == LSBUS_VR_RX_CLOCK) B->rxClock = active;
     else B->txClock = active;
     return OK;
 }
 
 int lsnode_interval(ModelInstance *comp, unsigned vr, double *interval) {
+    if (LSBUS_TX_TRIGGERED)
+        return log_error(comp, "fmi3GetIntervalDecimal: value reference %u: this node has no time-based clock "
+                               "(Tx_Clock is a triggered output clock, Rx_Clock a triggered input clock)", vr);
     if (vr != LSBUS_VR_TX_CLOCK)
         return log_error(comp, "fmi3GetIntervalDecimal: value reference %u is not a time-based clock (Tx_Clock "
                                "is %u; Rx_Clock is triggered)", vr, LSBUS_VR_TX_CLOCK);
@@ -111,7 +143,8 @@ int lsnode_interval(ModelInstance *comp, unsigned vr, double *interval) {
 
 void lsnode_enter_event_mode(ModelInstance *comp) {
     ready(comp);
-    B->rxClock = B->txClock = 0;
+    B->rxClock = 0;
+    B->txClock = tx_due(comp);   /* a triggered Tx_Clock: active from here to the update */
     B->updated = B->sent = 0;
     B->txSize = 0;            /* a new activation: Tx_Data holds only what it computes */
 }
@@ -266,11 +299,18 @@ static Status evaluate(ModelInstance *comp) {
     }
     if (!B->txClock || B->sent) return OK;
     B->sent = 1;
+    if (LSBUS_TX_TRIGGERED) { /* this tick done: the next one after now (bounded: after a huge step no
+                                 later tick is representable beyond 2^53 intervals) */
+        const double k = floor((comp->v.time + TICK_EPS - B->t0) / LSBUS_TX_INTERVAL) + 1.0;
+        B->txK = k < 9e15 ? (k > (double)B->txK ? (long long)k : B->txK + 1) : 9000000000000000LL;
+    }
     return transmit(comp);
 }
 
-int lsnode_update(ModelInstance *comp) {
+int lsnode_update(ModelInstance *comp, double *tNext) {
     ready(comp);
     B->updated = 1;
-    return evaluate(comp);
+    const int status = evaluate(comp);
+    if (LSBUS_TX_TRIGGERED) *tNext = tx_tick(comp);
+    return status;
 }

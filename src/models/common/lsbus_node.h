@@ -14,6 +14,13 @@
  *   Tx_Data  Binary output, clocked by Tx_Clock (an input, time-based clock,
  *            periodic with the DBC's cycle time: the ECUs' 10 ms): the operations
  *            this node sends; size 0 when it has none.
+ * The Tx clock's triggered form (a variant, <Name>_LSBUS_Triggered; LSBUS_TX_TRIGGERED
+ * of model_lsbus.h): Tx_Clock an output triggered clock the node activates itself at the
+ * same ticks, t0 + k txInterval (fmi-ls-bus 1.0, 4____network_abstraction.adoc, "Triggered
+ * Tx Clocks"): fmi3DoStep ending at or past a tick returns eventHandlingNeeded (never an
+ * early return), fmi3UpdateDiscreteStates announces the next tick as nextEventTime (FMI
+ * 3.0.2, 4.2, fmi3EnterEventMode: the importer enters Event Mode when time reaches it), and
+ * in the Event Mode at a tick fmi3GetClock(Tx_Clock) says active until the update.
  * In Event Mode (FMI 3.0, Co-Simulation with eventModeUsed) the importer sets the
  * active clocks and Rx_Data, reads Tx_Data while Tx_Clock is active, then calls
  * fmi3UpdateDiscreteStates. The node's output function runs once per Event Mode, at
@@ -80,7 +87,9 @@ typedef struct {
     unsigned counter[BUS36M_NMSG];/* per message sent: the next alive counter */
     long long nRx, nRejected, nTx, nFormatErrors, nIgnored;   /* counts, for the log and the tests */
     double t0;                    /* start time: cycle k of a message at t0 + k cycle */
+    long long txK;                /* triggered Tx_Clock: the index of its next tick, at t0 + txK interval */
     int ready;                    /* the above set up (lsbus_node.c, ready) */
+    int zeroSteps;                /* steps of size 0 taken (lsnode_zero_step) */
 } LsNode;
 
 struct ModelInstance;
@@ -91,10 +100,18 @@ int lsnode_set_binary(struct ModelInstance *comp, unsigned vr, size_t size, cons
 int lsnode_get_clock(struct ModelInstance *comp, unsigned vr, bool *active);
 int lsnode_set_clock(struct ModelInstance *comp, unsigned vr, bool active);
 int lsnode_interval(struct ModelInstance *comp, unsigned vr, double *interval);
-int lsnode_update(struct ModelInstance *comp);
+/* fmi3UpdateDiscreteStates; *tNext: the triggered Tx_Clock's next tick (nextEventTime), else unchanged */
+int lsnode_update(struct ModelInstance *comp, double *tNext);
 void lsnode_enter_event_mode(struct ModelInstance *comp);
 void lsnode_leave_event_mode(struct ModelInstance *comp);
 void lsnode_step(struct ModelInstance *comp);
+/* after fmi3DoStep: true when a triggered Tx_Clock's tick is due (eventHandlingNeeded) */
+bool lsnode_event_needed(struct ModelInstance *comp);
+/* fmi3DoStep with communicationStepSize 0 (FMI 3.0.2 wants > 0; an importer that serves a
+   countdown clock due now so, as fmu-manipulation-toolbox 2.0's container): nothing done, a
+   warning logged once, the outputs as after a step */
+int lsnode_zero_step(struct ModelInstance *comp, bool *eventHandlingNeeded, bool *terminateSimulation,
+                     bool *earlyReturn, double *lastSuccessfulTime);
 
 /* ---- supplied by each node model (its model_lsbus.c) ---------------------------------- */
 /* the messages (bit i: BUS36M_MESSAGES[i]) it receives, and those it sends at its Tx_Clock */
