@@ -50,7 +50,11 @@ GUARD = 30.0
 
 
 def fmu_path(name, version):
+    """fmus/<Name>.fmu, fmus/fmi3/<Name>.fmu; an LS-BUS node's triggered form (modelDescription/lsbus/
+    *_Triggered.xml) in fmus/fmi3/lsbus-triggered/"""
     from artibus import fmu_dir
+    if name.endswith("_Triggered"):
+        return fmu_dir() / "fmi3" / "lsbus-triggered" / f"{name}.fmu"
     return fmu_dir() / ("fmi3" if version == 3 else "") / f"{name}.fmu"
 
 

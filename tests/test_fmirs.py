@@ -49,6 +49,8 @@ MODES = {"cs": ["--interface-type", "cs"], "cs-event-mode": ["--interface-type",
 
 def _path(name, version):
     path = fmu_dir() / ("fmi3" if version == 3 else "") / f"{name}.fmu"
+    if name.endswith("_Triggered"):          # an LS-BUS node's triggered form (modelDescription/lsbus/*_Triggered.xml)
+        path = fmu_dir() / "fmi3" / "lsbus-triggered" / f"{name}.fmu"
     if not path.is_file():
         pytest.skip(f"{path} not built")
     return path
@@ -110,8 +112,17 @@ def _default_step(path):
     return float(read_model_description(str(path)).defaultExperiment.stepSize)
 
 
+#: an LS-BUS node's triggered form alone under fmi-rs: its output Tx clock ticks every 10 ms (it
+#: needs no importer for that), so the ECU and the actuator, receiving nothing, warn that their
+#: messages are stale, which the periodic form, whose input clock fmi-rs never ticks, does not;
+#: and fmi-rs's CSV writer writes the sensors' clocked rows short ("found record with 2 fields")
+ALONE_TRIGGERED = pytest.mark.xfail(strict=True, reason="a triggered node alone warns of stale messages; "
+                                    "fmi-rs's CSV of a clocked output is short")
+
+
 @pytest.mark.parametrize("mode", MODES)
-@pytest.mark.parametrize("name", FMI3)
+@pytest.mark.parametrize("name", [pytest.param(n, marks=ALONE_TRIGGERED) if n.endswith("_Triggered") else n
+                                  for n in FMI3])
 def test_fmi3_cs_equals_fmpy(name, mode, tmp_path):
     path = _path(name, 3)
     out = tmp_path / "out.csv"
