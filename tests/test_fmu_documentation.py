@@ -38,10 +38,13 @@ REPO_PATH = re.compile(r"(?<![\w/.])(?:src|ssp|tests|scripts|docs|modelDescripti
 
 
 def fmu(name):
-    """The FMI 2.0 build, or for an FMU built in FMI 3.0 only (the LS-BUS ones) that one."""
+    """The FMI 2.0 build, or for an FMU built in FMI 3.0 only (the LS-BUS ones) that one (a node's
+    triggered form in fmus/fmi3/lsbus-triggered/)."""
     p = fmu_dir() / f"{name}.fmu"
     if not p.is_file() and (fmu_dir() / "fmi3" / f"{name}.fmu").is_file():
         p = fmu_dir() / "fmi3" / f"{name}.fmu"
+    if not p.is_file() and (fmu_dir() / "fmi3" / "lsbus-triggered" / f"{name}.fmu").is_file():
+        p = fmu_dir() / "fmi3" / "lsbus-triggered" / f"{name}.fmu"     # an LS-BUS node's triggered form
     if not p.is_file():
         pytest.skip(f"{p} not built (scripts/setup.sh)")
     return p
@@ -71,7 +74,10 @@ def test_no_labels_issues_or_repository_paths(name):
 @pytest.mark.parametrize("name", NAMES)
 def test_papers_cited_in_full(name):
     html = page(name)
-    readme = (ROOT / "src/models" / name / "README.md").read_text(encoding="utf-8")
+    folder = ROOT / "src/models" / name
+    if not folder.is_dir() and name.endswith("_Triggered"):      # a node's triggered form: the node's text
+        folder = ROOT / "src/models" / name.removesuffix("_Triggered")
+    readme = (folder / "README.md").read_text(encoding="utf-8")
     xml = next(p for p in (ROOT / "modelDescription" / f"{name}.xml",          # FMI 2.0 (and 3.0)
                            ROOT / "modelDescription" / "lsbus" / f"{name}.xml",  # an LS-BUS node
                            ROOT / "modelDescription" / "fmi3" / f"{name}.xml")   # FMI 3.0 only

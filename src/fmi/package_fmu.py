@@ -828,6 +828,10 @@ def main(argv=None):
     name, root, tree = a.name, os.path.abspath(a.root), os.path.abspath(a.tree)
     version = project_version(root)
     model_dir = os.path.join(root, "src", "models", name)
+    if a.lsbus and not os.path.isdir(model_dir):     # a node's variant (variantOf=): the node's text and icon
+        base = ET.parse(a.lsbus).getroot().get("variantOf")
+        if base:
+            model_dir = os.path.join(root, "src", "models", os.path.splitext(base)[0])
 
     own = os.path.join(tree, "binaries", binaries_folder(a.platform, a.fmi_version),
                        name + SHARED_LIBRARY_EXT[a.platform])
