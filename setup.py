@@ -4,7 +4,8 @@
   ``artibus/data/`` in the clone's layout (artibus.base.PACKAGE_DATA, ROOT): the
   built FMUs (``fmus/*.fmu``, ``fmus/fmi3/*.fmu``), the benches, parameter sets,
   roads and the DBC (``ssp/``), the stepping core's and the roads' libraries
-  (``build/lib/*.so``). The FMUs are built by CMake with SUNDIALS and Eigen (the
+  (``build/lib/*.so``) and the licences of what they link (``licenses/``: SUNDIALS, in the core
+  for Model Exchange). The FMUs are built by CMake with SUNDIALS and Eigen (the
   set-up, scripts/setup.sh), not here: a clone without them stops with a message
   saying what to run, never a wheel that finds no bench. An editable install
   (``pip install -e .``, the set-up's) reads the clone itself and copies nothing.
@@ -21,7 +22,8 @@ from setuptools.command.build_py import build_py
 
 CLONE = Path(__file__).resolve().parent
 #: what the wheel carries, relative to the clone: (folder, glob)
-DATA = [("fmus", "*.fmu"), ("fmus/fmi3", "*.fmu"), ("ssp", "**/*"), ("build/lib", "*.so")]
+DATA = [("fmus", "*.fmu"), ("fmus/fmi3", "*.fmu"), ("fmus/fmi3/lsbus-triggered", "*.fmu"), ("ssp", "**/*"),
+        ("build/lib", "*.so"), ("licenses", "*")]     # (the core library links SUNDIALS: its licence with it)
 SETUP = "./run.sh (or scripts/setup.sh) in the clone"
 
 

@@ -87,7 +87,8 @@ def test_version_written_once():
 
 
 def test_wheel_carries_fmus_benches_and_core(wheel):
-    """Every built FMU (FMI 2.0 and 3.0), every bench folder's files and the core library are in the wheel."""
+    """Every built FMU (FMI 2.0 and 3.0, the LS-BUS nodes' triggered forms), every bench folder's
+    files, the core library and the licences of what it links are in the wheel."""
     names = set(zipfile.ZipFile(wheel).namelist())
     data = "artibus/data/"
     fmus = [p.name for p in FMUS.glob("*.fmu")]
@@ -99,6 +100,10 @@ def test_wheel_carries_fmus_benches_and_core(wheel):
                  if p.is_file() and "__pycache__" not in p.parts}
     assert ssp_files <= names
     assert f"{data}build/lib/libartibus_core.so" in names
+    # the core library links SUNDIALS (Model Exchange): its licence goes with it, as in every FMU
+    assert {f"{data}licenses/{p.name}" for p in (ROOT / "licenses").glob("*.txt")} <= names
+    assert {f"{data}fmus/fmi3/lsbus-triggered/{p.name}" for p in (FMUS / "fmi3" / "lsbus-triggered").glob("*.fmu")} \
+        <= names
     assert not [n for n in names if n.endswith(".ssp") or "__pycache__" in n]   # packs are made on use
 
 
