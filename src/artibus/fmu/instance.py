@@ -161,8 +161,8 @@ class Fmu:
         return checked
 
     def get(self, *names):
-        """The Real (Float64) variables' values, in one call."""
-        return self.calls.get([self.var(n) for n in names])
+        """get_values of the variables named (a Real's value a float)."""
+        return self.get_values(names)
 
     def get_values(self, names):
         """The values of variables of any type, as Python values: float, int
