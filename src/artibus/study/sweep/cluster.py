@@ -58,8 +58,10 @@ def lost_message(client, scheduler, out, done, e):
 def _client(scheduler, workers):
     from dask.distributed import Client, LocalCluster
     if scheduler:
-        # a lost scheduler is said by the sweep in one line (lost_message), not by Dask's client log too
-        logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
+        # a lost scheduler is said by the sweep in one line (lost_message), not by Dask's client log too,
+        # nor by its batched comm's (CommClosedError with a traceback, when the loss meets a send)
+        for name in ("distributed.client", "distributed.batched"):
+            logging.getLogger(name).setLevel(logging.CRITICAL)
         try:
             return Client(scheduler, timeout="5s"), None
         except (OSError, TimeoutError) as e:
