@@ -601,6 +601,16 @@ static Status me_size(ModelInstance *comp, const char *fn, const void *p, size_t
     return OK;
 }
 
+/* before the derivatives or the event indicators: the model initialised (in Initialization
+ * Mode, model_init after a set), but not its outputs. Each model's model_derivatives and
+ * model_event_indicators read the states, inputs and parameters only, never an output, and an
+ * integrator asks for them after every fmi2SetContinuousStates: refreshing the outputs there
+ * (a second evaluation of the equations of motion per right-hand side) is left to the next get
+ * of a variable (core_refresh; comp->dirty stays set) */
+static Status me_ready(ModelInstance *comp) {
+    return comp->v.state == S_INIT_MODE ? core_refresh(comp) : OK;
+}
+
 Status core_event_update(ModelInstance *comp, const char *fn, bool *terminate, double *tNext) {
     if (core_refresh(comp) > Warning) return leave(comp, Error);
     *terminate = false;
@@ -633,7 +643,7 @@ Status core_set_x(ModelInstance *comp, const char *fn, const double x[], size_t 
 
 Status core_derivatives(ModelInstance *comp, const char *fn, double dx[], size_t nx) {
     if (me_size(comp, fn, dx, nx, MODEL_NX, "nx")) return leave(comp, Error);
-    if (core_refresh(comp) > Warning) return leave(comp, Error);
+    if (me_ready(comp) > Warning) return leave(comp, Error);
     if (model_derivatives(comp, dx) > Warning) return leave(comp, Error);
     for (size_t i = 0; i < nx; i++)
         if (!isfinite(dx[i]))
@@ -644,7 +654,7 @@ Status core_derivatives(ModelInstance *comp, const char *fn, double dx[], size_t
 
 Status core_event_indicators(ModelInstance *comp, const char *fn, double z[], size_t nz) {
     if (me_size(comp, fn, z, nz, MODEL_NZ, "the number of event indicators")) return leave(comp, Error);
-    if (core_refresh(comp) > Warning) return leave(comp, Error);
+    if (me_ready(comp) > Warning) return leave(comp, Error);
     if (nz > 0) model_event_indicators(comp, z);
     return OK;
 }
