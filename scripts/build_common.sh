@@ -114,7 +114,7 @@ cross_build() {
   targets="$(grep -v '^add_fmu([A-Za-z0-9_]* LSBUS' CMakeLists.txt | sed -n "s/^add_fmu(\([A-Za-z0-9_]*\).*/$check\1/p")"
   if ! grep -q '^ARTIBUS_FMI3:BOOL=OFF' "$dir/CMakeCache.txt"; then   # and the FMI 3.0 builds: <platform>/fmi3/
     targets="$targets $(sed -n 's/^add_fmu(\([A-Za-z0-9_]*\).*/\1_fmi3/p' CMakeLists.txt)"
-    targets="$targets CanBus_fmi3"   # FMI 3.0 only, not an add_fmu (CMakeLists.txt, issue 24)
+    targets="$targets CanBus_fmi3 CanBus_Triggered_fmi3"   # FMI 3.0 only, not add_fmu (CMakeLists.txt, issues 24, 39)
   fi
   quiet cmake --build "$dir" -j"$jobs" --target $targets
 }

@@ -41,6 +41,7 @@ VR = {"baudrate": 1, "wireTime": 2, "arbitrationLostBehavior": 3, "faultStart": 
       "faultSilentNode": 5, "faultCorruptId": 6, "faultBusOffNode": 7, "nNodes": 8,
       "busLoad": 10, "nFrames": 11, "nBusErrors": 12, "nArbitrationLost": 13}
 CHANGED = 2   # fmi3IntervalChanged
+UNCHANGED, NOT_YET_KNOWN = 1, 0   # fmi3IntervalUnchanged, fmi3IntervalNotYetKnown
 
 
 def vr(k, member):
@@ -374,6 +375,51 @@ def test_wire_time_is_the_frames_bits_at_the_baud_rate(bus, can_id, data):
     assert b.ops(1, "Confirm") == [(pytest.approx(expected, abs=1e-12), ("Confirm", can_id))]
 
 
+
+def _countdown(b, k):
+    """NodeK.Tx_Clock's (qualifier, interval) from fmi3GetIntervalDecimal now"""
+    vrs = (ctypes.c_uint32 * 1)(vr(k, TX_CLOCK))
+    iv, q = (ctypes.c_double * 1)(), (ctypes.c_int * 1)()
+    b.fmu.getIntervalDecimal(vrs, iv, q)
+    return q[0], iv[0]
+
+
+def test_an_unchanged_countdown_interval_is_the_one_given_not_the_time_left(bus):
+    """FMI 3.0.2, 2.2.9, fmi3GetIntervalDecimal: fmi3IntervalUnchanged "returns the unchanged
+    interval value provided in a previous call" (the importer keeps the time it was given at;
+    fmu-manipulation-toolbox's container counts down from it). A frame of node 1 put on the wire
+    at t = 0 is announced to node 2 with its wire time (closed form); at half of it, in a new
+    Event Mode, the interval is unchanged and still that wire time, not the half left"""
+    b = bus()
+    b.send({1: transmit(0x110, bytes(8))})
+    wt = wire_time(0x110, bytes(8))
+    assert b.ticks[2] == pytest.approx(wt, abs=1e-12)        # given with fmi3IntervalChanged at t = 0
+    b._leave_event_mode()
+    b.fmu.doStep(0.0, wt / 2)
+    b.t = wt / 2
+    b._enter_event_mode()
+    b.fmu.updateDiscreteStates()
+    q, iv = _countdown(b, 2)
+    assert q == UNCHANGED and iv == pytest.approx(wt, abs=1e-12), (q, iv, wt)
+
+
+def test_the_frames_end_is_announced_by_the_tx_clocks_not_again_as_next_event_time(bus):
+    """FMI 3.0.2, 2.3, Event Mode: time events are announced "through the argument nextEventTime
+    of fmi3UpdateDiscreteStates, or the arguments of fmi3GetShift and fmi3GetInterval". The end of
+    a frame is the tick of its receivers' countdown Tx clocks: announced there, once (an importer
+    that shortens its step to nextEventTime and counts an unchanged interval down by that step,
+    as fmu-manipulation-toolbox 2.0's container does, would lose the clock)"""
+    b = bus()
+    b._leave_event_mode()
+    b._enter_event_mode()
+    b.fmu.setClock([vr(1, RX_CLOCK)], [True])
+    b.fmu.setBinary([vr(1, RX_DATA)], [transmit(0x110, bytes(8))])
+    need, _, _, _, defined, _ = b.fmu.updateDiscreteStates()
+    assert not need and not defined
+    assert _countdown(b, 2) == (CHANGED, pytest.approx(wire_time(0x110, bytes(8)), abs=1e-12))
+    assert _countdown(b, 1) == (CHANGED, pytest.approx(wire_time(0x110, bytes(8)), abs=1e-12))   # its Confirm
+
+
 def test_baud_rate_from_a_configuration(bus):
     b = bus()
     b.send({1: configuration(0x01, 250_000) + transmit(0x110, bytes(8))})
@@ -540,10 +586,27 @@ def test_rx_data_without_its_clock_is_an_error(bus):
     _raises(b, lambda: b.fmu.setBinary([vr(2, RX_DATA)], [transmit(1, b"")]), "Node2.Rx_Clock", "not active")
 
 
-def test_a_clock_set_after_the_discrete_states_is_an_error(bus):
+def test_a_countdown_tx_clock_set_after_the_discrete_states_is_an_error(bus):
     b = bus()
     b.send({1: transmit(0x100, b"")})        # ends with fmi3UpdateDiscreteStates, nothing due now
-    _raises(b, lambda: b.fmu.setClock([vr(2, RX_CLOCK)], [True]), "Node2.Rx_Clock", "after fmi3UpdateDiscreteStates")
+    _raises(b, lambda: b.fmu.setClock([vr(2, TX_CLOCK)], [True]), "Node2.Tx_Clock", "after fmi3UpdateDiscreteStates")
+
+
+def test_a_triggered_rx_clock_set_after_the_discrete_states_is_taken(bus):
+    """FMI 3.0.2, 2.3, Event Mode, fmi3SetClock: a clock must not be active for more than one
+    fmi3UpdateDiscreteStates per Event Mode; "This restriction does not apply to triggered Clocks".
+    NodeK.Rx_Clock is triggered: set after an update that asked for no iteration, in the same Event
+    Mode, it begins a new super-dense instant and its operations go on the wire after node 1's"""
+    b = bus()
+    b.send({1: transmit(0x100, b"")})        # ends with fmi3UpdateDiscreteStates, nothing due now
+    b.fmu.setClock([vr(2, RX_CLOCK)], [True])
+    b.fmu.setBinary([vr(2, RX_DATA)], [transmit(0x200, b"\x07")])
+    b._update()
+    b.run(0.01)
+    t1, t2 = wire_time(0x100, b""), wire_time(0x200, b"\x07")
+    assert b.ops(3, "Transmit") == [(pytest.approx(t1, abs=1e-12), ("Transmit", (0x100, b""))),
+                                    (pytest.approx(t1 + t2, abs=1e-12), ("Transmit", (0x200, b"\x07")))]
+    assert not [m for st, m in b.log if st >= 3]
 
 
 @pytest.mark.parametrize("name,value", [("baudrate", 0), ("nNodes", 9), ("arbitrationLostBehavior", 3),
@@ -631,3 +694,49 @@ def test_manifest_terminals_and_variables_follow_ls_bus(unzipped):
         assert (v.type, v.causality, v.variability, v.start) == ("Boolean", "output", "constant", "true")
         used += list(members.values()) + [bn.get("variableName")]
     assert len(used) == len(set(used))          # a variable in one terminal only
+
+
+# ---- the triggered Tx form (fmus/fmi3/lsbus-triggered/CanBus_Triggered.fmu, issue 39) ---------
+
+def test_the_triggered_form_signals_a_frames_end_and_activates_its_output_tx_clocks():
+    """CanBus_Triggered: NodeK.Tx_Clock a triggered output clock (FMI 3.0.2, 2.2.9; fmi-ls-bus
+    4____network_abstraction.adoc, "Triggered Tx Clocks": pending Tx data signalled by fmi3DoStep's
+    eventHandlingNeeded). A frame of node 1 put on the wire at t = 0 ends after its wire time
+    (closed form), given as nextEventTime (no countdown clock says it); at a step to it the bus asks
+    for event handling; its update activates node 1's and node 2's Tx clocks for the next
+    super-dense instant (discreteStatesNeedUpdate), which hold the Confirm and the Transmit; the
+    next update deactivates them (FMI 3.0.2, 2.3: the FMU deactivates its active clocks)"""
+    path = fmu_dir() / "fmi3" / "lsbus-triggered" / "CanBus_Triggered.fmu"
+    assert path.is_file(), f"{path} not built"
+    md = read_model_description(str(path))
+    clocks = {v.name: v for v in md.modelVariables if v.type == "Clock"}
+    assert all((c.causality, c.intervalVariability) == ("output", "triggered")
+               for n, c in clocks.items() if n.endswith("Tx_Clock")) and len(clocks) == 2 * N
+    assert not validate_fmu(str(path))
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier="CanBus_Triggered",
+                    instanceName="bus")
+    log = []
+    fmu.instantiate(eventModeUsed=True, logMessage=lambda env, st, cat, msg: log.append((st, msg.decode())))
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.exitInitializationMode()
+    data = bytes(range(8))
+    wt = wire_time(0x110, data)
+    fmu.setClock([vr(1, RX_CLOCK)], [True])
+    fmu.setBinary([vr(1, RX_DATA)], [transmit(0x110, data)])
+    need, _, _, _, defined, t_next = fmu.updateDiscreteStates()
+    assert not need and defined and t_next == pytest.approx(wt, abs=1e-12)
+    fmu.enterStepMode()
+    event, _, _, _ = fmu.doStep(0.0, wt)
+    assert event
+    fmu.enterEventMode()
+    need = fmu.updateDiscreteStates()[0]
+    assert need
+    tx = [vr(k, TX_CLOCK) for k in (1, 2, 3)]
+    assert list(fmu.getClock(tx)) == [True, True, True]        # nNodes 8: node 3 listens too
+    got = [parse(b) for b in fmu.getBinary([vr(k, TX_DATA) for k in (1, 2)])]
+    assert got == [[("Confirm", 0x110)], [("Transmit", (0x110, data))]]
+    need = fmu.updateDiscreteStates()[0]
+    assert not need and not any(fmu.getClock(tx))
+    assert not [m for st, m in log if st >= 3]
+    fmu.terminate()
+    fmu.freeInstance()

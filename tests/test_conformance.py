@@ -42,11 +42,8 @@ def options(model):
 
 
 def cases():
-    for version in (2, 3):
-        for m in MODELS:
-            if version == 2 and m == "LinearTransform":
-                continue                     # (FMI 3.0 only: arrays)
-            yield pytest.param(m, version, id=f"fmi{version}-{m}")
+    return [pytest.param(m, version, id=f"fmi{version}-{m}") for version in (2, 3) for m in MODELS
+            if version == 3 or m != "LinearTransform"]                 # (FMI 3.0 only: arrays)
 
 
 def fmu_of(model, version):
@@ -104,7 +101,11 @@ def test_reference_fmu_as_the_cross_check_runs_it(model, version, tmp_path):
         for k, c in enumerate(cols):
             scale = max(1.0, float(np.max(np.abs(y[:, k]))))
             np.testing.assert_allclose(ours[c], y[:, k], rtol=1e-9, atol=1e-12 * scale, err_msg=c)
-    # the reference results the sources carry, by the cross-check's rule
+    against_the_reference_results(model, version, path, ours)
+
+
+def against_the_reference_results(model, version, path, ours):
+    """ours against the reference results the sources carry, by the cross-check's rule"""
     ref_path = REFERENCE / "ref" / f"{model}_ref.csv"
     if not ref_path.read_text().strip():
         pytest.skip(f"{ref_path.name} is empty")
@@ -120,6 +121,116 @@ def test_reference_fmu_as_the_cross_check_runs_it(model, version, tmp_path):
             continue
         *_, outside = validate_signal(ours["time"], ours[n].astype(float), t_ref, y_ref)
         assert not np.any(outside), f"{model} FMI {version}.0: {n} leaves the reference band"
+
+
+def me_cases():
+    """every Reference-FMU that has Model Exchange, both versions (FMI 2.0 has no LinearTransform)"""
+    for version in (2, 3):
+        for m in MODELS:
+            path = REFERENCE / ("fmi3" if version == 3 else "") / f"{m}.fmu"
+            if path.is_file() and fmpy.read_model_description(str(path)).modelExchange is None:
+                continue
+            if version == 3 or m != "LinearTransform":
+                yield pytest.param(m, version, id=f"fmi{version}-{m}-me")
+
+
+def fmpy_rows_at(ours_t, theirs_t, input_events):
+    """Which of FMPy's rows is ours at each of our times. FMPy's simulate_fmu in Model Exchange
+    records an event instant twice (its values before and after the event, one time); ours once:
+    at an input event (a time of the input file) the values before the inputs are set there, as
+    at every communication point (Co-Simulation's), at a time or state event the values after the
+    event iteration (the FMU's own, as its Co-Simulation build's step ends there)."""
+    rows = []
+    for t in ours_t:
+        at = np.flatnonzero(np.isclose(theirs_t, t, rtol=1e-12, atol=1e-12))
+        assert len(at), f"FMPy has no row at t = {t}"
+        rows.append(at[0] if any(np.isclose(t, e, rtol=1e-12, atol=1e-12) for e in input_events) else at[-1])
+    return np.array(rows)
+
+
+@pytest.mark.parametrize("model, version", list(me_cases()))
+def test_reference_fmu_in_model_exchange_as_fmpy_integrates_it(model, version, tmp_path):
+    """`artibus simulate --fmi-type me` (CVODE, rtol 1e-8) against FMPy's simulate_fmu(fmi_type=
+    "ModelExchange", solver="CVode", relative_tolerance=1e-8) on the same output grid: each signal
+    within 1e-6 of its peak magnitude (|ours - FMPy| <= 1e-6 max|FMPy|, an integer or Boolean
+    exactly), at the rows of fmpy_rows_at; then the sources' reference results by the
+    cross-check's rule. A run the FMU ends itself (Stair: terminateSimulation at its counter's
+    10th event) ends at FMPy's time; there FMPy records only the values before that event,
+    ours the event's own: that last row is held against the reference results only."""
+    path = fmu_of(model, version)
+    opt = options(model)
+    out = tmp_path / "ours.csv"
+    args = ["--fmi-type", "me", "--start-time", opt["StartTime"], "--stop-time", opt["StopTime"],
+            "--relative-tolerance", 1e-8]
+    if opt.get("StepSize"):
+        args += ["--output-interval", opt["StepSize"]]
+    inp = input_file(model, version, path)
+    if inp is not None:
+        args += ["--input-file", inp]
+    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(path), *map(str, args), "-o", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    table = read_csv(str(inp)) if inp is not None else None
+    theirs = fmpy.simulate_fmu(str(path), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-8,
+                               start_time=opt["StartTime"], stop_time=opt["StopTime"], input=table,
+                               output_interval=opt.get("StepSize") or float(ours["time"][1] - ours["time"][0]))
+    assert ours["time"][-1] == pytest.approx(theirs["time"][-1], rel=1e-12)
+    ended = ours["time"][-1] < opt["StopTime"] - 1e-9          # (the FMU ended the run itself)
+    rows = fmpy_rows_at(ours["time"], theirs["time"], table["time"] if table is not None else ())
+    mine = ours[:-1] if ended else ours
+    rows = rows[:-1] if ended else rows
+    for name in theirs.dtype.names[1:]:
+        y = np.asarray(theirs[name], dtype=float).reshape(len(theirs), -1)[rows]
+        if table is not None and theirs[name].dtype in (np.int64, np.uint64):
+            # FMPy's float64 input file wraps 2**63 - 1 (as in the CS test): the file's own integers
+            rows_in = [line.split(",") for line in Path(inp).read_text().splitlines()]
+            col = rows_in[0].index(name.replace("_output", "_input"))
+            assert ours[name][0] == pytest.approx(int(rows_in[1][col]), rel=1e-9)
+            assert ours[name][-1] == pytest.approx(int(rows_in[-1][col]), rel=1e-9)
+            continue
+        cols = [name] if y.shape[1] == 1 else [f"{name}[{k + 1}]" for k in range(y.shape[1])]
+        for k, c in enumerate(cols):
+            if theirs[name].dtype.kind in "iub":
+                np.testing.assert_array_equal(mine[c], y[:, k], err_msg=c)
+            else:
+                peak = float(np.max(np.abs(y[:, k])))
+                assert np.max(np.abs(mine[c] - y[:, k])) <= 1e-6 * peak + 1e-300, c
+    against_the_reference_results(model, version, path, ours)
+
+
+def test_a_discrete_input_of_an_me_fmu_in_a_bench_is_set_in_event_mode(tmp_path):
+    """TypesTest's count (the steps taken: k at t_k) into FMI 3.0 Feedthrough's Int32_input, the
+    Feedthrough run as Model Exchange: a discrete input changes in Event Mode only (FMI 3.0
+    3.2.1, "State: Continuous-Time Mode": there only continuous-time inputs are set; the
+    Reference-FMUs refuse it, "Illegal call sequence"): Int32_output = count = k at every point"""
+    import zipfile
+
+    from artibus.base import fmu_dir
+    feed, types = REFERENCE / "fmi3" / "Feedthrough.fmu", fmu_dir() / "TypesTest.fmu"
+    if not feed.is_file() or not types.is_file():
+        pytest.skip(f"{feed} or {types} not built")
+    ns = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+          'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"')
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {ns} version="1.0" name="me">'
+           '<ssd:System name="me"><ssd:Elements><ssd:Component name="T" source="resources/TypesTest.fmu">'
+           '<ssd:Connectors><ssd:Connector name="count" kind="output"/></ssd:Connectors></ssd:Component>'
+           '<ssd:Component name="F" source="resources/Feedthrough.fmu"><ssd:Connectors>'
+           '<ssd:Connector name="Int32_input" kind="input"/><ssd:Connector name="Int32_output" kind="output"/>'
+           '</ssd:Connectors></ssd:Component></ssd:Elements><ssd:Connections><ssd:Connection startElement="T" '
+           'startConnector="count" endElement="F" endConnector="Int32_input"/></ssd:Connections></ssd:System>'
+           '<ssd:DefaultExperiment startTime="0" stopTime="1"/></ssd:SystemStructureDescription>')
+    bench = tmp_path / "me.ssp"
+    with zipfile.ZipFile(bench, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        z.write(feed, "resources/Feedthrough.fmu")
+        z.write(types, "resources/TypesTest.fmu")
+    out = tmp_path / "me.csv"
+    p = subprocess.run([sys.executable, "-m", "artibus", "run", str(bench), "--fmi-type", "me", "--step", "0.25",
+                        "-o", str(out)], capture_output=True, text=True)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    assert list(ours["T.count"]) == list(ours["F.Int32_output"]) == [0, 1, 2, 3, 4]
 
 
 def test_a_scheduled_execution_only_fmu_is_refused_by_name(tmp_path):
@@ -237,3 +348,46 @@ def test_a_pythonfmu3_fmu_in_a_bench_driven_by_an_input_file(python_fmu, tmp_pat
     assert len(ours) == 11
     np.testing.assert_allclose(ours["P.x"], x, rtol=1e-9, atol=1e-12)
     assert list(ours["P.n"]) == list(n)
+
+
+def test_a_pythonfmu3_array_output_drives_linear_transform_in_a_bench(python_fmu, tmp_path):
+    """Scaled's y (4 elements, gain u) connected whole to LinearTransform's u, its n = 4 set in
+    the bench (an .ssv: a structural parameter, FMI 3.0 2.3 Configuration Mode): L.y = A (gain u)
+    element by element (u = 2 held; Scaled's y is its start value 0 until its first step)."""
+    import zipfile
+    lt = REFERENCE / "fmi3" / "LinearTransform.fmu"
+    if not lt.is_file():
+        pytest.skip(f"{lt} not built")
+    ns = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+          'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
+          'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"')
+    ssv = (f'<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet {ns} version="1.0" name="n"><ssv:Parameters>'
+           '<ssv:Parameter name="n"><ssv:Integer value="4"/></ssv:Parameter></ssv:Parameters></ssv:ParameterSet>')
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {ns} version="1.0" name="py">'
+           '<ssd:System name="py"><ssd:Elements><ssd:Component name="P" source="resources/Scaled.fmu">'
+           '<ssd:Connectors><ssd:Connector name="y" kind="output"/></ssd:Connectors></ssd:Component>'
+           '<ssd:Component name="L" source="resources/LinearTransform.fmu"><ssd:Connectors>'
+           '<ssd:Connector name="u" kind="input"/><ssd:Connector name="y" kind="output"/></ssd:Connectors>'
+           '<ssd:ParameterBindings><ssd:ParameterBinding source="resources/n.ssv"/></ssd:ParameterBindings>'
+           '</ssd:Component></ssd:Elements><ssd:Connections><ssd:Connection startElement="P" startConnector="y" '
+           'endElement="L" endConnector="u"/></ssd:Connections></ssd:System>'
+           '<ssd:DefaultExperiment startTime="0" stopTime="0.5"/></ssd:SystemStructureDescription>')
+    bench = tmp_path / "py.ssp"
+    with zipfile.ZipFile(bench, "w") as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        z.writestr("resources/n.ssv", ssv)
+        z.write(python_fmu, "resources/Scaled.fmu")
+        z.write(lt, "resources/LinearTransform.fmu")
+    a = np.array([[1.0, 0.0, 2.0, -1.0], [0.5, 1.0, 0.0, 3.0]])
+    out = tmp_path / "bench.csv"
+    p = subprocess.run([sys.executable, "-m", "artibus", "run", str(bench), "--step", str(H), "--set", "P.u=2",
+                        "--set", "L.A=" + " ".join(map(str, a.ravel())), "-o", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    y = 2.0 * np.array(GAIN)
+    for k in range(4):
+        assert ours[f"P.y[{k + 1}]"][0] == 0.0
+        np.testing.assert_array_equal(ours[f"P.y[{k + 1}]"][1:], y[k])
+    for k in range(2):
+        np.testing.assert_allclose(ours[f"L.y[{k + 1}]"][2:], (a @ y)[k], rtol=1e-15)

@@ -143,13 +143,19 @@ def _component(name, fmu, connectors):
             f'<ssd:Connectors>{conns}</ssd:Connectors></ssd:Component>')
 
 
-def test_an_array_in_a_bench_is_refused_naming_it(tmp_path):
+def test_an_array_in_a_bench_is_recorded_element_wise(tmp_path):
+    """(issue 38; refused before, when a bench carried scalars only) LinearTransform's y at its
+    start values (A the identity, u = [1, 2]: the XML's): y = [1, 2], a column per element;
+    connections of arrays: tests/test_bench_arrays.py"""
     ssp = _ssp(tmp_path / "A.ssp", _component("LT", "LinearTransform", [("y", "output", "Real")]), "",
                {"resources/LinearTransform.fmu": linear_transform()})
-    p = subprocess.run([sys.executable, "-m", "artibus", "run", str(ssp), "-o", str(tmp_path / "a.csv")],
+    out = tmp_path / "a.csv"
+    p = subprocess.run([sys.executable, "-m", "artibus", "run", str(ssp), "--step", "0.5", "-o", str(out)],
                        capture_output=True, text=True, cwd=tmp_path)
-    assert p.returncode == 1 and "Traceback" not in p.stderr
-    assert "LT.y is an array of 2 values (Float64, 2)" in p.stderr, p.stderr
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    header = out.read_text().splitlines()[0].replace('"', "").split(",")
+    assert header == ["time", "LT.y[1]", "LT.y[2]"]
+    np.testing.assert_array_equal(np.loadtxt(out, delimiter=",", skiprows=1)[:, 1:], [[1.0, 2.0]] * 3)
 
 
 @pytest.mark.parametrize("value, passes", [(100, True), (300, False)])

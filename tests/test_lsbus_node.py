@@ -408,10 +408,10 @@ def test_call_order_errors_are_errors_not_crashes(tmp_path):
     node = Node("SteeringECU_LSBUS", tmp_path, module=2)
     f = node.fmu
     try:
-        f.setClock([node.rxc], [True])
+        f.setClock([node.txc], [True])
         f.updateDiscreteStates()
-        with pytest.raises(FMICallException):                    # a clock after the discrete states
-            f.setClock([node.rxc], [True])
+        with pytest.raises(FMICallException):     # a periodic clock active at a second update of the Event Mode
+            f.setClock([node.txc], [True])        # (FMI 3.0.2, 2.3, fmi3SetClock)
     finally:
         f.freeInstance()
     node = Node("SteeringECU_LSBUS", tmp_path / "b", module=2)
@@ -425,6 +425,71 @@ def test_call_order_errors_are_errors_not_crashes(tmp_path):
         with pytest.raises(FMICallException):                    # more than maxSize
             node.fmu.setClock([node.rxc], [True])
             node.fmu.setBinary([node.rx], [bytes(1025)])
+    finally:
+        node.fmu.freeInstance()
+
+
+def _logged_node(name, tmp, **params):
+    """the node with its log messages kept in node.log as (status, text)"""
+    path = fmu3(name)
+    md = read_model_description(str(path))
+    node = Node.__new__(Node)
+    node.md, node.log = md, []
+    node.vr = {v.name: v.valueReference for v in md.modelVariables}
+    node.dir = extract(str(path), unzipdir=str(tmp / name))
+    node.fmu = FMU3Slave(guid=md.guid, unzipDirectory=node.dir, modelIdentifier=md.coSimulation.modelIdentifier,
+                         instanceName=name)
+    node.fmu.instantiate(eventModeUsed=True,
+                         logMessage=lambda env, st, cat, msg: node.log.append((st, msg.decode())))
+    node.fmu.enterInitializationMode(startTime=0.0)
+    for k, v in params.items():
+        node.fmu.setInt32([node.vr[k]], [v])
+    node.fmu.exitInitializationMode()
+    node.t, node.in_event = 0.0, True
+    node.rx, node.tx, node.rxc, node.txc = (node.vr["SteeringCAN." + m] for m in
+                                            ("Rx_Data", "Tx_Data", "Rx_Clock", "Tx_Clock"))
+    return node
+
+
+@pytest.mark.parametrize("member", ["Rx_Clock", "Tx_Clock"])
+def test_a_clock_activated_in_step_mode_is_an_error_naming_node_clock_and_time(tmp_path, member):
+    """FMI 3.0.2, 4.2, Step Mode: "clocked variables can not be set or get because Clocks are only
+    active during Event Mode": fmi3SetClock in Step Mode is refused, the message naming the node
+    (its instance name: FMI 3.0's log callback carries none), the clock and the time"""
+    node = _logged_node("SteeringECU_LSBUS", tmp_path, module=2)
+    try:
+        node.fmu.enterStepMode()
+        node.fmu.doStep(0.0, 0.0125)
+        with pytest.raises(FMICallException):
+            node.fmu.setClock([node.vr["SteeringCAN." + member]], [True])
+        errors = [m for st, m in node.log if st >= 3]
+        assert errors and all(w in errors[-1] for w in ("SteeringECU_LSBUS", f"SteeringCAN.{member}",
+                                                         "t = 0.0125")), errors
+        assert "step mode" in errors[-1].lower(), errors
+    finally:
+        node.fmu.freeInstance()
+
+
+def test_an_rx_clock_set_after_the_update_is_a_new_instant_of_the_event_mode(tmp_path, db):
+    """FMI 3.0.2, 2.3, Event Mode, fmi3SetClock: a clock is active for at most one
+    fmi3UpdateDiscreteStates per Event Mode, "This restriction does not apply to triggered Clocks";
+    "The event mode may consist of several super-dense time instants". Rx_Clock is triggered: set
+    again after the update, with Rx_Data, it is taken in that Event Mode: the ECU (module 2) receives
+    the frames of the second instant (their values through the DBC, cantools) as in one instant"""
+    node = _logged_node("SteeringECU_LSBUS", tmp_path, module=2)
+    try:
+        f = node.fmu
+        f.setClock([node.txc], [True])
+        f.updateDiscreteStates()                              # the tick at t = 0: its frames, no Rx yet
+        frames = ecu_frames(db, 0, 0.1, 0.05, -0.02, 0.0, 0, 3.0)
+        f.setClock([node.rxc], [True])
+        f.setBinary([node.rx], [b"".join(op_transmit(i, d) for i, d in frames.items())])
+        f.updateDiscreteStates()
+        want = decoded(db, frames)
+        got = dict(zip(("gamma1", "dPsi[1]", "dPsi[2]", "v"), f.getFloat64([node.vr[n] for n in
+                                                                           ("gamma1", "dPsi[1]", "dPsi[2]", "v")])))
+        assert got == pytest.approx({k: want[k] for k in got}, abs=1e-12)
+        assert not [m for st, m in node.log if st >= 3], node.log
     finally:
         node.fmu.freeInstance()
 

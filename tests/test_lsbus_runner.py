@@ -230,8 +230,8 @@ def test_a_clock_after_the_discrete_states_is_refused():
         with pytest.raises(LsBusError, match=r"ecu: fmi3SetClock\(SteeringCAN.Rx_Clock\) after "
                                              r"fmi3UpdateDiscreteStates"):
             ecu.set_clocks([term.rx_clock])
-        with pytest.raises(FMICallException):       # and the FMU itself refuses it
-            ecu.fmu.setClock([term.rx_clock], [True])
+        with pytest.raises(FMICallException):       # the FMU itself refuses its periodic Tx clock a second
+            ecu.fmu.setClock([term.tx_clock], [True])   # update (FMI 3.0.2, 2.3; a triggered Rx clock it takes)
 
 
 def test_an_fmu_without_a_bus_terminal_is_refused_by_name():

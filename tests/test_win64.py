@@ -33,11 +33,18 @@ from artibus import fmu_dir
 ROOT = Path(__file__).resolve().parents[1]
 WIN = Path(os.environ.get("ARTIBUS_WIN64_BUILD", ROOT / "build-win64"))
 FMU_DIR = fmu_dir()
-NAMES = re.findall(r"^add_fmu\((\w+)", (ROOT / "CMakeLists.txt").read_text(), re.M)
+NAMES = re.findall(r"^add_fmu\((\w+)\s+(?!LSBUS\b)", (ROOT / "CMakeLists.txt").read_text(), re.M)
+#: the FMI 3.0-only FMUs (FMI-LS-BUS, issues 24 and 39: the nodes, their triggered forms, the bus in
+#: both forms): build-win64/win64/fmi3/<Name>.dll, in binaries/x86_64-windows of their FMU
+LSBUS = re.findall(r"^add_fmu\((\w+)\s+LSBUS\b", (ROOT / "CMakeLists.txt").read_text(), re.M) \
+    + ["CanBus", "CanBus_Triggered"]
 
 # the FMI 2.0 functions (both interfaces): the shared layer defines them all
 FMI2_FUNCTIONS = set(re.findall(r"FMI2_Export\s+\w+TYPE\s+(fmi2\w+);",
                                 (ROOT / "include/fmi2/fmi2Functions.h").read_text()))
+
+FMI3_FUNCTIONS = set(re.findall(r"FMI3_Export\s+\w+TYPE\s+(fmi3\w+);",
+                                (ROOT / "include/fmi3/fmi3Functions.h").read_text()))
 
 # what a Windows machine has without installing anything
 SYSTEM_DLLS = re.compile(r"^(kernel32|msvcrt|ucrtbase|user32|advapi32|ws2_32|"
@@ -184,6 +191,27 @@ def test_fmu_carries_the_win64_binary(name):
         assert f"binaries/win64/{name}.dll" in z.namelist()
         packed = z.read(f"binaries/win64/{name}.dll")
     assert packed == _dll(name).read_bytes(), "the FMU's DLL is not the win64 build's"
+
+
+@pytest.mark.parametrize("name", LSBUS)
+def test_fmi3_only_fmu_carries_its_win64_binary(name):
+    """an FMI-LS-BUS FMU (FMI 3.0 only): its DLL imports only Windows system DLLs, exports every
+    FMI 3.0 function and nothing else, and is the one in its FMU's binaries/x86_64-windows (FMI 3.0,
+    2.5.1.1)"""
+    dll = WIN / "win64" / "fmi3" / f"{name}.dll"
+    if not dll.is_file():
+        pytest.skip(f"no win64 build ({dll} missing): run scripts/setup.sh --all-platforms")
+    imports, exports = pe_tables(dll)
+    assert imports and all(SYSTEM_DLLS.match(i) for i in imports), imports
+    assert set(exports) == FMI3_FUNCTIONS, sorted(set(exports) ^ FMI3_FUNCTIONS)
+    fmu = FMU_DIR / "fmi3" / f"{name}.fmu"
+    if name.endswith("_Triggered"):
+        fmu = FMU_DIR / "fmi3" / "lsbus-triggered" / f"{name}.fmu"
+    if not fmu.is_file():
+        pytest.skip(f"{fmu} not built")
+    with zipfile.ZipFile(fmu) as z:
+        packed = z.read(f"binaries/x86_64-windows/{name}.dll")
+    assert packed == dll.read_bytes(), "the FMU's DLL is not the win64 build's"
 
 
 def _importer(name):

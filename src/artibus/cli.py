@@ -10,6 +10,8 @@
   artibus plot RESULTS.csv SIGNAL...   a PNG of signals of a results file, a panel per unit
   artibus bode BENCH --input C.V --measure C.V  gain and phase by sine tests through the co-simulation
   artibus calibrate [-o FILE.ssv]      the damping controller's gains (seed 001, 5.2.2)
+  artibus linearize FMU [--steady]     A, B, C, D of one Model Exchange FMU at an operating point (--at T,
+                                       --steady); its modes: frequency, damping ratio, dominant state
   artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
   artibus can plot LOG [--signal S]    a CAN log's frame timing and decoded signals as a PNG
   artibus replay LOG --bench BENCH     a recorded log (.csv, .blf, .asc) drives a bench; model against measured
@@ -32,10 +34,11 @@ import sys
 from pathlib import Path
 
 from artibus.console import path_error, quiet_exit, stdout_gone
-from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds, fmu_path
+from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds
 from artibus import files
-from artibus.files import atomic_dir, bench_inputs, check_output, given as _given, make_dir, report_said
-from artibus.inventory import cmd_info, cmd_list
+from artibus.files import atomic_dir, bench_inputs, given as _given, make_dir, report_said
+from artibus.analysis import cmd_bode, cmd_calibrate, cmd_linearize
+from artibus.inventory import cmd_info, cmd_list, fmu_arg, wrong_kind
 from artibus.options import Parser
 
 
@@ -54,29 +57,6 @@ def _check_output(path, inputs=(), what="-o", results=False):
     a run's results, in a format of its extension (artibus.runner.formats)."""
     from artibus.runner.results import check_results_file
     return check_results_file(path, what, inputs, results)
-
-
-def _fmu_arg(text):
-    p = Path(text)
-    _wrong_kind("simulate", text)
-    return p if p.suffix == ".fmu" else fmu_path(text)
-
-
-def _wrong_kind(verb, text):
-    """A bench (a name of ssp/benches, an .ssp) given to ``simulate`` or an FMU (an
-    .fmu, the name of a built FMU that is no bench) given to ``run``: an error
-    saying which verb takes it, before any look-up says "not built" or "no such bench"."""
-    from artibus.base import fmu_dir
-    from artibus.bench import ssp
-    p = Path(text)
-    benches = ssp.bench_names()
-    if verb == "simulate" and (p.suffix.lower() == ".ssp" or (p.suffix == "" and text in benches)):
-        raise ArtibusError(f"simulate {text}: a bench (an SSP system of FMUs), not an FMU: run it with "
-                           f"`artibus run {text}`; simulate runs one FMU alone (`artibus list` shows both)")
-    if verb == "run" and (p.suffix.lower() == ".fmu" or (text not in benches and p.suffix == ""
-                                                       and (fmu_dir() / f"{text}.fmu").is_file())):
-        raise ArtibusError(f"run {text}: an FMU, not a bench: simulate it alone with "
-                           f"`artibus simulate {text}`; run runs a bench (`artibus list` shows both)")
 
 
 def cmd_pack(args):
@@ -98,7 +78,7 @@ def cmd_pack(args):
         raise ArtibusError("--fmi: a portable pack has the builds the bench's .ssd names")
     from artibus.bench.portable import pack_portable
     benches = args.bench or [b for b in ssp.bench_names()                  # (pack_portable says why not the others)
-                             if (r := ssp.read(ssp.ssp_path(b))).can is None and r.version == "1.0"]
+                             if (r := ssp.read(ssp.ssp_path(b))).can is None and r.read_as == "1.0"]
     if args.output and len(benches) != 1:
         raise ArtibusError("-o names one portable pack: give one BENCH")
     if args.variant and len(benches) != 1:
@@ -116,7 +96,7 @@ def cmd_run(args):
     if args.all == bool(args.bench):
         raise ArtibusError("give one BENCH or --all")
     if args.bench:
-        _wrong_kind("run", args.bench)
+        wrong_kind("run", args.bench)
     if args.all and args.variant:
         raise ArtibusError("--variant selects a variant of one BENCH, not of --all")
     if args.all and args.input_file:
@@ -222,52 +202,12 @@ def cmd_can_plot(args):
     return 0
 
 
-def cmd_bode(args):
-    from artibus.bench import ssp
-    from artibus.bench.parameters import parse_set
-    from artibus.study import bode
-    if not args.measure:
-        hint = (f" (-o/--output is the results file now, as in every command: "
-                f"--measure {args.output} names the output to measure)"
-                if args.output and not args.output.endswith(".csv") else "")
-        raise ArtibusError("bode: give the output to measure, --measure COMP.VAR" + hint)
-    if not args.output and not args.plot:
-        raise ArtibusError("bode: say where the results go: -o FILE.csv (the table) and/or --plot FILE.png")
-    out = _check_output(Path(args.output), bench_inputs(args.bench)) if args.output else None
-    if args.plot:
-        _check_output(args.plot, bench_inputs(args.bench), "--plot")
-    overrides = {**ssp.variant_overrides(args.bench, args.variant), **parse_set(args.set)}
-    bode.measure(args.bench, args.input, args.measure, args.fmin, args.fmax, args.n, args.amplitude,
-                 periods=args.periods, settle=args.settle, overrides=overrides, step=args.step,
-                 out=out, plot_path=args.plot, log=print, fmi=args.fmi)
-    return 0
-
-
-def cmd_calibrate(args):
-    """seed 001, 5.2.2: each damping option's gain for a peak damping of 13.5 %
-    on the 200 m / 100 km/h / rear-friction-0.2 lane change; printed, and
-    written as a parameter set only to -o FILE (the benches' own gains:
-    -o ssp/parameters/DampingGains.ssv)."""
-    from artibus.study import damping
-    out = check_output(args.output, "-o") if args.output else None
-    if out is not None and Path(out).suffix != ".ssv":
-        raise ArtibusError(f"-o {out}: the gains are written as a parameter set, FILE.ssv")
-    gains, reached = damping.calibrate(target=args.target)
-    print("\n" + damping.gains_table(gains, reached))
-    if out is None or args.dry_run:
-        print("\n(written nowhere: -o FILE.ssv writes them; -o ssp/parameters/DampingGains.ssv is the benches' set)")
-        return 0
-    notes = "Made by `artibus calibrate`; " + ", ".join(f"{n}: {reached[n]:.3f} %" for n in reached) + "."
-    print(f"gains written to {damping.write_gains(gains, path=out, notes=notes)}")
-    return 0
-
-
 def cmd_simulate(args):
     from artibus.bench.parameters import check_against, parse_set, read_parameters
-    from artibus.fmu import simulate
+    from artibus.fmu.isolated import simulate     # the FMU in a process of its own: its crash ends only that
     from artibus.runner import save_partial
     from artibus.bench.fmi import simulated_fmu
-    fmu = _fmu_arg(args.fmu)
+    fmu = fmu_arg(args.fmu)
     run = simulated_fmu(fmu, args.fmu, args.fmi)     # --fmi 3: its FMI 3.0 build, checked as FMI 2.0's
     out = args._out = _check_output(Path(args.output or f"{fmu.stem}.csv"), _given([fmu, args.ssv], "a file simulate reads") + bench_inputs(fmu), results=True)
     from artibus.options import check_interface, input_file, start_values
@@ -460,6 +400,24 @@ def build_parser():
     s.add_argument("--plot", metavar="FILE.png", help="PNG with gain and phase")
     add_fmi_option(s, "bode")
     s.set_defaults(func=cmd_bode)
+    s = sub.add_parser("linearize", help="A, B, C, D of one Model Exchange FMU at an operating point, "
+                                         "its modes (frequency, damping ratio, dominant state)")
+    s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU (it needs Model Exchange)")
+    g = s.add_mutually_exclusive_group()
+    g.add_argument("--at", type=arg_real, metavar="TIME", help="simulate (ME, inputs held) to TIME first, s")
+    g.add_argument("--steady", action="store_true", help="simulate until the dynamic states are at rest")
+    s.add_argument("--ssv", help="a parameter set (.ssv, or a name in ssp/parameters) for the FMU")
+    s.add_argument("--set", action="append", metavar="NAME=VALUE", help="a parameter or an input's held value")
+    s.add_argument("--inputs", metavar="A,B", help="the inputs (default: every continuous Real input)")
+    s.add_argument("--outputs", metavar="Y,Z", help="the outputs (default: every continuous Real output)")
+    s.add_argument("--derivatives", choices=["auto", "fd", "exact"], default="auto",
+                   help="auto: the FMU's directional derivatives where it provides them, else finite differences")
+    s.add_argument("--fd-step", type=arg_seconds, default=1e-5, metavar="H",
+                   help="finite differences' step, times each state's and input's nominal (default 1e-5)")
+    s.add_argument("-o", "--output", metavar="FILE", help="the matrices: FILE.mat (MATLAB) or FILE.csv")
+    s.add_argument("--bode", metavar="IN:OUT", help="the linear model's Bode plot from IN to OUT (with --plot)")
+    s.add_argument("--plot", metavar="FILE.png", help="where the Bode plot goes")
+    s.set_defaults(func=cmd_linearize)
     s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), printed; "
                                          "-o FILE.ssv writes them")
     s.add_argument("--target", type=arg_real, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")

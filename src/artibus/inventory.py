@@ -3,7 +3,7 @@ benches (their components, connections, variants, bound values) and the FMUs
 (their variables, units, defaults)."""
 from pathlib import Path
 
-from artibus.base import ArtibusError, fmu_dir
+from artibus.base import ArtibusError, fmu_dir, fmu_path
 
 
 def _fmu_names():
@@ -97,3 +97,27 @@ def cmd_list(args):
     if not args.parameters:
         print("\n(`artibus list --parameters` adds every bench's parameter values)")
     return 0
+
+
+def fmu_arg(text):
+    """an FMU named on the command line: a path to an .fmu, or the name of a built FMU (never a bench)"""
+    p = Path(text)
+    wrong_kind("simulate", text)
+    return p if p.suffix == ".fmu" else fmu_path(text)
+
+
+def wrong_kind(verb, text):
+    """A bench (a name of ssp/benches, an .ssp) given to ``simulate`` or an FMU (an
+    .fmu, the name of a built FMU that is no bench) given to ``run``: an error
+    saying which verb takes it, before any look-up says "not built" or "no such bench"."""
+    from artibus.base import fmu_dir
+    from artibus.bench import ssp
+    p = Path(text)
+    benches = ssp.bench_names()
+    if verb == "simulate" and (p.suffix.lower() == ".ssp" or (p.suffix == "" and text in benches)):
+        raise ArtibusError(f"simulate {text}: a bench (an SSP system of FMUs), not an FMU: run it with "
+                           f"`artibus run {text}`; simulate runs one FMU alone (`artibus list` shows both)")
+    if verb == "run" and (p.suffix.lower() == ".fmu" or (text not in benches and p.suffix == ""
+                                                       and (fmu_dir() / f"{text}.fmu").is_file())):
+        raise ArtibusError(f"run {text}: an FMU, not a bench: simulate it alone with "
+                           f"`artibus simulate {text}`; run runs a bench (`artibus list` shows both)")

@@ -393,6 +393,9 @@ fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueRef
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Clock values[]) {
+    ModelInstance *node = (ModelInstance *)instance;   /* in Step Mode, ...: named with node, clock and time */
+    if (node && !(node->v.state & (S_EVENT_MODE | S_ERROR | S_FATAL)) && nValueReferences > 0 && valueReferences)
+        return leave(node, lsnode_clock_outside_event_mode(node, valueReferences[0]));
     ENTER("fmi3SetClock", S_EVENT_MODE);     /* FMI 3.0, 2.2.9: clocks are set in Event Mode only */
     REQUIRE_ARRAY("fmi3SetClock", valueReferences, nValueReferences);
     REQUIRE_ARRAY("fmi3SetClock", values, nValueReferences);

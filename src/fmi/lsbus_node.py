@@ -185,7 +185,8 @@ def write_header(spec_path, xml_path, out_h):
              "#ifndef MODEL_LSBUS_H", "#define MODEL_LSBUS_H", ""]
     for m in MEMBERS:
         lines.append(f"#define LSBUS_VR_{m.upper()} {vr[m]}u   /* {spec['terminal']}.{m} */")
-    lines += [f"#define LSBUS_MAX_SIZE {MAX_SIZE}   /* maxSize of Rx_Data and Tx_Data */",
+    lines += [f"#define LSBUS_TERMINAL \"{spec['terminal']}\"   /* the bus terminal's name, for messages */",
+              f"#define LSBUS_MAX_SIZE {MAX_SIZE}   /* maxSize of Rx_Data and Tx_Data */",
               f"#define LSBUS_TX_INTERVAL {gen_vars.c_double(repr(spec['txInterval']))}   "
               "/* s, the Tx ticks' interval */",
               f"#define LSBUS_TX_TRIGGERED {int(spec['txClock'] == 'triggered')}   "

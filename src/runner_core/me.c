@@ -323,12 +323,11 @@ static fmi2Status ended(ac_me *me) {
     return fmi2Discard;
 }
 
-/* an event at me->time: Event Mode, the iteration, Continuous-Time Mode, CVODE restarted */
-static fmi2Status handle_event(ac_me *me) {
+/* the end of an event at me->time, the FMU in Event Mode: the iteration, Continuous-Time Mode,
+ * CVODE restarted */
+static fmi2Status end_event(ac_me *me) {
     int terminate;
-    fmi2Status st = enter_event_mode(me);
-    if (st > fmi2Warning)
-        return call_failed(me, "EnterEventMode", st, me->time);
+    fmi2Status st;
     if ((st = iterate(me, &terminate)) > fmi2Warning)
         return st;
     if (terminate)
@@ -336,6 +335,36 @@ static fmi2Status handle_event(ac_me *me) {
     if ((st = enter_continuous_time_mode(me)) > fmi2Warning)
         return call_failed(me, "EnterContinuousTimeMode", st, me->time);
     return restart(me);
+}
+
+/* an event at me->time: Event Mode, then end_event */
+static fmi2Status handle_event(ac_me *me) {
+    const fmi2Status st = enter_event_mode(me);
+    if (st > fmi2Warning)
+        return call_failed(me, "EnterEventMode", st, me->time);
+    return end_event(me);
+}
+
+/* Discrete inputs changed at a communication point (me.h): in Continuous-Time Mode only the
+ * continuous-time inputs u_c may be set (FMI 3.0 3.2.1, "State: Continuous-Time Mode", its table;
+ * FMI 2.0.4 3.2.3, the table of calls: there fmi2SetReal only "for a variable with causality =
+ * input and variability = continuous", no fmi2SetInteger/Boolean/String), a discrete one u_d in
+ * Event Mode: begin enters it, the caller sets them, end ends the event. */
+AC_EXPORT fmi2Status artibus_me_begin_input_event(fmi2Component p) {
+    ac_me *me = p;
+    me->message[0] = 0;
+    if (!me->solver)
+        return say(me, "an input event at t = %.17g came before the initialisation's end", me->time), fmi2Error;
+    if (me->terminated)
+        return fmi2Discard;
+    const fmi2Status st = enter_event_mode(me);
+    return st > fmi2Warning ? call_failed(me, "EnterEventMode", st, me->time) : fmi2OK;
+}
+
+AC_EXPORT fmi2Status artibus_me_end_input_event(fmi2Component p) {
+    ac_me *me = p;
+    me->time_events++;                        /* (an event at a time the importer knew: the input table's) */
+    return end_event(me);
 }
 
 AC_EXPORT fmi2Status artibus_me_exit_initialization(fmi2Component p) {

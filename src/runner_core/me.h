@@ -99,6 +99,11 @@ typedef struct {
  * Continuous-Time Mode, and CVODE set up on its states (ac_settle's exit). */
 AC_EXPORT fmi2Status artibus_me_exit_initialization(fmi2Component me);
 
+/* discrete inputs set at me->time (FMI 3.0 3.2.1: a discrete input is set in Event Mode only,
+ * not in Continuous-Time Mode; FMI 2.0.4 3.2.3 likewise): begin enters Event Mode, the caller
+ * sets them, end runs the event iteration, Continuous-Time Mode, CVODE restarted */
+AC_EXPORT fmi2Status artibus_me_begin_input_event(fmi2Component me);
+AC_EXPORT fmi2Status artibus_me_end_input_event(fmi2Component me);
 /* a Co-Simulation step of the ME FMU: integrate from me->time to t + h */
 AC_EXPORT fmi2Status artibus_me_do_step(fmi2Component me, fmi2Real t, fmi2Real h, fmi2Boolean no_prior);
 AC_EXPORT fmi3Status artibus_me3_do_step(fmi3Instance me, fmi3Float64 t, fmi3Float64 h, fmi3Boolean no_prior,

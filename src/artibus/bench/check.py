@@ -343,6 +343,7 @@ def check_bench(bench, out=print):
         out(f"  system connector {name} = {value!r}: bound, connected to no FMU variable (the value stays the "
             f"connector's)")
     _loops(path, b, out)
+    _masters(bench, b, out)
     if b.read_as == "2.0":       # its FMI-LS-BUS network, read and checked as the runner reads it
         from artibus.bench.ssp2 import network_lines
         for line in network_lines(path):
@@ -354,6 +355,23 @@ def check_bench(bench, out=print):
         for p, k, (raw, unit, x, target) in conv:
             out(f"    {p}.{k} = {raw:g} {unit} -> {x:.10g} {target} (from {b.components[p].origins.get(k, '?')})")
     return 0
+
+
+def _masters(bench, b, out):
+    """What ecos, libcosim and fmpy.ssp make of the bench's portable pack, as measured
+    (artibus.bench.masters): each master outside its tolerance of our runner, per variant."""
+    from pathlib import Path
+
+    from artibus.bench.masters import TOLERANCE, all_differences
+    if b.read_as != "1.0" or b.can is not None or any(c.can for c in b.connections):
+        return                                 # no portable pack (artibus_specific says why)
+    name = Path(str(bench)).stem if str(bench).endswith(".ssp") else str(bench)
+    found = all_differences(name)
+    tolerances = ", ".join(f"{m} {t:.1%}".replace(".0%", "%") for m, t in TOLERANCE.items())
+    out(f"  its portable pack in other masters (measured; KPIs within {tolerances} of ours stepped as each steps"
+        + (f" except {len(found)}):" if found else ")"))
+    for variants, d in found:
+        out(f"    {'--variant ' + ' '.join(variants) if variants else 'the bench'}: {d.text()}")
 
 
 def _loops(path, b, out):

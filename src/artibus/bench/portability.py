@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from lxml import etree
 
-from artibus.bench.ssp import ANNOTATION, CAN_ANNOTATION, NS, REBIND, VARIANT_DIR, origin, variants
+from artibus.bench.ssp import ANNOTATION, CAN_ANNOTATION, NS, OSP_TYPE, REBIND, VARIANT_DIR, origin, variants
 
 META = {"id", "description", "author", "fileversion", "copyright", "license", "generationTool",
         "generationDateAndTime", "version", "name"}
@@ -32,7 +32,8 @@ APPLIED = {
     "ParameterBindings": set(), "ParameterBinding": {"source", "type", "prefix", "sourceBase"},
     "ParameterValues": set(), "ParameterMapping": {"source", "type"},
     "Connections": set(), "Connection": {"startElement", "startConnector", "endElement", "endConnector",
-                                         "suppressUnitConversion"},
+                                         "suppressUnitConversion", "startIndices",
+                                         "endIndices"},     # (the latter refused by name: ssp._indices)
     "Annotations": set(), "Annotation": {"type"}, "DefaultExperiment": {"startTime", "stopTime"},
     "Units": set(), "Unit": set(), "BaseUnit": {"kg", "m", "s", "A", "K", "mol", "cd", "rad", "factor", "offset"},
     "Enumerations": set(), "Enumeration": {"value"}, "Item": {"value"},
@@ -49,7 +50,10 @@ APPLIED = {
 ANNOTATIONS = {ANNOTATION: "per-component communication steps",
                CAN_ANNOTATION: "connections routed over CAN",
                "org.artibus.variant": "a variant's stop time",
-               "org.artibus.source": "where a value is from (documentation)"}
+               "org.artibus.source": "where a value is from (documentation)",
+               # (a component's osp:StepSizeHint where ours gives no step; the DefaultExperiment's
+               # osp:FixedStepAlgorithm baseStepSize is the shortest of them, the base step the runner takes)
+               OSP_TYPE: "the Open Simulation Platform's step-size hints"}
 #: attribute values the runner does not implement: (element, attribute) -> {value: why}, or a
 #: function of the value giving why (None: applied)
 UNSUPPORTED_VALUES = {
@@ -166,9 +170,12 @@ def artibus_specific(ssp, bench=None):
         h = min(steps.values())
         rates = ", ".join(f"{p} {s:g} s" for p, s in steps.items())
         out.append((f"multi-rate steps (org.artibus.simulation stepSize, else the FMU's default experiment): {rates}",
-                    f"steps every component at its one step (ecos, libcosim, FMPy), e.g. {h:g} s: the "
-                    f"slower components then step {max(steps.values()) / h:g} times as often (`artibus run "
-                    f"BENCH --single-rate` runs it so; the bench's report page gives the KPI deviation)"))
+                    f"libcosim and ecos step each component at the osp:StepSizeHint of the bench's portable pack "
+                    f"(`artibus pack --portable`; measured: libcosim gives our --algorithm jacobi run, ecos our "
+                    f"Gauss-Seidel run where our order is its order, the components' names'); fmpy.ssp steps every "
+                    f"component at its one step, e.g. {h:g} s: the slower components then step "
+                    f"{max(steps.values()) / h:g} times as often (`artibus run BENCH --single-rate` runs it so; "
+                    f"the bench's report page gives the KPI deviation)"))
     elif steps:
         out.append((f"communication step (org.artibus.simulation stepSize): {min(steps.values()):g} s",
                     "takes its own step size: give it this one"))

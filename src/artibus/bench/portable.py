@@ -150,8 +150,21 @@ def pack_portable(bench, variants=None, out=None):
     _portable_or_refused(b, where)
     _files_into_fmus(b, values, files)
     _rewrite_ssd(root, b, values, variables, steps, ssp_mod.variant_stop_time(src, variants))
+    root.set("version", "1.0")          # what it holds (read_as): the other masters read SSP 1.0 only
     ssd = etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
-    return _write(Path(out) if out is not None else portable_path(bench, variants), bench, ssd, files)
+    out = _write(Path(out) if out is not None else portable_path(bench, variants), bench, ssd, files)
+    _warn_measured(out, bench, variants)
+    return out
+
+
+def _warn_measured(out, bench, variants):
+    """A warning for each master that runs this pack differently from our runner, with the measured
+    difference (artibus.bench.masters.MEASURED): the pack is written, but nobody runs it silently wrong."""
+    import sys
+    from artibus.bench.masters import differences
+    name = Path(str(bench)).stem if str(bench).endswith(".ssp") else str(bench)
+    for d in differences(name, variants):
+        print(f"warning: {out}: {d.text()} (measured; `artibus check {name}`)", file=sys.stderr)
 
 
 def _values(bench, overrides, variables, where):
@@ -173,9 +186,10 @@ def _values(bench, overrides, variables, where):
 
 
 def _portable_or_refused(b, where):
-    """an ArtibusError for a bench no other master runs: SSP 2.0 (an FMI-LS-BUS network), CAN routing"""
-    if b.version != "1.0":
-        raise ArtibusError(f"{where}: an SSP {b.version} system structure (an FMI-LS-BUS network, artibus.bench.ssp2): "
+    """an ArtibusError for a bench no other master runs: SSP 2.0 content (an FMI-LS-BUS network; by what
+    the file holds, Bench.read_as: OMSimulator 3.x's version="2.0" on SSP 1.0 content is SSP 1.0), CAN routing"""
+    if b.read_as != "1.0":
+        raise ArtibusError(f"{where}: an SSP {b.read_as} system structure (an FMI-LS-BUS network, artibus.bench.ssp2): "
                            "the other masters (ecos, libcosim, fmpy.ssp) read SSP 1.0 only; a portable pack holds "
                            "SSP 1.0 benches")
     if any(c.can is not None for c in b.connections) or b.can is not None:

@@ -62,6 +62,8 @@ ANNOTATION = "org.artibus.simulation"
 #: annotation type routing connections over CAN: on the System, <Can source="resources/X.dbc"
 #: period="0.01"/>; on a Connection, <Route message="..." signal="..."/> (see artibus.can)
 CAN_ANNOTATION = "org.artibus.can"
+#: the Open Simulation Platform's annotations (libcosim's; our portable packs carry its step-size hints too)
+OSP_TYPE, OSP_NS = "com.opensimulationplatform", "http://opensimulationplatform.com/SSP/OSPAnnotations"
 
 
 def bench_names():
@@ -300,6 +302,7 @@ class Connection:
     can: dict | None = None        # routed over CAN: {"message", "signal", "line"}
     mapping: tuple | None = None   # SSP 1.0 Boolean/Integer/EnumerationMappingTransformation:
                                    # ("Boolean" | "Integer" | "Enumeration", {source: target})
+    indices: tuple = (None, None)  # SSP 2.0 startIndices, endIndices as written (artibus.runner.setup)
 
 
 @dataclass
@@ -403,14 +406,18 @@ def _connectors(element, kind=None):
 
 
 def _step(xml_el, path, where):
-    """a component's communication step from our ANNOTATION (<artibus:Simulation stepSize=>), or None"""
-    ann = xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
-    if ann is None or not ann.get("stepSize"):
+    """a component's communication step from our ANNOTATION (<artibus:Simulation stepSize=>), else from
+    the Open Simulation Platform's (<osp:StepSizeHint value=>, as libcosim reads it), or None"""
+    attr, ann = "stepSize", xml_el.find(f"ssd:Annotations/ssc:Annotation[@type='{ANNOTATION}']/artibus:Simulation", NS)
+    if ann is None or not ann.get(attr):
+        osp = f"ssd:Annotations/ssc:Annotation[@type='{OSP_TYPE}']/{{{OSP_NS}}}StepSizeHint"
+        attr, ann = "value", xml_el.find(osp, NS)
+    if ann is None or not ann.get(attr):
         return None
-    step = _number(ann, "stepSize", None, where)
+    step = _number(ann, attr, None, where)
     if not step > 0:
         raise ArtibusError(f"{where}:{ann.sourceline}: Component '{path}': "
-                           f"stepSize = {ann.get('stepSize')} must be > 0")
+                           f"{attr} = {ann.get(attr)} must be > 0")
     return step
 
 
@@ -445,6 +452,7 @@ class _Reading:
     given_units: dict = field(default_factory=dict)  # component path -> {var: (unit, defs, then, origin)}
     edges: list = field(default_factory=list)        # (a, b, factor, offset, line, route, mapping)
     outgoing: dict = field(default_factory=dict)     # node -> [(b, factor, offset, line, route, mapping)]
+    indices: dict = field(default_factory=dict)      # (a, b, line) -> (startIndices, endIndices) of an edge
 
     def walk(self, prefix):
         """the components of the system ``prefix`` and of its sub-systems (its components
@@ -509,6 +517,11 @@ class _Reading:
             for n in (a, b):
                 self._check_end(n, label)
             factor, offset, mapping = _transformation(xc, label, where)
+            if xc.get("startIndices") is not None or xc.get("endIndices") is not None:
+                if a[0] != "comp" or b[0] != "comp":
+                    raise ArtibusError(f"{label}: startIndices/endIndices through a system's connector: "
+                                       "the runner takes them between two components' connectors")
+                self.indices[(a, b, xc.sourceline)] = (xc.get("startIndices"), xc.get("endIndices"))
             self.edges.append((a, b, factor, offset, xc.sourceline, _route(xc), mapping))
         for a, b, f, o, line, route, mp in self.edges:
             self.outgoing.setdefault(a, []).append((b, f, o, line, route, mp))
@@ -530,7 +543,8 @@ class _Reading:
                 continue
             for end, f2, o2, l2, r2, mp2 in self.ends(b, f, o, line, route, mp, frozenset()):
                 self.bench.connections.append(Connection(start=(a[1], a[2]), end=(end[1], end[2]),
-                                                         factor=f2, offset=o2, line=l2, can=r2, mapping=mp2))
+                                                         factor=f2, offset=o2, line=l2, can=r2, mapping=mp2,
+                                                         indices=self.indices.get((a, b, line), (None, None))))
 
     def _connector_targets(self, full):
         """the component variables the system connector ``full`` ("Sub.connector") reaches, either

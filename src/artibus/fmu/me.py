@@ -53,6 +53,8 @@ def _library():
                            "facade (src/runner_core/me.c): build it again")
     if not getattr(lib, "_me_typed", False):
         for name, args, res in (("artibus_me_exit_initialization", [c_void_p], c_int),
+                                ("artibus_me_begin_input_event", [c_void_p], c_int),
+                                ("artibus_me_end_input_event", [c_void_p], c_int),
                                 ("artibus_me_do_step", [c_void_p, c_double, c_double, c_int], c_int),
                                 ("artibus_me_free", [c_void_p], None)):
             f = getattr(lib, name)
@@ -156,6 +158,34 @@ class _Me:
             self._failed("ExitInitializationMode", status)
         self.mode = "step"
 
+    def set(self, variables, values):
+        """Set the variables' values. After the initialisation a discrete input is set in
+        Event Mode only (FMI 3.0 3.2.1, "State: Continuous-Time Mode": there only the
+        continuous-time inputs; FMI 2.0.4 3.2.3, the table of calls): the continuous ones
+        are set as they come, the discrete ones whose value changed in an event of their own
+        (the facade's input event: Event Mode, the event iteration, CVODE restarted), as
+        FMPy's simulate_fmu sets them at its input events; an unchanged one is not set again."""
+        held = self.__dict__.setdefault("_held", {})
+        if not self.facade.struct.solver:    # (before the initialisation's end, the facade's or the core's: any input)
+            super().set(variables, values)
+            held.update((v.valueReference, x) for v, x in zip(variables, values) if not _continuous(v))
+            return
+        pairs = list(zip(variables, values))
+        cont = [(v, x) for v, x in pairs if _continuous(v)]
+        changed = [(v, x) for v, x in pairs if not _continuous(v) and held.get(v.valueReference, _NONE) != x]
+        if cont:
+            super().set(*zip(*cont))
+        if changed:
+            lib, me = self.facade.lib, self.facade.component
+            status = lib.artibus_me_begin_input_event(me)
+            if status > 1:
+                self._failed("EnterEventMode", status)
+            super().set(*zip(*changed))
+            status = lib.artibus_me_end_input_event(me)
+            if status > 1:
+                self._failed("UpdateDiscreteStates" if self.fmi == 3 else "NewDiscreteStates", status)
+            held.update((v.valueReference, x) for v, x in changed)
+
     def do_step(self, t, h):
         """Integrate from t to t + h: None, or the time where the FMU ended the simulation
         (terminateSimulation at an event); a failure raises FMICallException, the facade's
@@ -187,6 +217,15 @@ class _Me:
                 self.facade.free()
         finally:
             super().free()
+
+
+_NONE = object()                 # (no value held yet)
+
+
+def _continuous(v):
+    """A continuous-time variable (a Real one of variability continuous, FMI 3.0 2.4.7.4's
+    default for Float64/Float32; FMI 2.0.4 2.2.7's for Real): settable in Continuous-Time Mode."""
+    return v.kind == "Real" and (v.variability or "continuous") == "continuous"
 
 
 class Calls2(_Me, fmi2.Calls):

@@ -102,7 +102,7 @@ def _text(x, kind):
 
 def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
              outputs=None, start_time=0.0, output_interval=None, tolerance=None, logging=False,
-             messages=None, events=(), interface="cs", me_method="bdf"):
+             messages=None, events=(), interface="cs", me_method="bdf", on_result=None):
     """Simulate one FMU (FMI 2.0 or 3.0, Co-Simulation or Model Exchange).
 
     parameters: {name: value} set in initialization mode (checked against
@@ -122,6 +122,8 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     events: times the inputs jump (artibus.fmu.inputs.InputTable.events): the steps are cut
     there and the point recorded, where the FMU takes a variable communication step
     (canHandleVariableCommunicationStepSize), as FMPy's simulate_fmu does.
+    on_result: called with the Result and the model's name before the first row is recorded
+    (artibus.fmu.isolated: its rows written as they come).
     Returns a Result; raises SimulationError (with the partial Result) on failure.
     Ctrl-C or SIGTERM (KeyboardInterrupt) ends it between two steps, the rows so
     far in ``e.result``: each doStep returns in bounded time (the FMUs refuse a
@@ -145,6 +147,8 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         check_room(n + 1, sum(v.size for v in variables) + 1, path)
         check_steps(n, path)
         result, record = _recorder(fmu, variables)
+        if on_result is not None:
+            on_result(result, fmu.md.modelName)
         clocks = _schedule(fmu, path) if event_mode else None
         if me:                           # CVODE's method; no input changes: CVODE steps freely
             fmu.calls.facade.use_method(me_method)

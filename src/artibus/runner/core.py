@@ -170,7 +170,7 @@ class _CoreStepper:
         """core.h's ac_unit of each unit: its FMU's functions, buffers, sources, C stimuli, hooks."""
         units, double = self.sim.units, sizeof(c_double)
         self.units = (struct("ac_unit") * len(units))()
-        self.written = []
+        self.written, self.sources = [], []
         for j, (s, u) in enumerate(zip(self.units, units)):
             raw = u.raw
             if j in c_stimuli:                       # the FMI-LS-BUS network's outputs onto the plant
@@ -178,6 +178,7 @@ class _CoreStepper:
                 self._keep.append(arr)
                 s.n_stimuli, s.stimuli = len(c_stimuli[j]), addressof(arr)
             sources = (struct("ac_source") * max(1, len(u.sources)))()
+            self.sources.append(sources)
             for q, (i, out, jj, factor, offset) in zip(sources, u.sources):
                 q.dst = addressof(raw.inp) + double * i
                 q.src = addressof(out) + double * jj
@@ -261,6 +262,29 @@ class _CoreStepper:
         self._settle_refs = (self._struct_ref, byref(self.settling))
         self._inputs = [(a, raw, written) for a, _, raw, written in self._each if raw.n_in]
 
+    def _hold_broken(self):
+        """The connections Gauss-Seidel breaks (sim.broken) held at one value through the
+        initialisation's rounds, as each carries one value into every step (its source's output
+        of the step before): its source's output before the exchange (read once here), so a loop
+        through it is not iterated to a fixed point it may not have (gain >= 1). [(the core's
+        ac_source, its own src, the held double)], pointed at the held value; settle restores
+        them. (A connection of the Python part, an Integer or Boolean one, is iterated still.)"""
+        sim = self.sim
+        cut = {(w.src, w.output, w.dst, w.input) for w, _ in getattr(sim, "broken", ())}
+        held = []
+        for u, sources in zip(sim.units, self.sources):
+            for k, link in enumerate(u.links_in):
+                c = link.connection
+                if c is None or (*c.start, *c.end) not in cut:
+                    continue
+                link.src.raw.read()
+                value = c_double(link.src.raw.out[link.src_index])
+                q = sources[k]
+                held.append((q, q.src, value))
+                q.src = addressof(value)
+        self._keep += [v for *_, v in held]
+        return held
+
     def settle(self, max_iter):
         """Simulation._initialize's rounds to the fixed point of the connected inputs
         (artibus_core_settle): the same reads, propagations, writes and network settles
@@ -274,9 +298,12 @@ class _CoreStepper:
             for a, m in zip(self.can.messages, self.can.net.messages):
                 a.counter = m.counter
         z.max_iter, z.fmu_wall = max_iter, 0.0
+        held = self._hold_broken()
         try:
             failed = self.lib.artibus_core_settle(*self._settle_refs)
         finally:
+            for q, src, _ in held:
+                q.src = src
             sim.settle_wall = getattr(sim, "settle_wall", 0.0) + z.fmu_wall
             for a, raw, written in self._inputs:
                 raw.written = bytes(written) if a.has_written else None

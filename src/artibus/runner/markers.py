@@ -36,6 +36,9 @@ from artibus.base import ArtibusError
 PIECE = 5000
 _ENV, _WAIT_ENV = "ARTIBUS_PROGRESS_FD", "ARTIBUS_PROGRESS_WAIT_FD"
 _broken = set()          # descriptors that failed: not written again in this process
+#: called after each wait at a marker, where set (artibus.fmu.isolated: the run's child process
+#: asks its parent, which takes the test's signal, whether one came while it waited)
+after_wait = None
 _checked = {}            # "N:INODE" -> N when descriptor N is that file in this process, else None
 
 
@@ -69,5 +72,7 @@ def mark(line):
         os.write(out, f"{line}\n".encode())
         if wait is not None and wait not in _broken and not os.read(wait, 1):
             _broken.add(wait)                # end of file: the test lets it run
+        if wait is not None and after_wait is not None:
+            after_wait()
     except OSError:
         _broken.add(out)

@@ -124,7 +124,10 @@ class _Setup:
                 if isinstance(value, Quantity) and v is not None and v.kind == "Real":
                     values[var] = convert(value, v, units[path].fmu.md, f"{path}.{var}")
         for path, values in self.parameters.items():
+            _configure(units[path], values, where, origins.get(path))
             check_against(values, units[path].fmu.md, where, prefix=f"{path}.", origins=origins.get(path))
+            for name in [n for n, v in units[path].fmu.vars.items() if v.causality == "structuralParameter"]:
+                values.pop(name, None)    # (set in Configuration Mode, _configure: not again at the initialisation)
 
     def _check_cut(self, units, cut, where):
         """self.cut: the inputs whose connection the run leaves out, each a connected input."""
@@ -176,8 +179,19 @@ class _Setup:
             raise ArtibusError(f"{label}: types {va.type} -> {vb.type} ({c.start[0]}.{c.start[1]} is "
                                f"{va.type}, {c.end[0]}.{c.end[1]} is {vb.type}): a connection joins "
                                f"variables of one type")
+        start = f"{c.start[0]}.{c.start[1]}"
+        if _start_element(c, label, va) is not None:       # one element (startIndices) into a scalar
+            start, shape_a = f"{start}[{','.join(c.indices[0].split())}]", ()
+        else:
+            shape_a = va.shape
+        if shape_a != vb.shape:
+            # SSP 2.0 5.x "Connections": without startIndices/endIndices "this connection applies
+            # to the whole connector", element by element (FMI 3.0 2.2.6.2: row-major): one shape on both ends
+            raise ArtibusError(f"{label}: the shapes differ ({start} is {_shaped(va, shape_a)}, "
+                               f"{c.end[0]}.{c.end[1]} is {_shaped(vb)}): a connection joins a whole array "
+                               "to an array of the same shape, a scalar (or an array's element) to a scalar")
         for u, v in ((a, va), (b, vb)):
-            _scalar_number(v, f"{label}: {u.path}.{v.name}")
+            _scalar_number(v, f"{label}: {u.path}.{v.name}", arrays=True)
         if va.causality not in ("output", "parameter", "calculatedParameter") or vb.causality != "input":
             raise ArtibusError(f"{label}: connects a {va.causality} to a {vb.causality} "
                                f"(expected output -> input)")
@@ -231,12 +245,14 @@ class _Setup:
                     self.record.append((u, n))
         for u, n in self.record:
             v = u.fmu.var(n)
-            _scalar_number(v, f"{where}: recording {u.path}.{n}")
+            _scalar_number(v, f"{where}: recording {u.path}.{n}", arrays=True)
             if not _in_core(v):
                 if v not in u.tout:
                     u.tout.append(v)
             else:
                 u.output_index(v)
+        from artibus.fmu.simulate import columns      # an array: a column per element, row-major (FMI 3.0 2.4.7.6)
+        self.record = [(u, e) for u, n in self.record for e in columns(u.fmu.var(n))]
 
     def _stimuli(self, units, stimuli, where):
         """Each stimulus {"comp.input": f(t)} on its unit: added to the input's connection,
@@ -299,9 +315,9 @@ class _Setup:
         """The result's column names and units; per unit, which outputs go to which columns
         (self._rec); the String columns (self._text_cols: their texts, _with_texts)."""
         self.names = ["time"] + [f"{u.path}.{n}" for u, n in self.record]
-        self._col_units = {"time": "s", **{f"{u.path}.{n}": declared_unit(u.fmu.vars[n]) or ""
+        self._col_units = {"time": "s", **{f"{u.path}.{n}": declared_unit(u.variable_of(n)) or ""
                                            for u, n in self.record}}
-        self._col_descriptions = {"time": "simulation time", **{f"{u.path}.{n}": u.fmu.vars[n].description or ""
+        self._col_descriptions = {"time": "simulation time", **{f"{u.path}.{n}": u.variable_of(n).description or ""
                                                                  for u, n in self.record}}
         self._rec = []
         for u in self.units:
@@ -309,13 +325,15 @@ class _Setup:
             idx = [u.column(n) for v, n in self.record if v is u]
             if cols:
                 self._rec.append((u, np.array(idx), np.array(cols)))
-        self._text_cols = {f"{u.path}.{n}": u for u, n in self.record if u.fmu.vars[n].kind == "String"}
+        self._text_cols = {f"{u.path}.{n}": u for u, n in self.record if u.variable_of(n).kind == "String"}
 
     def _typed_link(self, c, label, a, va, b, vb):
         """A connection of Integer, Boolean, String or Enumeration variables (see
         _typed_convert): read and set in Python (_TypedCalls), exact values."""
         convert = _typed_convert(label, a, va, b, vb, c.mapping)
-        if c.factor != 1.0 or c.offset != 0.0:
+        if va.shape and va.kind == "Real":    # a Float64/Float32 array: as a scalar Real connection, each element
+            convert = _real_conversion(c, label, a, va, b, vb)
+        elif c.factor != 1.0 or c.offset != 0.0:
             raise ArtibusError(f"{label}: a LinearTransformation on {va.type} variables "
                                + ("(artibus applies it to Float64 ones)" if va.kind == "Real" else
                                   "(SSP 1.0: it applies to Real ones)"))
@@ -326,6 +344,7 @@ class _Setup:
         if va not in a.tout:
             a.tout.append(va)
         b.tin.append(vb)
+        convert = _over_elements(convert, va, _start_element(c, label, va))
         b.typed_sources.append((len(b.tin) - 1, a, a.tout.index(va), convert))
 
     def _setup_can(self, where, interface, log, faults=None, routed=True):
@@ -381,18 +400,92 @@ def _warn_once(text):
         print(f"warning: {text}", file=sys.stderr)
 
 
+def _configure(u, values, where, origins=None):
+    """The FMI 3.0 unit's structural parameters among its bound ``values`` set in Configuration
+    Mode (FMI 3.0 2.3, "State: Configuration Mode"), before anything reads its arrays' shapes:
+    the arrays they dimension (2.4.7.6, <Dimension valueReference>) are resized from then on
+    (Fmu.configure), the connections and the recording use the new shapes."""
+    structural = {n: x for n, x in values.items()
+                  if n in u.fmu.vars and u.fmu.vars[n].causality == "structuralParameter"}
+    if not structural:
+        return
+    try:
+        u.fmu.configure(structural)
+    except ArtibusError as e:
+        origin = "; ".join(f"{n} from {origins[n]}" for n in structural if origins and n in origins)
+        raise ArtibusError(f"{where}: Component '{u.path}': {e}" + (f" ({origin})" if origin else "")) from None
+
+
 def _in_core(v):
     """Whether the stepping core gets and sets ``v`` itself: a scalar Float64 (FMI 2.0's Real,
     FMI 3.0's Float64); the other types go through the core's hooks (_TypedCalls)."""
     return v.type in ("Real", "Float64") and not v.shape
 
 
-def _scalar_number(v, label):
-    """An error unless ``v`` is a scalar a connection or a result column can carry: an array
-    (FMI 3.0 <Dimension>), a Binary or a Clock (FMI-LS-BUS terminals carry those: an SSP 2.0
+def _real_conversion(c, label, a, va, b, vb):
+    """The conversion of one value of a Real array connection (each element's): the connection's
+    LinearTransformation (SSP 1.0 5.3.4.1: factor and offset), else the units' conversion
+    (unit_conversion), as a scalar Real connection has it; None where it is the identity."""
+    if c.mapping is not None:
+        raise ArtibusError(f"{label}: a {c.mapping[0]}MappingTransformation on Real variables "
+                           f"(a LinearTransformation applies to them)")
+    if c.factor != 1.0 or c.offset != 0.0:
+        f, o = c.factor, c.offset
+    else:
+        f, o = unit_conversion(a.fmu.md, va, b.fmu.md, vb, label)
+    return None if f == 1.0 and o == 0.0 else (lambda x: f * x + o)
+
+
+def _start_element(c, label, va):
+    """The row-major offset (FMI 3.0 2.2.6.2) of the element a connection's startIndices name in
+    the array ``va``, None without them. SSP 2.0 "Connections": startIndices, "the list of
+    indices of an array connector that this connection is restricted to" (without them "the
+    whole connector"): read as the one element of the start's array, an index per dimension,
+    1-based as FMI 3.0's structured names count them (2.4.7.6, ``y[1,2]``); into a scalar only:
+    endIndices refused by name. An error naming the connection where they do not fit."""
+    text, end = getattr(c, "indices", (None, None))
+    if end is not None:
+        raise ArtibusError(f"{label}: endIndices=\"{end}\": the runner connects into a whole array or a "
+                           "scalar (an element of an array as the start: startIndices)")
+    if text is None:
+        return None
+    try:
+        index = [int(i) for i in text.split()]
+    except ValueError:
+        index = []
+    if len(index) != len(va.shape) or not all(1 <= i <= n for i, n in zip(index, va.shape)):
+        raise ArtibusError(f"{label}: startIndices=\"{text}\" do not name an element of "
+                           f"{c.start[0]}.{c.start[1]}, {_shaped(va)} (1-based, an index per dimension)")
+    k = 0
+    for i, n in zip(index, va.shape):
+        k = k * n + i - 1
+    return k
+
+
+def _over_elements(convert, va, k):
+    """A connection's conversion of one value (None: none) applied to what the source's read
+    gives: the element k of the array va (startIndices), each element of a whole array, or the scalar."""
+    if k is not None:
+        return (lambda x: x[k]) if convert is None else (lambda x: convert(x[k]))
+    if va.shape and convert is not None:
+        return lambda xs: [convert(x) for x in xs]
+    return convert
+
+
+def _shaped(v, shape=None):
+    """A variable's type and shape (its own, or ``shape``) as an error names them: Float64[3],
+    Float64[2,3], Float64"""
+    shape = v.shape if shape is None else shape
+    return f"{v.type}[{','.join(map(str, shape))}]" if shape else v.type
+
+
+def _scalar_number(v, label, arrays=False):
+    """An error unless ``v`` is a number a connection or a result column can carry (with
+    ``arrays``: an FMI 3.0 array of numbers too, carried element by element): an array where
+    none is taken, a Binary or a Clock (FMI-LS-BUS terminals carry those: an SSP 2.0
     bench's Bus) named with its type and shape."""
     from artibus.fmu.model import NOT_NUMBERS
-    if v.shape:
+    if v.shape and not arrays:
         raise ArtibusError(f"{label} is an array of {v.size} values ({v.type}, "
                            f"{'x'.join(map(str, v.shape))}): a connection or a column of the results "
                            f"carries one scalar variable")

@@ -6,6 +6,7 @@ FMPy's calls (``_TypedCalls``, the conversion of such a connection:
 ``_typed_convert``)."""
 from ctypes import CDLL, c_double, c_int, c_size_t, c_uint, c_void_p
 from dataclasses import dataclass, field
+from itertools import accumulate
 
 from fmpy.fmi1 import FMICallException
 
@@ -67,11 +68,39 @@ class Unit:
         return self.inputs.index(v)
 
     def column(self, name):
-        """The place of an output in raw.out (Float64 ones first, then the typed ones)."""
+        """The place of an output in raw.out (Float64 ones first, then the typed ones, an
+        array's elements in row-major order, FMI 3.0 2.2.6.2); ``name`` an array's element as
+        its result column names it (``y[2]``, ``A[1,2]``) or a scalar's name."""
         names = self.out_names
         if name in names:
             return names.index(name)
-        return len(names) + [v.name for v in self.tout].index(name)
+        v, k = self.element(name)
+        place = len(names)
+        for w in self.tout:
+            if w is v:
+                return place + k
+            place += w.size
+        raise ValueError(f"{self.path}.{name} is not read")
+
+    def element(self, name):
+        """(the Variable, the element's row-major offset) of a column's name: a variable's own
+        name (0), or an array's element ``name[i,j]`` (1-based, FMI 3.0 2.4.7.6's convention)."""
+        vars_ = self.fmu.vars
+        if name in vars_ or not name.endswith("]") or "[" not in name:
+            return self.fmu.var(name), 0
+        base, _, idx = name[:-1].rpartition("[")
+        v = self.fmu.var(base)
+        index = [int(i) - 1 for i in idx.split(",")]
+        if len(index) != len(v.shape) or not all(0 <= i < n for i, n in zip(index, v.shape)):
+            raise ArtibusError(f"{self.path}.{name}: {base} is {v.type}[{','.join(map(str, v.shape))}]")
+        k = 0
+        for i, n in zip(index, v.shape):
+            k = k * n + i
+        return v, k
+
+    def variable_of(self, name):
+        """The Variable a column's name (a scalar's, or an array's element's) is of."""
+        return self.element(name)[0]
 
 
 def _address(dll, name):
@@ -169,7 +198,9 @@ class _TypedCalls(_RawCalls):
     def __init__(self, unit):
         super().__init__(unit)
         n_real = self.n_out
-        self.n_real, self.n_out = n_real, n_real + len(unit.tout)
+        self.n_real, self.n_out = n_real, n_real + sum(v.size for v in unit.tout)   # (an array: its elements)
+        # each typed output's first place in ``out``
+        self.tout_places = list(accumulate((v.size for v in unit.tout), initial=n_real))[:-1]
         self.out = (c_double * self.n_out)()
         self.tout_values = [None] * len(unit.tout)
         self.tin_values = [None] * len(unit.tin)
@@ -177,20 +208,26 @@ class _TypedCalls(_RawCalls):
         self.texts = {}
         self._get_groups = self._groups(unit.tout, self.fmi)
         self._set_groups = self._groups(unit.tin, self.fmi)
+        # a Model Exchange unit's inputs through its instance (artibus.fmu.me: a discrete one
+        # changed after the initialisation in an input event of its own, FMI 3.0 3.2.1)
+        self._me = unit.fmu.calls if getattr(unit.fmu.calls, "facade", None) is not None else None
+        self._tin = list(unit.tin)
         self._string_out = [i for i, v in enumerate(unit.tout) if v.kind == "String"]
 
     @staticmethod
     def _groups(variables, fmi=2):
-        """[(the get/set call's type, [indices], [value references])] per type (each FMI
-        version's calls: artibus.fmu.fmi2.ACCESSOR, artibus.fmu.fmi3.ACCESSOR)."""
+        """[(the get/set call's type, [indices], [value references], [sizes])] per type (each FMI
+        version's calls: artibus.fmu.fmi2.ACCESSOR, artibus.fmu.fmi3.ACCESSOR); a size is the
+        number of values a variable moves (an array's elements: FMI 3.0 2.2.6.2, nValues)."""
         from artibus.fmu import fmi2, fmi3
         accessor = (fmi3 if fmi == 3 else fmi2).ACCESSOR
         groups = {}
         for i, v in enumerate(variables):
-            g = groups.setdefault(accessor[v.type], ([], []))
+            g = groups.setdefault(accessor[v.type], ([], [], []))
             g[0].append(i)
             g[1].append(v.valueReference)
-        return [(t, idx, vrs) for t, (idx, vrs) in groups.items()]
+            g[2].append(v.size if v.shape else 0)     # (0: a scalar)
+        return [(t, idx, vrs, sizes) for t, (idx, vrs, sizes) in groups.items()]
 
     def read(self):
         if self.n_real:
@@ -203,16 +240,30 @@ class _TypedCalls(_RawCalls):
     def read_typed(self):
         """The typed outputs (FMPy's calls), after the Real ones (the stepping core's
         AC_HOOK_READ: the core reads the Real ones)."""
-        for t, idx, vrs in self._get_groups:
-            values = getattr(self.slave, f"get{t}")(vrs)
-            for i, x in zip(idx, values):
-                if t == "String":       # (FMI 3.0: FMPy's str already)
-                    x = x.decode("utf-8", errors="replace") if isinstance(x, bytes) else x or ""
-                    self.out[self.n_real + i] = self.texts.setdefault(x, len(self.texts))
+        for t, idx, vrs, sizes in self._get_groups:
+            n_values = sum(max(1, n) for n in sizes)
+            get = getattr(self.slave, f"get{t}")
+            values = get(vrs, n_values) if n_values != len(vrs) else get(vrs)   # (FMI 2.0: no nValues)
+            k = 0
+            for i, n in zip(idx, sizes):
+                place = self.tout_places[i]
+                if n:                   # an array: its values row-major, each in its own place
+                    xs = [self._number(t, x, place + j) for j, x in enumerate(values[k:k + n])]
+                    self.tout_values[i] = xs
                 else:
-                    x = bool(x) if t == "Boolean" else float(x) if t in ("Float32", "Float64") else int(x)
-                    self.out[self.n_real + i] = x
-                self.tout_values[i] = x
+                    self.tout_values[i] = self._number(t, values[k], place)
+                k += max(1, n)
+
+    def _number(self, t, x, place):
+        """A value as Python has it, its number put in out[place] (a Boolean 0/1, a String the
+        number of its text)."""
+        if t == "String":               # (FMI 3.0: FMPy's str already)
+            x = x.decode("utf-8", errors="replace") if isinstance(x, bytes) else x or ""
+            self.out[place] = self.texts.setdefault(x, len(self.texts))
+        else:
+            x = bool(x) if t == "Boolean" else float(x) if t in ("Float32", "Float64") else int(x)
+            self.out[place] = x
+        return x
 
     def write(self):
         super().write()
@@ -221,9 +272,13 @@ class _TypedCalls(_RawCalls):
     def write_typed(self):
         """The typed inputs that changed (FMPy's calls), after the Real ones (the
         stepping core's AC_HOOK_WRITE)."""
-        if self.tin_values and self.tin_values != self.tin_written:
-            for t, idx, vrs in self._set_groups:
-                getattr(self.slave, f"set{t}")(vrs, [self.tin_values[i] for i in idx])
+        if self.tin_values and self.tin_values != self.tin_written and self._me is not None:
+            self._me.set(self._tin, self.tin_values)
+            self.tin_written = list(self.tin_values)
+        elif self.tin_values and self.tin_values != self.tin_written:
+            for t, idx, vrs, sizes in self._set_groups:
+                getattr(self.slave, f"set{t}")(vrs, [x for i, n in zip(idx, sizes)
+                                                     for x in (self.tin_values[i] if n else (self.tin_values[i],))])
             self.tin_written = list(self.tin_values)
 
     def text(self, number):

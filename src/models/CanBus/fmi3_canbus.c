@@ -10,8 +10,9 @@
  *     the operations, arbitrates and puts a frame on the wire;
  *   - the bus has operations for node K at a time (the frame's end): its countdown
  *     NodeK.Tx_Clock reports that interval (fmi3GetIntervalDecimal, qualifier
- *     changed, once per announcement), and fmi3UpdateDiscreteStates gives the
- *     earliest as nextEventTime; the importer steps to it, enters Event Mode,
+ *     changed once per announcement, then unchanged with the same interval until
+ *     the clock is set); nextEventTime only for a frame's end no Tx clock
+ *     announces; the importer steps to the tick, enters Event Mode,
  *     sets NodeK.Tx_Clock and reads NodeK.Tx_Data (0 bytes when nothing is due);
  *   - interval 0 (wire time off, an answer due at once): discreteStatesNeedUpdate
  *     is true, and the importer sets the clock in the next event iteration.
@@ -75,6 +76,45 @@ static bool announce(Instance *c) {
     }
     return now;
 }
+
+/* the bus's next time event (a frame's end) if no Tx clock announces it, else INFINITY: FMI
+   3.0.2, 2.3, Event Mode, time events are announced "through the argument nextEventTime of
+   fmi3UpdateDiscreteStates, or the arguments of fmi3GetShift and fmi3GetInterval". A frame's end
+   is its sender's and receivers' countdown tick: said once, there (an importer that cuts its step
+   at nextEventTime and counts an unchanged interval down by that cut step, as fmu-manipulation-
+   toolbox 2.0's container does, would lose the clock); a frame's end no Tx clock announces (none
+   due by then) is a nextEventTime */
+#ifndef CANBUS_TRIGGERED_TX
+static double unannounced_event(const Instance *c) {
+    const double next = canbus_next_event(&c->bus);
+    for (int k = 0; k < CANBUS_NODES; k++)
+        if (c->announced[k] <= next + CANBUS_TIME_EPS) return INFINITY;
+    return next;
+}
+#endif
+
+#ifdef CANBUS_TRIGGERED_TX
+/* triggered form, in fmi3UpdateDiscreteStates: what NodeK.Tx_Data held while its clock was active
+   is gone (read or not: a clocked output is a value of its activation), the active clocks end (FMI
+   3.0.2, 2.3: "Any Clock active during fmi3UpdateDiscreteStates must be deactivated by the FMU
+   itself"), and a node with operations now gets its Tx_Clock activated for the next super-dense
+   instant, which discreteStatesNeedUpdate asks for: the importer reads fmi3GetClock and Tx_Data
+   there (2.3, fmi3GetClock: "it might be necessary to call this function several times").
+   Returns true if a clock was activated */
+static bool activate_triggered(Instance *c) {
+    bool any = false;
+    for (int k = 0; k < CANBUS_NODES; k++) {
+        if (c->txActive[k]) canbus_consume(&c->bus, k, c->shown[k]);
+        c->txActive[k] = false;
+        c->shown[k] = c->txRead[k] = 0;
+        if (canbus_due(&c->bus, k, c->time, 0) <= c->time + CANBUS_TIME_EPS) {
+            c->txActive[k] = any = true;
+            c->shown[k] = c->bus.node[k].nOut;
+        }
+    }
+    return any;
+}
+#endif
 
 /* the operations of the nodes whose Rx clock ticked, in node order */
 static void take_inputs(Instance *c) {
@@ -231,11 +271,18 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime) {
     ENTER("fmi3UpdateDiscreteStates", S(EVENT_MODE));
     take_inputs(c);
+#ifdef CANBUS_TRIGGERED_TX
+    canbus_advance(&c->bus, c->time);
+    c->needUpdate = activate_triggered(c);
+    c->updated = true;
+    const double next = canbus_next_event(&c->bus);      /* the frame's end: no countdown says it */
+#else
     consume_read(c);
     canbus_advance(&c->bus, c->time);
     c->needUpdate = announce(c);
     c->updated = true;
-    const double next = canbus_next_event(&c->bus);
+    const double next = unannounced_event(c);
+#endif
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = c->needUpdate;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
@@ -248,6 +295,10 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
     ENTER("fmi3EnterStepMode", S(EVENT_MODE));
     take_inputs(c);                       /* set without fmi3UpdateDiscreteStates: not lost */
+#ifdef CANBUS_TRIGGERED_TX
+    for (int k = 0; k < CANBUS_NODES; k++)
+        if (c->txActive[k]) c->txRead[k] = c->shown[k];
+#endif
     consume_read(c);
     canbus_advance(&c->bus, c->time);
     memset(c->txActive, 0, sizeof c->txActive);
@@ -287,6 +338,15 @@ fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], si
         const int rx = node_of(vr[i], VR_NODE_RX_CLOCK), tx = node_of(vr[i], VR_NODE_TX_CLOCK);
         if (rx < 0 && tx < 0) return FAIL("fmi3SetClock: value reference %u is no clock of CanBus", vr[i]);
         const int k = rx >= 0 ? rx : tx;
+#ifdef CANBUS_TRIGGERED_TX
+        if (tx >= 0)
+            return FAIL("fmi3SetClock: Node%d.Tx_Clock is an output clock of this form of CanBus (triggered: "
+                        "read it with fmi3GetClock, FMI 3.0.2, 2.2.9)", k + 1);
+#endif
+        /* NodeK.Rx_Clock is triggered: it may be active for more than one fmi3UpdateDiscreteStates
+           of an Event Mode (FMI 3.0.2, 2.3, fmi3SetClock: the restriction to one update "does not
+           apply to triggered Clocks"): set after an update, it begins a new super-dense instant */
+        if (values[i] && rx >= 0) c->updated = false;
         /* a Tx clock announced due now (interval 0) may be set after an update that asked for
            no further iteration: it begins a new super-dense instant of this Event Mode (FMI
            3.0.2, 2.2.9, "Countdown aperiodic Clock": T_interval >= 0; 2.3, Event Mode,
@@ -314,15 +374,31 @@ fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], si
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[]) {
+#ifdef CANBUS_TRIGGERED_TX
+    ENTER("fmi3GetClock", S(EVENT_MODE));
+    if (nvr > 0 && (!vr || !values)) return FAIL("fmi3GetClock: NULL arguments");
+    for (size_t i = 0; i < nvr; i++) {
+        const int k = node_of(vr[i], VR_NODE_TX_CLOCK);
+        if (k < 0) return FAIL("fmi3GetClock: value reference %u is no output clock of CanBus (the NodeK.Tx_Clock)", vr[i]);
+        values[i] = c->txActive[k];
+    }
+    return fmi3OK;
+#else
     ENTER("fmi3GetClock", ANY);
     (void)values;
     return FAIL("fmi3GetClock: CanBus has no output clocks (value reference %u: its clocks are inputs, "
                 "the Tx clocks countdown: fmi3GetIntervalDecimal)", nvr > 0 && vr ? vr[0] : 0u);
+#endif
 }
 
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                   fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[]) {
     ENTER("fmi3GetIntervalDecimal", S(INIT_MODE) | S(EVENT_MODE) | S(STEP_MODE));
+#ifdef CANBUS_TRIGGERED_TX
+    (void)intervals; (void)qualifiers;
+    return FAIL("fmi3GetIntervalDecimal: value reference %u: this form of CanBus has no countdown clock (its "
+                "NodeK.Tx_Clock is triggered, an output: fmi3GetClock)", nvr > 0 && vr ? vr[0] : 0u);
+#endif
     if (nvr > 0 && (!vr || !intervals || !qualifiers)) return FAIL("fmi3GetIntervalDecimal: NULL arguments");
     if (c->state != INIT_MODE) announce(c);
     for (size_t i = 0; i < nvr; i++) {
@@ -330,13 +406,18 @@ fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReferenc
         if (k < 0)
             return FAIL("fmi3GetIntervalDecimal: value reference %u is no countdown clock of CanBus (the "
                         "NodeK.Tx_Clock; NodeK.Rx_Clock is triggered)", vr[i]);
+        /* FMI 3.0.2, 2.2.9, fmi3GetIntervalDecimal: fmi3IntervalChanged gives the interval relative
+           to the current Event Mode; fmi3IntervalUnchanged "returns the unchanged interval value
+           provided in a previous call" (the same number, relative to the Event Mode it was given
+           in, not the time left); fmi3IntervalNotYetKnown only until an interval is known after
+           the clock's last activation (fmi3SetClock consumes the announcement) */
         if (c->changed[k]) {
             qualifiers[i] = fmi3IntervalChanged;
-            intervals[i] = fmax(0.0, c->announced[k] - c->time);
+            intervals[i] = c->given[k] = fmax(0.0, c->announced[k] - c->time);
             c->changed[k] = false;
         } else if (isfinite(c->announced[k])) {
             qualifiers[i] = fmi3IntervalUnchanged;
-            intervals[i] = fmax(0.0, c->announced[k] - c->time);
+            intervals[i] = c->given[k];
         } else {
             qualifiers[i] = fmi3IntervalNotYetKnown;
             intervals[i] = 0.0;

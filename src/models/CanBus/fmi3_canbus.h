@@ -14,7 +14,16 @@
 #error "modelDescription/fmi3/CanBus.xml declares another number of nodes than canbus.h"
 #endif
 
+/* CANBUS_TRIGGERED_TX: the form with NodeK.Tx_Clock a triggered output clock (FMI 3.0.2, 2.2.9,
+   "Triggered output Clock"; fmi-ls-bus 4____network_abstraction.adoc, "Triggered Tx Clocks"),
+   fmus/fmi3/lsbus-triggered/CanBus_Triggered.fmu, for importers that deliver no countdown-clocked
+   variable (fmu-manipulation-toolbox 2.0's container); its model description is written from
+   CanBus.xml by gen_canbus.py triggered, with this token */
+#ifdef CANBUS_TRIGGERED_TX
+#define TOKEN "{a3c1b2d4-24ca-4b05-9f3e-ca7b05b1e025}"
+#else
 #define TOKEN "{a3c1b2d4-24ca-4b05-9f3e-ca7b05b1e024}"
+#endif
 
 typedef enum { INSTANTIATED, INIT_MODE, EVENT_MODE, STEP_MODE, TERMINATED, FAILED } State;
 extern const char *const STATE_NAME[];
@@ -32,8 +41,10 @@ typedef struct {
     uint8_t rx[CANBUS_NODES][CANBUS_OUTBOX];   /* NodeK.Rx_Data as set */
     size_t rxSize[CANBUS_NODES];
     size_t txRead[CANBUS_NODES];               /* bytes of NodeK.Tx_Data handed out */
+    size_t shown[CANBUS_NODES];                /* triggered form: the bytes NodeK.Tx_Data holds while active */
     double announced[CANBUS_NODES];            /* the tick of NodeK.Tx_Clock announced, or INFINITY */
     bool changed[CANBUS_NODES];                /* announced but not yet reported */
+    double given[CANBUS_NODES];                /* the interval last reported (fmi3IntervalChanged) */
     bool updated, needUpdate;                  /* fmi3UpdateDiscreteStates in this Event Mode */
     bool eventModeUsed;                        /* false: an idle bus (no clock can tick) */
 } Instance;

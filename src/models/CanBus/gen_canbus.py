@@ -5,6 +5,8 @@
   (``VR_<name>`` for the bus's own variables, ``VR_NODE_*`` offsets of node k's
   members at ``VR_NODE_STRIDE * k``), after checking that every node's five
   members follow that pattern and that each Tx/Rx Binary is clocked by its clock;
+- ``triggered XML OUT``: the model description of the form whose NodeK.Tx_Clock are triggered
+  output clocks (fmus/fmi3/lsbus-triggered/CanBus_Triggered.fmu);
 - ``pack --xml XML --binary PLATFORM=FILE ... --readme MD --out FMU``: the FMU archive:
   the model description, binaries/<platform>/CanBus.so|.dll (x86_64-linux, and the cross
   builds' x86_64-windows, aarch64-linux where built), terminalsAndIcons/terminalsAndIcons.xml
@@ -129,6 +131,59 @@ def terminals(xml):
     return "\n".join(out)
 
 
+TRIGGERED_TOKEN = "{a3c1b2d4-24ca-4b05-9f3e-ca7b05b1e025}"     # fmi3_canbus.h, CANBUS_TRIGGERED_TX
+
+
+def triggered(xml, out):
+    """CanBus_Triggered.xml: the same declaration with each NodeK.Tx_Clock a triggered output
+    clock (FMI 3.0.2, 2.2.9, "Triggered output Clock"; fmi-ls-bus 4____network_abstraction.adoc,
+    "Triggered Tx Clocks": the form of the standard's example node), the form fmu-manipulation-
+    toolbox 2.0's container delivers the clocked Tx_Data of; its own instantiationToken."""
+    read(xml)
+    text = Path(xml).read_text(encoding="utf-8")
+    n = 0
+
+    def to_output(m):
+        nonlocal n
+        n += 1
+        return (m.group(1) + 'causality="output" intervalVariability="triggered"'
+                + m.group(2).replace("the bus has operations for node", "active while the bus has operations for node"))
+    text = re.sub(r'(<Clock name="Node\d+\.Tx_Clock" valueReference="\d+" )causality="input" '
+                  r'intervalVariability="countdown"([^>]*>)', to_output, text)
+    _, nodes = read(xml)
+    if n != len(nodes):
+        _fail(xml, f"{n} NodeK.Tx_Clock declared as countdown input clocks, expected {len(nodes)}")
+    # FMI 3.0.2, 2.4.8 <Output>: every output, output clocks too (after each node's Tx_Data, on
+    # which inputs its activation depends: the nodes' operations, as Tx_Data's)
+    text, m = re.subn(r'( *)<Output valueReference="(\d+)02" dependencies="([^"]*)"/>\n',
+                      lambda o: (o.group(0) + f'{o.group(1)}<Output valueReference="{o.group(2)}04" '
+                                 f'dependencies="{o.group(3)}"/>\n'), text)
+    if m != len(nodes):
+        _fail(xml, f"{m} <Output> of a NodeK.Tx_Data in ModelStructure, expected {len(nodes)}")
+    for attr in ('modelName="CanBus"', 'modelIdentifier="CanBus"'):
+        if attr not in text:
+            _fail(xml, f"no {attr}")
+        text = text.replace(attr, attr[:-1] + '_Triggered"', 1)
+    # and FMPy's validation counts an output clock among the initial unknowns (fmpy.validation)
+    last = list(re.finditer(r'( *)<InitialUnknown [^>]*/>\n', text))
+    if not last:
+        _fail(xml, "no <InitialUnknown> in ModelStructure")
+    clocks = "".join(f'{last[-1].group(1)}<InitialUnknown valueReference="{STRIDE * k + 4}" dependencies=""/>\n'
+                     for k in sorted(nodes))
+    text = text[:last[-1].end()] + clocks + text[last[-1].end():]
+    head = re.search(r'instantiationToken="[^"]*"', text)
+    if not head:
+        _fail(xml, "no instantiationToken")
+    text = text.replace(head.group(0), f'instantiationToken="{TRIGGERED_TOKEN}"', 1)
+    text = text.replace("Tx_Clock is a countdown clock (time-based, causality input): the bus announces\n"
+                        "     when it has operations for the node (a frame's end on the wire), and the importer\n"
+                        "     activates the clock then.",
+                        "Tx_Clock is a triggered output clock (this form, written by gen_canbus.py\n"
+                        "     triggered from CanBus.xml): active while the bus has operations for the node.")
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    Path(out).write_text(text, encoding="utf-8")
+
+
 PLATFORMS = ("x86_64-linux", "x86_64-windows", "aarch64-linux")   # FMI 3.0, 2.5.1.1: platform tuples
 
 
@@ -138,11 +193,12 @@ def pack(xml, binaries, readme, out):
     for platform, f in binaries:
         if platform not in PLATFORMS:
             raise DeclarationError(f"--binary {platform}={f}: platform {platform!r} is none of {PLATFORMS}")
+    model_id = ET.parse(xml).getroot().find("CoSimulation").get("modelIdentifier")
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
         z.write(xml, "modelDescription.xml")
         for platform, f in binaries:
-            z.write(f, f"binaries/{platform}/CanBus{Path(f).suffix}")
+            z.write(f, f"binaries/{platform}/{model_id}{Path(f).suffix}")
         z.writestr("terminalsAndIcons/terminalsAndIcons.xml", terminals(xml))
         z.writestr("extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml", MANIFEST)
         for name, text in documentation(xml, readme, [p for p, _ in binaries]).items():
@@ -191,6 +247,8 @@ def main(argv):
     try:
         if argv[:1] == ["header"] and len(argv) == 3:
             header(argv[1], argv[2])
+        elif argv[:1] == ["triggered"] and len(argv) == 3:
+            triggered(argv[1], argv[2])
         elif argv[:1] == ["pack"]:
             import argparse
             ap = argparse.ArgumentParser(prog="gen_canbus.py pack")

@@ -1,5 +1,6 @@
 /* An FMI-LS-BUS 1.0 CAN network node: see lsbus_node.h. */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "fmu_core.h"
@@ -118,16 +119,41 @@ int lsnode_set_clock(ModelInstance *comp, unsigned vr, bool active) {
     if (vr != LSBUS_VR_RX_CLOCK && vr != LSBUS_VR_TX_CLOCK)
         return log_error(comp, "fmi3SetClock: no Clock has value reference %u (Rx_Clock %u, Tx_Clock %u)", vr,
                          LSBUS_VR_RX_CLOCK, LSBUS_VR_TX_CLOCK);
-    if (B->updated)    /* the clocks of an event are set before its discrete states are updated */
-        return log_error(comp, "fmi3SetClock: %s set after fmi3UpdateDiscreteStates in this Event Mode (the "
-                               "importer sets the clocks first: FMI 3.0, 5.2.2; enter a new Event Mode)",
-                         bus_name(vr));
     if (vr == LSBUS_VR_TX_CLOCK && LSBUS_TX_TRIGGERED)
         return log_error(comp, "fmi3SetClock: Tx_Clock is an output clock (triggered: the node activates it at "
                                "its ticks; read it with fmi3GetClock, FMI 3.0.2, 2.2.9)");
+    /* FMI 3.0.2, 2.3, Event Mode, fmi3SetClock: "Periodic Clocks must not be active for more than one
+       call of fmi3UpdateDiscreteStates per Event Mode. This restriction does not apply to triggered
+       Clocks"; "The event mode may consist of several super-dense time instants", each begun by
+       setting clocks. So after an update: Rx_Clock (triggered) begins a new instant; the periodic
+       Tx_Clock too, unless it was active at an update of this Event Mode already (its tick sent) */
+    if (B->updated && active) {
+        if (vr == LSBUS_VR_TX_CLOCK && B->sent)
+            return log_error(comp, "%s: t = %.6g s: fmi3SetClock: %s.Tx_Clock set again after fmi3UpdateDiscreteStates "
+                                   "in this Event Mode, where it was active already (a periodic clock: FMI 3.0.2, "
+                                   "2.3, at most one update per Event Mode; enter a new Event Mode)",
+                             comp->instanceName, comp->v.time, LSBUS_TERMINAL);
+        B->updated = 0;         /* a new super-dense instant: the clocks active at the last update are over */
+        B->txClock = B->rxClock = 0;
+        B->rxSize = 0;
+    }
     if (vr == LSBUS_VR_RX_CLOCK) B->rxClock = active;
     else B->txClock = active;
     return OK;
+}
+
+/* fmi3SetClock outside Event Mode (FMI 3.0.2, 4.2, Step Mode: "clocked variables can not be set or
+   get because Clocks are only active during Event Mode"): refused, naming the node, the clock and
+   the time (FMI 3.0's log callback carries no instance name) */
+int lsnode_clock_outside_event_mode(ModelInstance *comp, unsigned vr) {
+    char clock[96];
+    if (vr == LSBUS_VR_RX_CLOCK || vr == LSBUS_VR_TX_CLOCK)
+        snprintf(clock, sizeof clock, "%s.%s", LSBUS_TERMINAL, bus_name(vr));
+    else
+        snprintf(clock, sizeof clock, "value reference %u (no Clock of it)", vr);
+    return log_error(comp, "%s: t = %.6g s: fmi3SetClock: %s activated in %s: clocks are active only in Event "
+                           "Mode (FMI 3.0.2, 4.2, Step Mode; enter Event Mode first)", comp->instanceName,
+                     comp->v.time, clock, state_name(comp->v.state));
 }
 
 int lsnode_interval(ModelInstance *comp, unsigned vr, double *interval) {

@@ -99,6 +99,7 @@ int lsnode_get_binary(struct ModelInstance *comp, unsigned vr, size_t *size, con
 int lsnode_set_binary(struct ModelInstance *comp, unsigned vr, size_t size, const uint8_t *value);
 int lsnode_get_clock(struct ModelInstance *comp, unsigned vr, bool *active);
 int lsnode_set_clock(struct ModelInstance *comp, unsigned vr, bool active);
+int lsnode_clock_outside_event_mode(struct ModelInstance *comp, unsigned vr);
 int lsnode_interval(struct ModelInstance *comp, unsigned vr, double *interval);
 /* fmi3UpdateDiscreteStates; *tNext: the triggered Tx_Clock's next tick (nextEventTime), else unchanged */
 int lsnode_update(struct ModelInstance *comp, double *tNext);
