@@ -108,7 +108,7 @@ SANITIZE_FILES = {
     "test_fmu_state.py", "test_fmu_standard.py", "test_hardening.py", "test_model_exchange.py",
     "test_runner_core.py", "test_can_core.py", "test_runner_types.py", "test_fmi3.py",
     "test_state_fuzzer.py", "test_canbus.py", "test_lsbus_node.py", "test_can_codec_c.py",
-    "test_lsbus_examples.py", "test_lsbus_core.py",
+    "test_lsbus_examples.py", "test_lsbus_core.py", "test_directional_derivatives.py",
 }
 SANITIZE_SKIP = ("binary_depends_only_on_system_libraries", "only_fmi_symbols_exported", "fmi_sim",
                  "bench_bit_for_bit")

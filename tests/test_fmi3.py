@@ -134,7 +134,11 @@ def test_both_model_descriptions_describe_the_same_variables(name):
             # FMPy's names (FMI 2.0's spelling) for canGetAndSetFMUState, canSerializeFMUState,
             # providesDirectionalDerivatives
             assert it.canGetAndSetFMUstate and it.canSerializeFMUstate
-            assert not it.providesDirectionalDerivative
+    # FMPy reads FMI 2.0's providesDirectionalDerivative only (the FMI 3.0 spelling's value is in
+    # test_jacobian_stated_and_documented / test_no_jacobian_stated_and_documented)
+    for it in (m2.coSimulation, m2.modelExchange):
+        if it is not None:
+            assert it.providesDirectionalDerivative == (name in JACOBIAN_FMUS)
 
 
 def _type_descriptions(fmu, tag):
@@ -178,11 +182,15 @@ def test_enumeration_items_are_the_codes_constants(name, tname):
     assert [int(i.value) for i in t.items] == _c_enum(path, names)
 
 
-@pytest.mark.parametrize("name", FMU_NAMES)
+#: the plants with exact directional derivatives (issue 43: tests/test_directional_derivatives.py)
+JACOBIAN_FMUS = {"ArticulationDamper", "BusDynamics", "BusKinematics", "MultiAxle3DOF"}
+
+
+@pytest.mark.parametrize("name", [n for n in FMU_NAMES if n not in JACOBIAN_FMUS])
 def test_no_jacobian_stated_and_documented(name):
-    """no model exports a Jacobian: every interface of the FMI 3.0 description states
-    providesDirectionalDerivatives and providesAdjointDerivatives false (FMI 3.0, 2.4.1: the
-    calls are then not to be made; ours answer fmi3Error), and the FMU's documentation says
+    """no model but JACOBIAN_FMUS exports a Jacobian: every interface of the FMI 3.0 description
+    states providesDirectionalDerivatives and providesAdjointDerivatives false (FMI 3.0, 2.4.1:
+    the calls are then not to be made; ours answer fmi3Error), and the FMU's documentation says
     why, and why its vectors are scalars"""
     import xml.etree.ElementTree as ET
     with zipfile.ZipFile(fmu3_file(name)) as z:
@@ -196,6 +204,20 @@ def test_no_jacobian_stated_and_documented(name):
     assert not list(root.iter("Dimension"))          # the flat names: no FMI 3.0 array
     assert "<th>derivatives</th><td>providesDirectionalDerivatives and providesAdjointDerivatives are false" in page
     assert "no analytic Jacobian" in page and "<th>arrays</th>" in page
+
+
+@pytest.mark.parametrize("name", sorted(JACOBIAN_FMUS))
+def test_jacobian_stated_and_documented(name):
+    """the plants with directional derivatives state both true on both interfaces, and their
+    documentation says what the derivatives are"""
+    import xml.etree.ElementTree as ET
+    with zipfile.ZipFile(fmu3_file(name)) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        page = z.read("documentation/index.html").decode()
+    for e in [e for e in root if e.tag in ("CoSimulation", "ModelExchange")]:
+        assert e.get("providesDirectionalDerivatives") == "true", e.tag
+        assert e.get("providesAdjointDerivatives") == "true", e.tag
+    assert "<th>derivatives</th><td>fmi3GetDirectionalDerivative and fmi3GetAdjointDerivative: the exact" in page
 
 
 @pytest.mark.parametrize("name", FMU_NAMES)

@@ -121,7 +121,7 @@ def linear_multiaxle(**kw):
 
 
 def test_multiaxle_A_and_B_are_seed_004_eq_2_linearised_by_hand():
-    lin, n = linear_multiaxle()
+    lin, n = linear_multiaxle(derivatives="fd")
     A, B, _ = eq2_matrices()
     s = index(lin.states, STATES)
     assert "finite differences" in lin.method and "1e-05" in lin.method
@@ -148,6 +148,28 @@ def test_multiaxle_A_and_B_are_seed_004_eq_2_linearised_by_hand():
     np.testing.assert_allclose(sorted([z for z in ev if z.imag >= 0], key=key), sorted(dyn, key=key), rtol=1e-6)
     g0 = lin.frequency_response("delta[1]", "w_r", [1e-6])[0]
     assert g0.real == pytest.approx((-np.linalg.solve(A, B[:, 0]))[0], rel=1e-5)
+
+
+def test_multiaxle_A_B_C_D_from_its_directional_derivatives_are_eq_2_to_1e_12():
+    """MultiAxle3DOF's own fmi2GetDirectionalDerivative (issue 43: lateral3dof.c on dual numbers)
+    gives eq. 2 linearised by hand to 1e-12 relative to each row's largest entry (the finite
+    differences above: 1e-6)"""
+    lin, n = linear_multiaxle(derivatives="exact")
+    A, B, _ = eq2_matrices()
+    assert lin.method.startswith("directional derivatives (fmi2GetDirectionalDerivative)")
+    s = index(lin.states, STATES)
+    for i in range(4):
+        scale = max(np.abs(A[i]).max(), np.abs(B[i]).max())
+        np.testing.assert_allclose(lin.A[s[i], s], A[i], rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(lin.B[s[i], :], B[i], rtol=0, atol=1e-12 * scale)
+    psi, y = index(lin.states, ["psi", "y"])
+    assert lin.A[psi, s[0]] == 1.0 and lin.A[y, s[1]] == pytest.approx(1.0, rel=1e-15)
+    assert lin.A[y, psi] == pytest.approx(U, rel=1e-12)
+    beta, ay = index(lin.outputs, ["beta", "a_y"])
+    np.testing.assert_allclose(lin.C[beta, s], [0, 1 / U, 0, 0], rtol=1e-15, atol=0)
+    np.testing.assert_allclose(lin.C[ay, s], A[1] + np.array([U, 0, 0, 0]), rtol=0,
+                               atol=1e-12 * np.abs(A[1]).max())
+    np.testing.assert_allclose(lin.D[ay], B[1], rtol=0, atol=1e-12 * np.abs(B[1]).max())
 
 
 def test_seed_004_eq_5_as_printed_disagrees_with_eq_2():
@@ -307,7 +329,7 @@ def test_cli_writes_mat_csv_and_bode_plot(tmp_path):
     r = run_cli(path, "--ssv", PARAMETERS / "Bus15mTagAxle.ssv", "--set", "u=20", "--inputs", "delta[1],M_d",
                 "--outputs", "beta", "-o", mat, "--bode", "delta[1]:w_r", "--plot", png)
     assert r.returncode == 0, r.stderr
-    assert "finite differences" in r.stdout
+    assert "directional derivatives (fmi2GetDirectionalDerivative)" in r.stdout   # the FMU's (issue 43)
     m = loadmat(mat)
     assert [str(x[0]) for x in m["states"].ravel()][:4] == STATES
     assert m["A"].shape == (7, 7) and m["B"].shape == (7, 2) and m["C"].shape == (1, 7) and m["D"].shape == (1, 2)
@@ -331,7 +353,7 @@ def test_cli_writes_mat_csv_and_bode_plot(tmp_path):
     (["BusDynamics", "--ssv", "Scania18m", "--set", "psi_start[2]=2.0", "--inputs", "delta[1]"],
      ["BusDynamics", "jack-knifed", "artAngle[1]"]),
     (["MultiAxle3DOF", "--at", "nan"], ["--at nan", "finite"]),
-    (["Scania18m_OpenLoop"], ["Scania18m_OpenLoop", "a bench", "give one FMU"]),
+    (["Scania18m_OpenLoop", "--at", "1"], ["Scania18m_OpenLoop", "--at", "a bench's operating point"]),
 ])
 def test_bad_input_is_one_line_naming_the_fmu_and_the_variable(args, words):
     if not args[0].startswith("Scania"):

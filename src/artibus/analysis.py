@@ -1,6 +1,7 @@
 """The analysis verbs of the command line (artibus.cli): `artibus bode` (frequency response
-through the co-simulation), `artibus linearize` (one Model Exchange FMU's linear model and modes),
-`artibus calibrate` (the damping controller's gains, seed 001)."""
+through the co-simulation), `artibus linearize` (one Model Exchange FMU's linear model and modes,
+or a bench's with its controllers in the loop), `artibus modes` (stability maps), `artibus calibrate`
+(the damping controller's gains, seed 001)."""
 from pathlib import Path
 
 from artibus.base import ArtibusError
@@ -41,9 +42,12 @@ def cmd_linearize(args):
     from artibus import linearize as lz
     from artibus.bench import ssp
     from artibus.bench.parameters import parse_set, read_parameters
-    if Path(args.fmu).suffix.lower() == ".ssp" or args.fmu in ssp.bench_names():
-        raise ArtibusError(f"linearize {args.fmu}: a bench; the linear model of a whole bench (its Model "
-                           "Exchange plants with their controllers) is to come (issue 43): give one FMU")
+    if (Path(args.fmu).suffix.lower() in (".ssp", ".ssd") or Path(args.fmu).is_dir()
+            or args.fmu in ssp.bench_names()):
+        return _linearize_bench(args)
+    for flag in ("variant", "exclude", "amplitude"):
+        if getattr(args, flag, None):
+            raise ArtibusError(f"linearize {args.fmu}: --{flag} is a bench's option; {args.fmu} is one FMU")
     fmu = fmu_arg(args.fmu)
     out = check_output(args.output, "-o") if args.output else None
     if out is not None and Path(out).suffix not in (".mat", ".csv"):
@@ -66,6 +70,74 @@ def cmd_linearize(args):
         print(f"{out}: A {lin.A.shape}, B {lin.B.shape}, C {lin.C.shape}, D {lin.D.shape}")
     if pair is not None:
         print(lz.bode_plot(lin, pair[0], pair[1], args.plot))
+    return 0
+
+
+def _linearize_bench(args):
+    """`artibus linearize BENCH`: its ME plants with the rest in the loop (artibus.linear.bench);
+    with --amplitude C.V=A the loop's describing function there (artibus.linear.describing)."""
+    from artibus import linearize as lz
+    from artibus.base import parse_real
+    from artibus.bench.parameters import parse_set
+    from artibus.linear import bench as lb, describing
+    if args.at is not None:
+        raise ArtibusError(f"linearize {args.fmu}: --at is for one FMU; a bench's operating point is its "
+                           "start (each component initialised with its values) or --steady")
+    if args.ssv:
+        raise ArtibusError(f"linearize {args.fmu}: --ssv is for one FMU; a bench binds its own parameter "
+                           "sets (change them with --set Component.variable=VALUE or --variant)")
+    out = check_output(args.output, "-o") if args.output else None
+    if out is not None and Path(out).suffix not in (".mat", ".csv"):
+        raise ArtibusError(f"-o {out}: the matrices are written as FILE.mat or FILE.csv")
+    if bool(args.bode) != bool(args.plot):
+        raise ArtibusError("linearize: --bode IN:OUT and --plot FILE.png go together")
+    names = lambda text: [n.strip() for n in text.split(",") if n.strip()] if text else None   # noqa: E731
+    opened = lb.open_bench(args.fmu, args.variant or (), parse_set(args.set), args.exclude or ())
+    try:
+        if args.amplitude:
+            sig, sep, amp = args.amplitude.partition("=")
+            if not sep:
+                raise ArtibusError(f"--amplitude {args.amplitude}: expected Component.variable=AMPLITUDE")
+            bl, _, _ = describing.linear_at_amplitude(opened, sig.strip(), parse_real(amp.strip()), args.steady)
+            bl.closed = lb._select(bl.closed, names(args.inputs), names(args.outputs))
+        else:
+            bl = lb.linear_of(opened, args.steady, names(args.inputs), names(args.outputs), args.fd_step,
+                              args.derivatives)
+    finally:
+        opened.close()
+    print("\n".join(lb.report(bl)))
+    if out is not None:
+        (lz.write_mat if Path(out).suffix == ".mat" else lz.write_csv)(bl.closed, out)
+        print(f"{out}: A {bl.closed.A.shape}, B {bl.closed.B.shape}, C {bl.closed.C.shape}, D {bl.closed.D.shape}")
+    if args.bode:
+        pair = args.bode.split(":", 1)
+        if len(pair) != 2:
+            raise ArtibusError(f"--bode {args.bode}: expected INPUT:OUTPUT")
+        print(lz.bode_plot(bl.closed, pair[0], pair[1], check_output(args.plot, "--plot")))
+    return 0
+
+
+def cmd_modes(args):
+    """`artibus modes -o DIR`: the stability maps' page (artibus.report.modes), the Scania table printed."""
+    import math
+
+    import numpy as np
+
+    from artibus.report import modes as page
+    parts = args.speeds.split(":")
+    try:
+        lo, hi, step = (float(x) for x in parts)
+    except ValueError:
+        raise ArtibusError(f"--speeds {args.speeds}: expected FROM:TO:STEP in km/h, e.g. 50:130:10") from None
+    if not (0 < lo <= hi and step > 0 and math.isfinite(hi)):
+        raise ArtibusError(f"--speeds {args.speeds}: speeds > 0 km/h, FROM <= TO, STEP > 0")
+    speeds = list(np.arange(lo, hi + step / 2, step))
+    if not (args.amplitude > 0 and math.isfinite(args.amplitude)):
+        raise ArtibusError(f"--amplitude {args.amplitude}: an articulation amplitude > 0 deg")
+    where, smap = page.write(args.output, speeds, args.mu_rear, math.radians(args.amplitude),
+                             mus=None if args.no_friction else page.MUS)
+    print("\n".join(page.text_table(smap)))
+    print(where)
     return 0
 
 

@@ -12,6 +12,9 @@
   artibus calibrate [-o FILE.ssv]      the damping controller's gains (seed 001, 5.2.2)
   artibus linearize FMU [--steady]     A, B, C, D of one Model Exchange FMU at an operating point (--at T,
                                        --steady); its modes: frequency, damping ratio, dominant state
+  artibus linearize BENCH [--variant V] a bench's ME plants with its controllers in the loop (--exclude C,
+                                       --amplitude C.V=A: the loop's describing function)
+  artibus modes -o DIR                 stability maps over speed (seed 001's sway, seed 004's FWS/MAS), a page
   artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
   artibus can plot LOG [--signal S]    a CAN log's frame timing and decoded signals as a PNG
   artibus replay LOG --bench BENCH     a recorded log (.csv, .blf, .asc) drives a bench; model against measured
@@ -37,7 +40,7 @@ from artibus.console import path_error, quiet_exit, stdout_gone
 from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds
 from artibus import files
 from artibus.files import atomic_dir, bench_inputs, given as _given, make_dir, report_said
-from artibus.analysis import cmd_bode, cmd_calibrate, cmd_linearize
+from artibus.analysis import cmd_bode, cmd_calibrate, cmd_linearize, cmd_modes
 from artibus.inventory import cmd_info, cmd_list, fmu_arg, wrong_kind
 from artibus.options import Parser
 
@@ -115,7 +118,7 @@ def cmd_run(args):
                 checked=lambda out: setattr(args, "_out", out), fmi=args.fmi,
                 inputs=_given(args.ssv, "an --ssv file") + _given([args.input_file], "the --input-file"),
                 fmi_type=_fmi_type(args.fmi_type), relative_tolerance=args.tolerance, me_method=args.me_method,
-                input_file=args.input_file)
+                input_file=args.input_file, reference=args.reference)
     return 0
 
 
@@ -284,7 +287,7 @@ def cmd_sweep(args):
                 design=args.design, out=out, stop_time=args.stop_time, step=args.step,
                 fixed=parse_set(args.set),
                 keep_series=args.keep_series, scheduler=args.scheduler, workers=args.workers, kpi=args.kpi,
-                retry_failed=args.retry_failed, argv=sys.argv, fmi=args.fmi)
+                retry_failed=args.retry_failed, argv=sys.argv, fmi=args.fmi, error_every=args.error_every)
     n = res.table.num_rows
     print(f"sweep {Path(args.bench).stem}: {n} cases, {res.ran} run now ({res.failed} failed), "
           f"{res.skipped} done before" + (f"; {res.rate:.1f} cases/min" if res.ran else ""))
@@ -337,6 +340,10 @@ def build_parser():
     s.add_argument("--relative-tolerance", "--tolerance", type=float, dest="tolerance",
                    help="the Model Exchange FMUs' integrator's relative tolerance (default: their default "
                         "experiment's, else 1e-6)")
+    s.add_argument("--reference", action="store_true",
+                   help="the bench's monolithic reference (issue 44): every component that has Model Exchange "
+                        "integrated together in one CVODE (relative tolerance 1e-8 unless given), the sampled "
+                        "controllers, the driver, the ECUs and the network as they are")
     s.add_argument("--me-method", choices=["bdf", "adams"], default=None,
                    help="the Model Exchange FMUs' integrator: CVODE's BDF (default, stiff-safe) or Adams")
     s.add_argument("--input-file", metavar="CSV",
@@ -402,7 +409,13 @@ def build_parser():
     s.set_defaults(func=cmd_bode)
     s = sub.add_parser("linearize", help="A, B, C, D of one Model Exchange FMU at an operating point, "
                                          "its modes (frequency, damping ratio, dominant state)")
-    s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU (it needs Model Exchange)")
+    s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU (it needs Model Exchange), "
+                               "or a bench (its ME plants with the rest of the bench in the loop)")
+    s.add_argument("--variant", action="append", metavar="NAME", help="a bench's variant (repeatable)")
+    s.add_argument("--exclude", action="append", metavar="COMPONENT",
+                   help="a bench's component left out: what it drives becomes an open input (repeatable)")
+    s.add_argument("--amplitude", metavar="C.V=A",
+                   help="a bench's loop linearised by its first harmonic at amplitude A of plant output C.V")
     g = s.add_mutually_exclusive_group()
     g.add_argument("--at", type=arg_real, metavar="TIME", help="simulate (ME, inputs held) to TIME first, s")
     g.add_argument("--steady", action="store_true", help="simulate until the dynamic states are at rest")
@@ -418,6 +431,16 @@ def build_parser():
     s.add_argument("--bode", metavar="IN:OUT", help="the linear model's Bode plot from IN to OUT (with --plot)")
     s.add_argument("--plot", metavar="FILE.png", help="where the Bode plot goes")
     s.set_defaults(func=cmd_linearize)
+    s = sub.add_parser("modes", help="stability maps: seed 001's sway mode with each damping function and "
+                                     "seed 004's FWS/MAS over speed, a page with plots")
+    s.add_argument("-o", "--output", required=True, metavar="DIR", help="where the page and its PNGs go")
+    s.add_argument("--speeds", default="50:130:10", metavar="FROM:TO:STEP", help="km/h (default 50:130:10)")
+    s.add_argument("--mu-rear", type=arg_real, default=1.0, help="the Scania's rear axle friction (default 1)")
+    s.add_argument("--amplitude", type=arg_real, default=2.0, metavar="DEG",
+                   help="articulation amplitude of the hinge's describing function, deg (default 2)")
+    s.add_argument("--no-friction", action="store_true",
+                   help="leave out the map over rear friction at 100 km/h (30 linearisations)")
+    s.set_defaults(func=cmd_modes)
     s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), printed; "
                                          "-o FILE.ssv writes them")
     s.add_argument("--target", type=arg_real, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
@@ -477,6 +500,9 @@ def build_parser():
     s.add_argument("--workers", type=arg_integer, help="local worker processes (default: one per core)")
     s.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
     s.add_argument("--kpi", help="the KPI of the study plot and the worst cases (default: the bench's first)")
+    s.add_argument("--error-every", type=arg_integer, default=0, metavar="N",
+                   help="every N-th case run again at half the continuous components' step: each KPI's "
+                        "co-simulation error, a column 'KPI [unit] cosim error' (issue 44; default 0: none)")
     add_fmi_option(s, "sweep")
     s.set_defaults(func=cmd_sweep)
     return p

@@ -144,7 +144,7 @@ def _state_of(fmu, der, derivatives):
     return v
 
 
-class _Equations:
+class Equations:
     """f(x, u) and g(x, u) of an initialised ME FMU (FMPy's FMU2Model / FMU3Model ``slave``):
     the states set with fmi2/fmi3SetContinuousStates, the inputs with SetReal/SetFloat64,
     the derivatives and outputs read back (FMI 2.0.4 3.2.1, FMI 3.0 3.2.1: Continuous-Time Mode)."""
@@ -305,7 +305,7 @@ def _simulate_to(fmu, t0, t1):
                            f"before the operating point t = {t1:g} s")
 
 
-def _steady(fmu, eq, t0, u0, xn, tol=STEADY_TOL, limit=STEADY_LIMIT):
+def steady_point(fmu, eq, t0, u0, xn, tol=STEADY_TOL, limit=STEADY_LIMIT):
     """Integrate until the derivatives of the dynamic states are below tol x their nominals (per
     second); returns (time, dynamic mask). Never steady within ``limit`` s: an error naming the
     state still moving most."""
@@ -351,11 +351,11 @@ def _chosen(fmu, names, causality):
     return chosen
 
 
-def _unit(v):
+def unit_of(v):
     return (v.unit if v is not None else None) or "-"
 
 
-def _nominal(v):
+def nominal_of(v):
     x = getattr(v, "nominal", None) if v is not None else None
     try:
         x = float(x)
@@ -402,17 +402,17 @@ def linearize(fmu, at=None, steady=False, parameters=None, inputs=None, outputs=
             inst.var(n)                         # an unknown name says the close ones
         t0 = float(getattr(inst.md.defaultExperiment, "startTime", None) or 0.0)
         inst.initialize(dict(parameters or {}), start_time=t0)
-        return _linear_at(inst, ins, outs, t0, at, steady_limit if steady else None, step, derivatives)
+        return linear_at(inst, ins, outs, t0, at, steady_limit if steady else None, step, derivatives)
     finally:
         inst.close()
 
 
-def _linear_at(inst, ins, outs, t0, at, steady, step, derivatives):
+def linear_at(inst, ins, outs, t0, at, steady, step, derivatives):
     """The operating point reached (at: a time; steady: None, or how long to wait for rest, s)
     and the matrices there."""
-    eq = _Equations(inst, ins, outs)
+    eq = Equations(inst, ins, outs)
     xn = eq.nominals()
-    un = np.array([_nominal(v) for v in ins])
+    un = np.array([nominal_of(v) for v in ins])
     u0 = eq.inputs()
     t, dyn = t0, None
     if at is not None:
@@ -421,7 +421,7 @@ def _linear_at(inst, ins, outs, t0, at, steady, step, derivatives):
         _simulate_to(inst, t0, float(at))
         t = float(at)
     elif steady is not None:
-        t, dyn = _steady(inst, eq, t0, u0, xn, limit=steady)
+        t, dyn = steady_point(inst, eq, t0, u0, xn, limit=steady)
     x0 = eq.states()
     f0, y0 = eq(x0, u0)
     _check_point(inst, eq, x0, f0, y0, outs)
@@ -440,10 +440,10 @@ def _linear_at(inst, ins, outs, t0, at, steady, step, derivatives):
     else:
         A, B, C, D = _central(eq, x0, u0, xn, un, step)
         method = f"finite differences (central), step h = {step:g} x each state's and input's nominal"
-    states = [Signal(v.name if v is not None else f"x{k + 1}", _unit(v), xn[k], x0[k])
+    states = [Signal(v.name if v is not None else f"x{k + 1}", unit_of(v), xn[k], x0[k])
               for k, v in enumerate(eq.state_vars)]
-    lin = Linear(A, B, C, D, states, [Signal(v.name, _unit(v), n, x) for v, n, x in zip(ins, un, u0)],
-                 [Signal(v.name, _unit(v), _nominal(v), y) for v, y in zip(outs, y0)],
+    lin = Linear(A, B, C, D, states, [Signal(v.name, unit_of(v), n, x) for v, n, x in zip(ins, un, u0)],
+                 [Signal(v.name, unit_of(v), nominal_of(v), y) for v, y in zip(outs, y0)],
                  fmu=str(inst.path), time=t, method=method)
     dyn = np.array(dynamic_states(A, xn), dtype=bool) if dyn is None else dyn
     lin.dynamic = [s.name for s, d in zip(states, dyn) if d]

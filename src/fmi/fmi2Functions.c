@@ -234,16 +234,26 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size
     return ST(core_deserialize(comp, "fmi2DeSerializeFMUstate", (const unsigned char *)bytes, size, state));
 }
 
-/* ---- not provided (capability flags are false in the model description) --- */
+/* ---- directional derivatives (FMI 2.0.4, 2.1.9): dvUnknown = J dvKnown, the
+ * knowns states and inputs, the unknowns outputs and state derivatives; allowed
+ * where getters are (4.2.4 and 3.2.3 tables). Models without the hook (fmu.h:
+ * MODEL_DIRECTIONAL_DERIVATIVE) say providesDirectionalDerivative = false. */
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown[],
                                         size_t nUnknown, const fmi2ValueReference vKnown[],
                                         size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    (void)vUnknown; (void)nUnknown; (void)vKnown; (void)nKnown; (void)dvKnown; (void)dvUnknown;
     ENTER("fmi2GetDirectionalDerivative", M_Get);
+#ifdef MODEL_DIRECTIONAL_DERIVATIVE
+    return ST(core_directional_derivative(comp, "fmi2GetDirectionalDerivative", vUnknown, nUnknown,
+                                          vKnown, nKnown, dvKnown, dvUnknown));
+#else
+    (void)vUnknown; (void)nUnknown; (void)vKnown; (void)nKnown; (void)dvKnown; (void)dvUnknown;
     return leave(comp, log_error(comp, "fmi2GetDirectionalDerivative: not provided by this FMU "
                                        "(providesDirectionalDerivative = false)"));
+#endif
 }
+
+/* ---- not provided (capability flags are false in the model description) --- */
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {

@@ -459,22 +459,57 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
                         "the dependencies are in <ModelStructure>");
 }
 
+/* ---- directional and adjoint derivatives (FMI 3.0, 2.2.11): sensitivity =
+ * J seed resp. J^T seed, the knowns continuous states and inputs, the unknowns
+ * outputs and state derivatives; allowed in Initialization, Event,
+ * Continuous-Time and Step Mode and when Terminated (2.3.3, 2.3.5, 2.3.8, 3.2,
+ * 4.2). Every variable is a scalar, so nSeed and nSensitivity are counts of
+ * variables. Models without the hook (fmu.h: MODEL_DIRECTIONAL_DERIVATIVE)
+ * refuse both (providesDirectionalDerivatives = false). */
+#define M_Derivatives (S_INIT_MODE | S_EVENT_MODE | S_CONT_TIME_MODE | S_STEP_COMPLETE | S_TERMINATED)
+
+#ifdef MODEL_DIRECTIONAL_DERIVATIVE
+static fmi3Status derivative(fmi3Instance instance, const char *fn, bool adjoint,
+                             const fmi3ValueReference unknowns[], size_t nUnknowns,
+                             const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
+                             size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity) {
+    ENTER(fn, M_Derivatives);
+    const size_t nIn = adjoint ? nUnknowns : nKnowns, nOut = adjoint ? nKnowns : nUnknowns;
+    if (nSeed != nIn || nSensitivity != nOut)
+        return leave(comp, log_error(comp, "%s: nSeed = %zu and nSensitivity = %zu must be %zu and %zu "
+                                           "(every variable of this FMU is a scalar)",
+                                     fn, nSeed, nSensitivity, nIn, nOut));
+    return ST((adjoint ? core_adjoint_derivative : core_directional_derivative)(
+        comp, fn, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity));
+}
+#endif
+
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
                                         size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns,
                                         const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
                                         size_t nSensitivity) {
+#ifdef MODEL_DIRECTIONAL_DERIVATIVE
+    return derivative(instance, "fmi3GetDirectionalDerivative", false, unknowns, nUnknowns, knowns, nKnowns,
+                      seed, nSeed, sensitivity, nSensitivity);
+#else
     (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed; (void)nSeed;
     (void)sensitivity; (void)nSensitivity;
     return NOT_PROVIDED("fmi3GetDirectionalDerivative", "providesDirectionalDerivatives = false");
+#endif
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
                                     size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns,
                                     const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
                                     size_t nSensitivity) {
+#ifdef MODEL_DIRECTIONAL_DERIVATIVE
+    return derivative(instance, "fmi3GetAdjointDerivative", true, unknowns, nUnknowns, knowns, nKnowns,
+                      seed, nSeed, sensitivity, nSensitivity);
+#else
     (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed; (void)nSeed;
     (void)sensitivity; (void)nSensitivity;
     return NOT_PROVIDED("fmi3GetAdjointDerivative", "providesAdjointDerivatives = false");
+#endif
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {

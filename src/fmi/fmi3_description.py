@@ -8,8 +8,9 @@ What changes from FMI 2.0 to FMI 3.0 (FMI 3.0, 2.4):
 - ``guid`` becomes ``instantiationToken``; ``numberOfEventIndicators`` goes (the event
   indicators are variables, listed in <ModelStructure><EventIndicator>);
 - <ModelExchange>/<CoSimulation>: ``canGetAndSetFMUState``, ``canSerializeFMUState``,
-  ``providesDirectionalDerivatives="false"`` and ``providesAdjointDerivatives="false"``
-  (stated, though false is the default: no model exports an analytic Jacobian),
+  ``providesDirectionalDerivatives`` and ``providesAdjointDerivatives`` both as FMI 2.0's
+  ``providesDirectionalDerivative`` (stated also where false, the default; a model with
+  the hook model_directional_derivative serves both, fmu_core.c),
   ``needsCompletedIntegratorStep="false"``; Co-Simulation ``hasEventMode="true"`` (the FMU
   has nothing to do in Event Mode, it handles its events inside the step, so an importer
   may use either), ``canHandleVariableCommunicationStepSize`` as in FMI 2.0; no
@@ -59,15 +60,15 @@ def _interfaces(md2, md3):
                      "false" if me.get("completedIntegratorStepNotNeeded") == "true" else "true",
                  "canGetAndSetFMUState": me.get("canGetAndSetFMUstate", "false"),
                  "canSerializeFMUState": me.get("canSerializeFMUstate", "false"),
-                 "providesDirectionalDerivatives": "false",
-                 "providesAdjointDerivatives": "false"}
+                 "providesDirectionalDerivatives": me.get("providesDirectionalDerivative", "false"),
+                 "providesAdjointDerivatives": me.get("providesDirectionalDerivative", "false")}
         md3.append(_element("ModelExchange", attrs, "\n  "))
     cs = md2.find("CoSimulation")
     attrs = {"modelIdentifier": cs.get("modelIdentifier"),
              "canGetAndSetFMUState": cs.get("canGetAndSetFMUstate", "false"),
              "canSerializeFMUState": cs.get("canSerializeFMUstate", "false"),
-             "providesDirectionalDerivatives": "false",
-             "providesAdjointDerivatives": "false",
+             "providesDirectionalDerivatives": cs.get("providesDirectionalDerivative", "false"),
+             "providesAdjointDerivatives": cs.get("providesDirectionalDerivative", "false"),
              "canHandleVariableCommunicationStepSize": cs.get("canHandleVariableCommunicationStepSize",
                                                                "false"),
              "hasEventMode": "true"}

@@ -188,6 +188,25 @@ void model_event_indicators(ModelInstance *comp, double z[]);
    simulation there (logged why); *tNext the next time event, INFINITY if none */
 Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext);
 
+/* ---- Directional derivatives: supplied by the models whose config.h says
+ *     #define MODEL_DIRECTIONAL_DERIVATIVE 1
+ * (their model description says providesDirectionalDerivative(s)="true"); the
+ * others refuse fmi2GetDirectionalDerivative / fmi3GetDirectionalDerivative
+ * with Error and a message.
+ *
+ * The knowns are the continuous states and the Real inputs, the unknowns the
+ * outputs and the state derivatives (FMI 2.0.4, 2.1.9 and 3.2.2; FMI 3.0,
+ * 2.2.11: v_unknown = g(v_known, v_rest), the sensitivity J seed). The layer
+ * writes the seed into `seed`, a ModelData that is zero but at the knowns'
+ * fields, and `tangent` starts as a copy of it. The model sets, at the
+ * current state, inputs and time (v), every output and derivative field of
+ * `tangent` to the derivative of that variable along the seed: forward-mode
+ * differentiation of the same equations model_outputs evaluates. Error
+ * (logged) where the equations are not defined there. */
+#ifdef MODEL_DIRECTIONAL_DERIVATIVE
+Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, ModelData *tangent);
+#endif
+
 /* The built-in test stimulus of a model run alone (`fmpy simulate`): one
  * sine period amp sin(2 pi t / period), an S-curve on a steering input, then
  * nothing. Parameters testSteerAmp / testSteerPeriod; off (amp = 0) by default. */

@@ -673,3 +673,106 @@ Status core_nominals(ModelInstance *comp, const char *fn, double x[], size_t nx)
 }
 
 #endif
+
+/* ---- directional derivatives (fmu.h: MODEL_DIRECTIONAL_DERIVATIVE) ------- */
+#ifdef MODEL_DIRECTIONAL_DERIVATIVE
+
+static double *field_of(ModelData *d, const VarInfo *v) {
+    return (double *)((char *)d + v->offset);
+}
+
+/* a continuous state (Model Exchange: listed in <Derivatives>) */
+static bool is_state(const VarInfo *v) {
+#ifdef MODEL_NX
+    for (int i = 0; i < MODEL_NX; i++)
+        if (strcmp(v->name, X_NAME[i]) == 0) return true;
+#endif
+    (void)v;
+    return false;
+}
+
+/* FMI 3.0, 2.2.11 (FMI 2.0.4, 2.1.9): the knowns are the continuous states and
+   the inputs (Float64 / Real), the unknowns the outputs and state derivatives;
+   the value references of both looked up, the VarInfo into ku[] */
+static Status dd_variables(ModelInstance *comp, const char *fn, const unsigned unknowns[], size_t nU,
+                           const unsigned knowns[], size_t nK, const VarInfo **ku) {
+    for (size_t j = 0; j < nK; j++) {
+        const VarInfo *v = core_lookup(comp, fn, T_REAL, knowns[j]);
+        if (!v) return Error;
+        if (!(v->causality == C_INPUT || is_state(v)))
+            return log_error(comp, "%s: known %s (value reference %u) is neither a continuous state nor "
+                                   "a Real input (FMI 3.0, 2.2.11: the knowns a dependency may name)",
+                             fn, v->name, knowns[j]);
+        ku[j] = v;
+    }
+    for (size_t i = 0; i < nU; i++) {
+        const VarInfo *v = core_lookup(comp, fn, T_REAL, unknowns[i]);
+        if (!v) return Error;
+        if (!(v->causality == C_OUTPUT || (v->causality == C_LOCAL && v->variability == V_CONTINUOUS)))
+            return log_error(comp, "%s: unknown %s (value reference %u) is neither an output nor a state "
+                                   "derivative (FMI 3.0, 2.2.11)", fn, v->name, unknowns[i]);
+        ku[nK + i] = v;
+    }
+    return OK;
+}
+
+/* one forward pass: tangent of every output and derivative along seed[] on ku[0..nK) */
+static Status dd_forward(ModelInstance *comp, const char *fn, const VarInfo **ku, size_t nK,
+                         const double seed[], ModelData *tangent) {
+    ModelData sd;
+    memset(&sd, 0, sizeof sd);
+    for (size_t j = 0; j < nK; j++) {
+        if (!isfinite(seed[j]))
+            return log_error(comp, "%s: the seed of %s is %g", fn, ku[j]->name, seed[j]);
+        *field_of(&sd, ku[j]) += seed[j];      /* a known named twice: the seeds add (J is linear) */
+    }
+    *tangent = sd;
+    return model_directional_derivative(comp, &sd, tangent);
+}
+
+static Status dd_prepare(ModelInstance *comp, const char *fn, const unsigned unknowns[], size_t nU,
+                         const unsigned knowns[], size_t nK, const double seed[], const double sensitivity[],
+                         const VarInfo ***ku) {
+    if ((nK > 0 && (!knowns || !seed)) || (nU > 0 && (!unknowns || !sensitivity)))
+        return log_error(comp, "%s: an argument array is NULL", fn);
+    if (core_refresh(comp) > Warning) return Error;
+    *ku = layer_calloc(comp, nK + nU + 1, sizeof **ku);
+    if (!*ku) return log_error(comp, "%s: out of memory", fn);
+    return dd_variables(comp, fn, unknowns, nU, knowns, nK, *ku);
+}
+
+Status core_directional_derivative(ModelInstance *comp, const char *fn, const unsigned unknowns[],
+                                   size_t nUnknowns, const unsigned knowns[], size_t nKnowns,
+                                   const double seed[], double sensitivity[]) {
+    const VarInfo **ku = NULL;
+    ModelData t;
+    Status status = dd_prepare(comp, fn, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity, &ku);
+    if (status <= Warning) status = dd_forward(comp, fn, ku, nKnowns, seed, &t);
+    for (size_t i = 0; status <= Warning && i < nUnknowns; i++)
+        sensitivity[i] = *field_of(&t, ku[nKnowns + i]);
+    if (ku) layer_free(comp, (void *)ku);
+    return status > Warning ? leave(comp, status) : status;
+}
+
+/* J^T seed, one forward pass per known: cheap here (a few tens of knowns) */
+Status core_adjoint_derivative(ModelInstance *comp, const char *fn, const unsigned unknowns[],
+                               size_t nUnknowns, const unsigned knowns[], size_t nKnowns,
+                               const double seed[], double sensitivity[]) {
+    const VarInfo **ku = NULL;
+    ModelData t;
+    /* seed has nUnknowns entries, sensitivity nKnowns (FMI 3.0, 2.2.11) */
+    Status status = dd_prepare(comp, fn, unknowns, nUnknowns, knowns, nKnowns, sensitivity, seed, &ku);
+    for (size_t i = 0; status <= Warning && i < nUnknowns; i++)
+        if (!isfinite(seed[i])) status = log_error(comp, "%s: the seed of %s is %g", fn, ku[nKnowns + i]->name, seed[i]);
+    for (size_t j = 0; status <= Warning && j < nKnowns; j++) {
+        const double one = 1.0;
+        status = dd_forward(comp, fn, ku + j, 1, &one, &t);
+        double s = 0.0;
+        for (size_t i = 0; status <= Warning && i < nUnknowns; i++) s += seed[i] * *field_of(&t, ku[nKnowns + i]);
+        sensitivity[j] = s;
+    }
+    if (ku) layer_free(comp, (void *)ku);
+    return status > Warning ? leave(comp, status) : status;
+}
+
+#endif

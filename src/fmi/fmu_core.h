@@ -79,6 +79,18 @@ Status core_event_indicators(ModelInstance *comp, const char *fn, double z[], si
 Status core_nominals(ModelInstance *comp, const char *fn, double x[], size_t nx);
 #endif
 
+/* directional derivatives (fmu.h: models with MODEL_DIRECTIONAL_DERIVATIVE):
+   sensitivity = J seed (directional) or J^T seed (adjoint: one forward pass
+   per known), J = d unknowns / d knowns; the value references checked */
+#ifdef MODEL_DIRECTIONAL_DERIVATIVE
+Status core_directional_derivative(ModelInstance *comp, const char *fn, const unsigned unknowns[],
+                                   size_t nUnknowns, const unsigned knowns[], size_t nKnowns,
+                                   const double seed[], double sensitivity[]);
+Status core_adjoint_derivative(ModelInstance *comp, const char *fn, const unsigned unknowns[],
+                               size_t nUnknowns, const unsigned knowns[], size_t nKnowns,
+                               const double seed[], double sensitivity[]);
+#endif
+
 /* ---- supplied by the layer ------------------------------------------------ */
 
 /* pass one message (plain text, already formatted) to the importer's logger */

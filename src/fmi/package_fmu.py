@@ -482,12 +482,22 @@ def documentation(md, name, readme, libraries, platforms, source_files, version,
                  "one flat folder: compile them with sources/ and your importer's FMI headers as the "
                  "include path, or <code>fmpy compile</code> the FMU)" if source_files else
                  f"not shipped: {e(why_not or '')}"))
-    if fmi_version == "3.0":
+    provides = any(md.find(k) is not None and md.find(k).get(a) == "true" for k in interfaces
+                   for a in ("providesDirectionalDerivative", "providesDirectionalDerivatives"))
+    if provides:
+        calls = ("fmi3GetDirectionalDerivative and fmi3GetAdjointDerivative" if fmi_version == "3.0"
+                 else "fmi2GetDirectionalDerivative")
+        rows.append(("derivatives", f"{calls}: the exact partial derivatives (to rounding) of the state "
+                     "derivatives and outputs with respect to the continuous states and the inputs, by "
+                     "forward-mode automatic differentiation (dual numbers) through the model's own "
+                     "equations; the <ModelStructure> dependencies are exact"))
+    elif fmi_version == "3.0":
         rows.append(("derivatives", "providesDirectionalDerivatives and providesAdjointDerivatives are false: "
                      "the model exports no analytic Jacobian (its equations are integrated inside the FMU, "
                      "and no model derives its partial derivatives), so fmi3GetDirectionalDerivative and "
                      "fmi3GetAdjointDerivative answer fmi3Error; an importer that needs a Jacobian takes "
                      "finite differences of the outputs"))
+    if fmi_version == "3.0":
         rows.append(("arrays", "none: every vector (axle angles, forces, positions) is a set of scalar "
                      "variables named x[1], x[2], ... as in FMI 2.0, so the same connections and parameter "
                      "files serve both versions and every importer that reads scalars"))

@@ -140,6 +140,14 @@ static int unit_ended(ac_unit *u, fmi2Status st) {
     return 1;
 }
 
+/* Where the step the plan does in base step [t, t + h] starts: at t + h - step when the plan
+ * steps the unit in the last base step of its period (early 0); a sampled unit whose output the
+ * bench's stated timing makes visible earlier is stepped `early` base steps before that, its
+ * step still from its period's start (artibus.runner.plan: the sampled outputs' timing, issue 44) */
+static double step_start(const ac_unit *u, double t, double h) {
+    return t + h * (1 + u->early) - u->step;
+}
+
 /* its inputs set (write: they changed), then its step from t and its outputs read
  * (step: the plan steps it right after, as Gauss-Seidel's propagate, write,
  * step of one unit does): the FMU's calls within one pair of stamps, its
@@ -792,16 +800,16 @@ static int do_op(ac_sim *sim, int i, int end, long k, double t, fmi2Status *st, 
             if ((failed = write_unit(sim, j, k, t, st)) || !step)
                 return failed;
             *skip = 1;
-            failed = call_unit(u, 0, 1, t + h - u->step, st);
+            failed = call_unit(u, 0, 1, step_start(u, t, h), st);
         } else {
             const int write = inputs_changed(u);
             *skip = step;
             if (write || step)
-                failed = call_unit(u, write, step, t + h - u->step, st);
+                failed = call_unit(u, write, step, step_start(u, t, h), st);
         }
         break;
     default:                                         /* its step from t + h - u.step */
-        failed = call_unit(u, 0, 1, t + h - u->step, st);
+        failed = call_unit(u, 0, 1, step_start(u, t, h), st);
         break;
     }
     if ((u->hooks & AC_HOOK_READ) && !failed && (step || sim->op_kind[i] == AC_STEP))
@@ -827,7 +835,7 @@ static int finish_step(ac_sim *sim, int i, int end, long k, double t) {
             failed = propagate_unit(sim, j, k, t);
         else if (sim->op_kind[i] == AC_WRITE)
             failed = write_unit(sim, j, k, t, &st);
-        else if ((failed = call_unit(u, 0, 1, t + sim->h - u->step, &st)) == AC_DO_STEP && unit_ended(u, st))
+        else if ((failed = call_unit(u, 0, 1, step_start(u, t, sim->h), &st)) == AC_DO_STEP && unit_ended(u, st))
             failed = read_unit(sim, j, k, t, &st);
         else if (!failed)
             failed = hook(sim, AC_HOOK_READ, j, k, t);

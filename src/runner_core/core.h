@@ -99,6 +99,8 @@ typedef struct {
     /* FMI 2.0: fmi2DoStep's fmi2Discard ends the run when fmi2Terminated is true (FMI 2.0 4.2.3) */
     fmi2GetBooleanStatusTYPE *getBooleanStatus;
     fmi2GetRealStatusTYPE *getRealStatus;
+    int early;                      /* base steps before its period's end in which the plan steps it
+                                     * (a sampled unit's stated timing: artibus.runner.plan); 0: the last */
 } ac_unit;
 
 /* what the plan does with a unit */

@@ -3,6 +3,7 @@
  * of FMI 2.0.4 and FMI 3.0 each part follows. */
 #define _POSIX_C_SOURCE 200809L
 #include "me.h"
+#include "me_group.h"
 
 #include <float.h>
 #include <math.h>
@@ -364,6 +365,8 @@ AC_EXPORT fmi2Status artibus_me_begin_input_event(fmi2Component p) {
 AC_EXPORT fmi2Status artibus_me_end_input_event(fmi2Component p) {
     ac_me *me = p;
     me->time_events++;                        /* (an event at a time the importer knew: the input table's) */
+    if (me->group)                            /* the group's CVODE restarts at its next step */
+        ((ac_me_group *)me->group)->inputs_set = 1;
     return end_event(me);
 }
 
@@ -496,7 +499,8 @@ static fmi2Status step(ac_me *me, double t, double h) {
 
 AC_EXPORT fmi2Status artibus_me_do_step(fmi2Component p, fmi2Real t, fmi2Real h, fmi2Boolean no_prior) {
     (void)no_prior;
-    return step(p, t, h);
+    ac_me *me = p;
+    return me->group ? artibus_me_group_step(me->group, t, h) : step(me, t, h);
 }
 
 AC_EXPORT fmi3Status artibus_me3_do_step(fmi3Instance p, fmi3Float64 t, fmi3Float64 h, fmi3Boolean no_prior,
@@ -504,7 +508,7 @@ AC_EXPORT fmi3Status artibus_me3_do_step(fmi3Instance p, fmi3Float64 t, fmi3Floa
                                          fmi3Float64 *last) {
     (void)no_prior;
     ac_me *me = p;
-    const fmi2Status st = step(me, t, h);
+    const fmi2Status st = me->group ? artibus_me_group_step(me->group, t, h) : step(me, t, h);
     *event = fmi3False;
     *early = fmi3False;
     *terminate = me->terminated ? fmi3True : fmi3False;
@@ -560,4 +564,42 @@ AC_EXPORT fmi2Status artibus_me_get_real_status(fmi2Component p, const fmi2Statu
 AC_EXPORT void artibus_me_free(ac_me *me) {
     solver_free(me->solver);
     me->solver = NULL;
+}
+
+/* --- the FMU's calls for the group (me_group.h; hidden in the library) ----------------------- */
+
+fmi2Status me_fmu_set_time(ac_me *me, double t) { return set_time(me, t); }
+fmi2Status me_fmu_set_states(ac_me *me, const double *x) { return set_states(me, x); }
+fmi2Status me_fmu_get_states(ac_me *me, double *x) { return get_states(me, x); }
+fmi2Status me_fmu_get_derivatives(ac_me *me, double *dx) { return get_derivatives(me, dx); }
+fmi2Status me_fmu_get_indicators(ac_me *me, double *z) { return me->nz ? get_indicators(me, z) : fmi2OK; }
+fmi2Status me_fmu_get_nominals(ac_me *me, double *x) { return get_nominals(me, x); }
+fmi2Status me_fmu_completed(ac_me *me, int *enter, int *terminate) { return completed(me, enter, terminate); }
+fmi2Status me_fmu_failed(ac_me *me, const char *name, fmi2Status st, double t) {
+    return call_failed(me, name, st, t);
+}
+
+/* an event of the member at me->time: Event Mode, the event iteration, Continuous-Time Mode
+ * (FMI 2.0.4 3.2.2, FMI 3.0 2.3.5); the group restarts CVODE itself. *terminate: it asked to end */
+fmi2Status me_fmu_event(ac_me *me, int *terminate) {
+    fmi2Status st = enter_event_mode(me);
+    *terminate = 0;
+    if (st > fmi2Warning)
+        return call_failed(me, "EnterEventMode", st, me->time);
+    if ((st = iterate(me, terminate)) > fmi2Warning || *terminate)
+        return st;
+    if ((st = enter_continuous_time_mode(me)) > fmi2Warning)
+        return call_failed(me, "EnterContinuousTimeMode", st, me->time);
+    return fmi2OK;
+}
+
+/* one Float64 value of the member: get (its output) and set (its input) */
+fmi2Status me_fmu_get_one(ac_me *me, fmi2ValueReference vr, double *x) {
+    return me->fmi == 3 ? (fmi2Status)me->calls->fmi3GetFloat64(me->component, &vr, 1, x, 1)
+                        : me->calls->fmi2GetReal(me->component, &vr, 1, x);
+}
+
+fmi2Status me_fmu_set_one(ac_me *me, fmi2ValueReference vr, double x) {
+    return me->fmi == 3 ? (fmi2Status)me->calls->fmi3SetFloat64(me->component, &vr, 1, &x, 1)
+                        : me->calls->fmi2SetReal(me->component, &vr, 1, &x);
 }

@@ -92,6 +92,9 @@ typedef struct {
     long restarts;                  /* CVODE re-initialised (events, changed inputs) */
     char message[512];              /* why the last call failed */
     void *solver;                   /* me.c's CVODE state, NULL before the initialisation's end */
+    void *group;                    /* its ac_me_group (the monolithic reference), or NULL: then its
+                                     * step integrates the group (me_group.c), not the FMU alone */
+    char name[128];                 /* the component's name in the group's messages */
 } ac_me;
 
 /* fmi2/fmi3ExitInitializationMode of the FMU, the event iteration at the
@@ -123,5 +126,46 @@ AC_EXPORT fmi2Status artibus_me_get_boolean_status(fmi2Component me, const fmi2S
 AC_EXPORT fmi2Status artibus_me_get_real_status(fmi2Component me, const fmi2StatusKind s, fmi2Real *value);
 /* CVODE freed (the FMU is the caller's to free) */
 AC_EXPORT void artibus_me_free(ac_me *me);
+
+/* --- a Model Exchange group: the monolithic reference (issue 44, me_group.c) ------------------
+ *
+ * Several ME FMUs of a bench (its plants, the damper) integrated together in one CVODE: their
+ * states concatenated, their event indicators concatenated, and each member's continuous input
+ * that another member's output feeds set inside every evaluation of the right-hand side and of
+ * the root functions (ac_me_link: the bench's connection with its linear transformation or unit
+ * factor), in an order Python computes from the members' direct feedthrough (an algebraic loop
+ * is refused there). Each member stays a unit of the stepping core with its own inputs from
+ * outside the group and its own outputs; its step (artibus_me_do_step with me->group set)
+ * integrates the whole group to t + h the first time it is asked for that interval, the other
+ * members' steps find it done. The plan writes every member's inputs before the first member's
+ * step (artibus.runner.plan). Time, state and step events of any member are handled for the
+ * group: each member whose event it is does its event iteration (FMI 2.0.4 3.2.2, FMI 3.0
+ * 2.3.5), then CVODE restarts from all members' states. */
+typedef struct {
+    int src_member, dst_member;     /* indices into ac_me_group.members */
+    fmi2ValueReference src_vr, dst_vr;
+    double factor, offset;          /* dst = factor * src + offset */
+} ac_me_link;
+
+typedef struct {
+    int n_members;
+    ac_me **members;                /* each set up as for the facade alone, its group set to this */
+    int n_links;
+    const ac_me_link *links;        /* in evaluation order: a link after those its source depends on */
+    int adams;
+    double rtol;                    /* relative tolerance; absolute: rtol * each state's nominal */
+    double time;
+    int inputs_set;                 /* a member's discrete input changed (its input event): restart */
+    int terminated;
+    double last_successful_time;
+    long steps, rhs_calls, time_events, state_events, step_events, restarts;
+    int fail_member;                /* the member whose call failed, -1: none (CVODE's own failure) */
+    char message[512];
+    void *solver;                   /* me_group.c's CVODE state, set up at the group's first step */
+} ac_me_group;
+
+/* the group's step from its time to t + h (a member's step delegates here) */
+AC_EXPORT fmi2Status artibus_me_group_step(ac_me_group *g, double t, double h);
+AC_EXPORT void artibus_me_group_free(ac_me_group *g);
 
 #endif

@@ -42,7 +42,7 @@ _FMI3 = ("SetTime", "SetContinuousStates", "GetContinuousStates", "GetContinuous
          "GetNumberOfContinuousStates", "GetNumberOfEventIndicators")
 
 
-def _library():
+def me_library():
     """The stepping core's library (the facade is in it), its ME functions' signatures set."""
     from artibus.runner import corelib
     lib, why = corelib.load()
@@ -75,7 +75,7 @@ class Facade:
 
     def __init__(self, model, slave, fmi, tolerance, start_time, adams=False):
         from artibus.runner.corelib import struct
-        self.lib = _library()
+        self.lib = me_library()
         self.calls = struct("ac_me_calls")()
         names = _FMI3 if fmi == 3 else _FMI2
         for name in names:

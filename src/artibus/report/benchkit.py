@@ -87,7 +87,7 @@ def hinge_oscillation_kpis(r, t_after, what):
         why = "settles without oscillating" if osc.periods == 0 else ""
         kpis.append(Kpi(f"articulation hinge {k} after the {what}: damping ratio{settled}", osc.damping_ratio, "-",
                         "stable on dry and wet roads (decays)", "seed 000, sec. IV",
-                        None if osc.periods == 0 else osc.damping_ratio > 0, why=why,
+                        None if osc.periods == 0 else osc.damping_ratio > 0, why=why, bound=0.0,
                         explain="Seed 000 reports the manoeuvre stable, without data. A growing oscillation "
                                 "depends on the closed loop: the driver's gains, the guidance's and the force "
                                 "minimisation's lags (10 ms ECUs) and the estimated tyre and mass data "

@@ -28,6 +28,8 @@ from artibus.report.plots import signals
 
 PASS, FAIL = "✔", "✘"
 CALIBRATED = "calibrated"
+WITHIN = "within the stepping error"
+ERROR_COLUMNS = ("cosim_error", "cosim_error_pct", "cosim_error_method", "within_stepping_error")
 NOT_GRADED = "not graded"
 
 
@@ -52,6 +54,48 @@ class Kpi:
     calibrated: bool = False     # the value is a calibration target (set to the paper's figure, not tested by it)
     explain: str = ""      # a ✘'s explanation: why, what it depends on, what would change it
     explain_figure: str = ""     # a PNG in the page's folder illustrating the explanation
+    bound: object = None   # the paper's bound in the KPI's unit: a number or a tuple of them (its edges)
+    error: float | None = None   # the co-simulation error, in the KPI's unit (artibus.report.cosim_error)
+    error_how: str = ""    # how it was measured: against the reference, h against h/2, the two algorithms
+    margin_error: float | None = None   # the same of its distance to the bound (an ordering's other side moves too)
+
+    @property
+    def error_pct(self):
+        """The co-simulation error in % of the value (None: not measured; inf: a value of 0)."""
+        if self.error is None or self.missing or isinstance(self.value, (bool, np.bool_)):
+            return None
+        v = abs(float(self.value))
+        return 100.0 * self.error / v if v > 0 else (0.0 if self.error == 0 else math.inf)
+
+    @property
+    def margin(self):
+        """The value's distance to the paper's bound (its nearest edge), or None."""
+        if self.bound is None or self.missing or isinstance(self.value, (bool, np.bool_)):
+            return None
+        edges = self.bound if isinstance(self.bound, (tuple, list)) else (self.bound,)
+        return min(abs(float(self.value) - float(b)) for b in edges) if edges else None
+
+    @property
+    def within_error(self):
+        """A graded KPI whose grade the stepping could change (issue 44): its co-simulation
+        error above MARK_PCT % of its value (a value below a thousandth of its bound, 0 by
+        construction, judged on that thousandth), or larger than its distance to the paper's bound
+        (that distance's own error, where measured: a bound that is another run's value moves too)."""
+        from artibus.report.cosim_error import MARK_PCT
+        if not self.graded or self.error is None:
+            return False
+        margin = self.margin
+        e = max(self.error, self.margin_error or 0.0)
+        edges = self.bound if isinstance(self.bound, (tuple, list)) else () if self.bound is None else (self.bound,)
+        scale = max([abs(float(self.value))] + [1e-3 * abs(float(b)) for b in edges])   # (0 by construction)
+        return self.error > MARK_PCT / 100 * scale or (margin is not None and e > margin)
+
+    def error_cell(self):
+        """The co-simulation error as the page and the printout show it: "±0.012 m (1.3 %)"; "" if not measured."""
+        if self.error is None:
+            return ""
+        pct = self.error_pct
+        return f"±{self.error:.3g} {self.unit}".rstrip() + (f" ({pct:.3g} %)" if pct is not None else "")
 
     @property
     def missing(self):
@@ -78,20 +122,24 @@ class Kpi:
 
     @property
     def verdict(self):
-        """✔, ✘, "calibrated", "not graded" (a paper figure beside it, not a bound of this run) or ""."""
+        """✔, ✘ (either followed by "within the stepping error" where the stepping could change
+        it: within_error), "calibrated", "not graded" (a paper figure beside it, not a bound of
+        this run) or ""."""
         if self.calibrated:
             return CALIBRATED
         if self.graded:
-            return PASS if bool(self.passed) else FAIL
+            return (PASS if bool(self.passed) else FAIL) + (f" {WITHIN}" if self.within_error else "")
         if self.ungraded:
             return NOT_GRADED
         return ""
 
     def line(self):
-        """The KPI as the console prints it: name, value, unit, the paper's figure, the grade."""
+        """The KPI as the console prints it: name, value, unit, its co-simulation error, the
+        paper's figure, the grade."""
         paper = f"   (paper: {self.paper}" + (f"; {self.source}" if self.source else "") + ")" if self.paper else ""
         v = self.verdict
-        return f"{self.name}: {self.cell()} {self.unit}{paper}" + (f"   {v}" if v else "")
+        err = f"   co-simulation error {self.error_cell()} ({self.error_how})" if self.error is not None else ""
+        return f"{self.name}: {self.cell()} {self.unit}{err}{paper}" + (f"   {v}" if v else "")
 
 
 def tally(kpis):
@@ -128,16 +176,29 @@ def _grade_word(k):
     return NOT_GRADED if k.ungraded else ""
 
 
+def _error_fields(k):
+    """The co-simulation error's CSV fields (ERROR_COLUMNS): in the KPI's unit, in %, how
+    measured, and "yes" for a graded KPI within the stepping error of its bound (Kpi.within_error)."""
+    if k.error is None:
+        return ["", "", "", ""]
+    pct = k.error_pct
+    return [repr(float(k.error)), "" if pct is None else repr(float(pct)), k.error_how,
+            "yes" if k.within_error else ""]
+
+
 def write_kpi_csv(path, kpis):
     """The KPI table as CSV with its units: kpi, value, unit, paper, source,
-    passed (pass, FAIL, calibrated, not graded or empty), why, and the note
-    (a ✘'s explanation, or why a paper figure is not graded)."""
+    passed (pass, FAIL, calibrated, not graded or empty), why, the note (a ✘'s
+    explanation, or why a paper figure is not graded), and the co-simulation error
+    (ERROR_COLUMNS): in the KPI's unit, in % of the value, how measured
+    (artibus.report.cosim_error; empty where not measured), "yes" where a graded
+    KPI is within the stepping error of its bound."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["kpi", "value", "unit", "paper", "source", "passed", "why_no_value", "note"])
+    w.writerow(["kpi", "value", "unit", "paper", "source", "passed", "why_no_value", "note", *ERROR_COLUMNS])
     for k in kpis:
         w.writerow([k.name, "" if k.missing else repr(float(k.value)), k.unit, k.paper, k.source,
-                    _grade_word(k), k.why, k.explain if k.failed else k.ungraded])
+                    _grade_word(k), k.why, k.explain if k.failed else k.ungraded, *_error_fields(k)])
     return files.write_text(path, buf.getvalue())
 
 
@@ -156,6 +217,7 @@ figcaption { color: #555; font-size: 90%; }
 .meta { color: #555; font-size: 90%; }
 table.summary td { font-size: 92%; }
 div.why { border-left: 4px solid #c5221f; padding: 0.2em 1em; margin: 1em 0; }
+span.within { color: #b06000; font-weight: normal; font-size: 85%; } td.fail span.within { color: #fff; }
 """
 
 
@@ -164,9 +226,10 @@ def _verdict_td(k, i=None):
     if k.calibrated:
         return f'<td class="cal">{CALIBRATED}</td>'
     if k.graded:
+        within = f' <span class="within">{WITHIN}</span>' if k.within_error else ""
         if bool(k.passed):
-            return f'<td class="pass">{PASS}</td>'
-        return f'<td class="fail"><a href="#{anchor(i)}">{FAIL}</a></td>'
+            return f'<td class="pass">{PASS}{within}</td>'
+        return f'<td class="fail"><a href="#{anchor(i)}">{FAIL}</a>{within}</td>'
     if k.ungraded:
         return f'<td class="ungraded">{NOT_GRADED}: {html.escape(k.ungraded)}</td>'
     return "<td></td>"
@@ -197,6 +260,30 @@ class Table:
         return f"<h2>{html.escape(self.title)}</h2><table><tr>{head}</tr>{body}</table>{note}"
 
 
+def _margins_html(kpis):
+    """Which grades hold beyond the stepping error (issue 44): each graded KPI with a
+    bound and an error, its distance to the bound (for an ordering between two runs,
+    e.g. an option against the baseline, the difference between them) against that
+    distance's co-simulation error."""
+    rows = []
+    for k in kpis:
+        if not k.graded or k.margin is None or k.error is None:
+            continue
+        e = max(k.error, k.margin_error or 0.0)
+        said = WITHIN if k.within_error else "holds beyond the stepping error"
+        rows.append(f"<tr><td>{html.escape(k.name)}</td><td>{PASS if k.passed else FAIL}</td>"
+                    f"<td class=n>{k.margin:.4g} {html.escape(k.unit)}</td><td class=n>{e:.3g} "
+                    f"{html.escape(k.unit)}</td><td>{said}</td></tr>")
+    if not rows:
+        return ""
+    n_within = sum(1 for k in kpis if k.within_error)
+    return (f"<h2>The grades against the stepping error</h2><p>{len(rows) - n_within} of {len(rows)} graded KPIs "
+            "with a bound hold beyond the stepping error: the distance to the bound (for an ordering, the "
+            "difference from the other run) is larger than its co-simulation error and the error is at most "
+            f"2 % of the value.</p><table><tr><th>KPI</th><th>grade</th><th>distance to the bound</th>"
+            f"<th>its co-simulation error</th><th></th></tr>{''.join(rows)}</table>")
+
+
 def _notes_html(notes):
     """notes: a string (a paragraph), or a list of strings and Tables."""
     if isinstance(notes, (str, Table)):
@@ -207,13 +294,14 @@ def _notes_html(notes):
     return "\n".join(out)
 
 
-def write_html(out_dir, title, intro, kpis, images, notes="", sections=""):
+def write_html(out_dir, title, intro, kpis, images, notes="", sections="", error_note="not measured"):
     """One self-contained page (images next to it) with the KPI table, the KPIs
     as kpis.csv (with units) and thumb.png (the first image, small) for the index.
     A KPI without a value shows why (Kpi.why); one without a value and a reason
     is left out of the table and named below it. Each ✘ links to its
     explanation below the table (Kpi.explain, with its figure). notes: a
-    paragraph, or a list of paragraphs and Tables."""
+    paragraph, or a list of paragraphs and Tables. error_note: how the KPIs'
+    co-simulation errors (Kpi.error) were measured, said under the table."""
     out_dir = Path(out_dir)
     rows, dropped, whys = [], [], []
     for k in kpis:
@@ -226,7 +314,8 @@ def write_html(out_dir, title, intro, kpis, images, notes="", sections=""):
             whys.append(k)
         rows.append(f"<tr><td>{html.escape(k.name)}</td><td class=n>{html.escape(k.cell())}</td>"
                     f"<td>{html.escape(k.unit)}</td><td>{html.escape(k.paper)}</td>"
-                    f"<td>{html.escape(k.source)}</td>{_verdict_td(k, i)}</tr>")
+                    f"<td>{html.escape(k.source)}</td>{_verdict_td(k, i)}"
+                    f"<td class=n>{html.escape(k.error_cell())}</td></tr>")
     figs = []
     for i, cap in images:
         name = html.escape(Path(i).name)
@@ -261,14 +350,18 @@ def write_html(out_dir, title, intro, kpis, images, notes="", sections=""):
 <h1>{html.escape(title)}</h1>
 <p>{html.escape(intro)}</p>
 {marks}
-<table><tr><th>KPI</th><th>artibus</th><th>unit</th><th>paper</th><th>source</th><th>grade</th></tr>
+<table><tr><th>KPI</th><th>artibus</th><th>unit</th><th>paper</th><th>source</th><th>grade</th>
+<th>co-simulation error</th></tr>
 {''.join(rows)}
 </table>
 {drop}
 <p class=meta>The table as CSV, with units: <a href="kpis.csv">kpis.csv</a>. {PASS}/{FAIL}: against the paper's
 bound for the configuration that ran; "calibrated": the value we calibrated to the paper's figure (not a test);
-"not graded": the paper gives a figure, but not a bound for this configuration (the reason beside it).</p>
+"not graded": the paper gives a figure, but not a bound for this configuration (the reason beside it).
+Co-simulation error: {html.escape(error_note)} ("{WITHIN}": a graded KPI whose error exceeds 2 % of its value or its
+distance to the paper's bound; how it is measured: docs/guide/cosim-error.md).</p>
 {why_html}
+{_margins_html(kpis)}
 {_notes_html(notes)}
 {sections}
 {''.join(figs)}
@@ -328,7 +421,7 @@ def write_index(out_dir, summary, pages=(), metadata=None):
     """out_dir/index.html: a summary of every bench (headline KPIs against the
     paper with pass/fail, a thumbnail, a link to its page), links to further
     pages ([(relative href, title, what)], e.g. the comparison page), the run's
-    metadata; summary.csv beside it (every KPI with its unit)."""
+    metadata; summary.csv beside it (every KPI with its unit and its co-simulation error)."""
     out_dir = Path(out_dir)
     meta = metadata or run_metadata()
     rows, csv_rows = [], []
@@ -356,7 +449,11 @@ def write_index(out_dir, summary, pages=(), metadata=None):
                 mark = f" <i>({k.verdict})</i>" if k.verdict else ""
             paper = f" <i>(paper: {html.escape(k.paper)}" + (f"; {html.escape(k.source)}" if k.source else "") + \
                 ")</i>" if k.paper else ""
-            lines.append(f"{html.escape(k.name)}: <b>{html.escape(k.cell())}</b> {html.escape(k.unit)}{paper}{mark}")
+            if k.within_error:
+                mark += f' <span class="within">{WITHIN}</span>'
+            err = f" (co-sim. error {html.escape(k.error_cell())})" if k.error is not None else ""
+            lines.append(f"{html.escape(k.name)}: <b>{html.escape(k.cell())}</b> {html.escape(k.unit)}{err}"
+                         f"{paper}{mark}")
         more = len([k for k in kpis if not (k.missing and not k.why)]) - len(lines)
         if more > 0:
             lines.append(f'<a href="{href}">{more} more KPIs</a>')
@@ -364,7 +461,7 @@ def write_index(out_dir, summary, pages=(), metadata=None):
                     f'<td>{"<br>".join(lines) or "no KPIs"}</td></tr>')
         for k in kpis:
             csv_rows.append([name, k.name, "" if k.missing else repr(float(k.value)), k.unit, k.paper, k.source,
-                             _grade_word(k)])
+                             _grade_word(k), *_error_fields(k)])
     links = "".join(f'<li><a href="{html.escape(h)}">{html.escape(t)}</a>: {html.escape(w)}</li>'
                     for h, t, w in pages)
     meta_html = "<br>".join(f"{html.escape(k)}: {html.escape(str(v))}" for k, v in meta.items())
@@ -387,7 +484,7 @@ Every KPI with its unit: <a href="summary.csv">summary.csv</a>.</p>
 """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["bench", "kpi", "value", "unit", "paper", "source", "passed"])
+    w.writerow(["bench", "kpi", "value", "unit", "paper", "source", "passed", *ERROR_COLUMNS])
     w.writerows(csv_rows)
     files.write_text(out_dir / "summary.csv", buf.getvalue())
     return files.write_text(out_dir / "index.html", page)
@@ -415,15 +512,18 @@ def _report(bench, result, out):
     return mod.kpis(result), mod.figures(result, out), getattr(mod, "TEXT", ""), result
 
 
-def write_report(bench, result, out_dir, wall=None, sections="", results_file=None):
+def write_report(bench, result, out_dir, wall=None, sections="", results_file=None, errors=None):
     """PNGs and index.html for one bench run (``sections``: more of the page,
     HTML, after the KPI table); returns the KPIs. Where the bench's study
     shows a run of its own (_report), the page is that run's: its span in the
     header, its animation, and its results saved as ``results_file`` (the
-    page's results.csv) in place of the bench's run."""
+    page's results.csv) in place of the bench's run. ``errors``: the KPIs'
+    co-simulation errors (artibus.report.cosim_error.Estimate), beside each."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     kpis, images, notes, shown = _report(bench, result, out)
+    if errors is not None:
+        errors.apply(kpis)
     if shown is not result:
         wall = None                         # (the bench's run's wall time is not the shown run's)
         if results_file is not None:
@@ -434,5 +534,6 @@ def write_report(bench, result, out_dir, wall=None, sections="", results_file=No
     intro = (f"Bench {bench}: {span:g} s simulated" + (f" in {wall:.2f} s." if wall else ".")
              + (" The page shows the run of its study (results.csv), not the bench's run alone."
                 if shown is not result else ""))
-    write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes, sections)
+    write_html(out, bench, intro, kpis, [(out / i, c) for i, c in images], notes, sections,
+               error_note=errors.said() if errors is not None else "not measured")
     return kpis

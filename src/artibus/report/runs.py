@@ -16,7 +16,7 @@ from artibus.runner.results import check_results_file
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
                 algorithm="gauss-seidel", can=None, can_log=None, can_faults=None, report=None, output=None,
                 progress=False, checked=None, log=print, single_rate=False, fmi=None, inputs=(),
-                fmi_type=None, relative_tolerance=None, me_method=None, input_file=None):
+                fmi_type=None, relative_tolerance=None, me_method=None, input_file=None, reference=False):
     """Run each bench (names or .ssp paths) with its variants (``variants``: names, as
     ``--variant``), then the user's values (``user``: {"comp.var": value}, from
     --ssv and --set); ``every``: the benches are all of ssp/benches/ (``--all``:
@@ -36,7 +36,8 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     "3" (--fmi; artibus.bench.fmi); the extra runs use the same. ``fmi_type`` "me" (--fmi-type):
     every FMU that has Model Exchange runs as ME at ``relative_tolerance`` with CVODE's ``me_method``
     (runner.Simulation). ``input_file``: a CSV driving the benches' free inputs (--input-file,
-    columns COMPONENT.VARIABLE; runner.Simulation). Returns
+    columns COMPONENT.VARIABLE; runner.Simulation). ``reference``: each bench's monolithic reference
+    (--reference, artibus.runner.reference). Returns
     [(bench, report directory, KPIs)] of the benches with a report. The drawing
     (artibus.report.pages, comparison: matplotlib) is imported only with ``report``."""
     if report:
@@ -50,6 +51,8 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
         settings.update(fmi_type=fmi_type, relative_tolerance=relative_tolerance, me_method=me_method or "bdf")
     if input_file is not None:
         settings.update(input_file=input_file)
+    if reference:
+        settings.update(reference=True)
     for bench in benches:
         overrides = {**ssp.variant_overrides(bench, variants), **(user or {})}
         guard = list(inputs) + bench_inputs(bench)
@@ -222,9 +225,9 @@ def _beside(final):
 
 def _page(run, bench, overrides, out_dir, final, stop_time, can_faults, settings):
     """A bench run's page in ``out_dir`` (the new folder of the report ``final``):
-    the single-rate comparison, the KPIs, the CAN bus's figures, the fault-free
-    KPIs; printed."""
-    from artibus.report import single_rate as single_rate_report
+    the single-rate comparison, the KPIs with their co-simulation errors
+    (artibus.report.cosim_error), the CAN bus's figures, the fault-free KPIs; printed."""
+    from artibus.report import cosim_error, single_rate as single_rate_report
     from artibus.report.pages import FAIL, PASS, tally, write_report
     sim, result, log, name = run.sim, run.result, run.log, run.sim.bench.name
     # the page says how far a master without multi-rate steps is: one more run, single-rate
@@ -233,9 +236,15 @@ def _page(run, bench, overrides, out_dir, final, stop_time, can_faults, settings
     if sr.multi_rate:
         log(f"{name}: single-rate at {sr.step:g} s: KPIs within {sr.deviation:.3g} % "
             f"({sr.worst}); the extra run took {sr.wall:.2f} s")
+    if settings.get("reference"):            # (this run is the reference: nothing to measure it against)
+        errors = cosim_error.Estimate(why="this run is the monolithic reference")
+    else:
+        errors = cosim_error.measure(bench, result, overrides, stop_time,
+                                     {**settings, "can_faults": can_faults, "single_rate": sim.single_rate})
+    log(f"{name}: co-simulation errors: {errors.said()}; the extra runs took {errors.wall:.2f} s")
     results_file = out_dir / "results.csv"      # (the page's own results: a study's run may replace them)
     kpis = write_report(name, result, out_dir, sim.wall, sections=sr.html(),
-                        results_file=results_file if results_file.is_file() else None)
+                        results_file=results_file if results_file.is_file() else None, errors=errors)
     if run.can_summary is not None:
         write_text(out_dir / "can_bus.txt", run.can_summary + "\n")
     for k in kpis:

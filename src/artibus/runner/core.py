@@ -198,6 +198,7 @@ class _CoreStepper:
             s.in_vrs, s.inp = addressof(raw.in_vrs), addressof(raw.inp)
             s.written, s.n_sources, s.sources = addressof(written), len(u.sources), addressof(sources)
             s.hooks = self.hooks.flags(u)
+            s.early = getattr(u, "early", 0)        # (a sampled unit's stated timing: runner.plan)
         self._each = [(a, u, u.raw, written) for a, u, written in zip(self.units, units, self.written)]
 
     def _network(self, python_net, lsbus):

@@ -157,6 +157,33 @@ def loop_warning(where, wire, loop):
             f"one step of delay there")
 
 
+def _steps_at(u, k):
+    """Whether the plan steps unit u in base step k: in the last base step of its period, or
+    ``u.early`` base steps before it (a sampled unit's stated timing: stated_timing)."""
+    return (k + 1 + getattr(u, "early", 0)) % u.ratio == 0
+
+
+def stated_timing(units, default_base, base):
+    """Each sampled unit's ``early`` (core.h's ac_unit.early): a sampled unit (a controller, the
+    driver, an ECU: one whose period the bench states and that offers no Model Exchange) samples
+    its inputs at the start of its period and its output is seen by the others from the base step
+    in which the plan steps it. At the bench's default base step ``default_base`` that is the last
+    base step of its period: its output holds from (period - default_base) after the sample (0
+    for a unit at the base step; the Gauss-Seidel order puts such a controller, without direct
+    feedthrough, before the plants, so it reads their outputs at the sample instant). That delay
+    is the bench's model, not its stepping (issue 44): at another base step ``base`` (--step,
+    the plants' steps halved, the reference) the unit is stepped where its output is seen the
+    same delay after its sample, when that is a whole number of base steps (else in its period's
+    last one, as before)."""
+    for u in units:
+        u.early = 0
+        if not getattr(u, "sampled", False) or u.ratio == 1 or default_base is None:
+            continue
+        offset = (u.step - default_base) / base        # base steps from its sample to its output
+        if abs(offset - round(offset)) < 1e-9 and 0 <= round(offset) <= u.ratio - 1:
+            u.early = u.ratio - 1 - int(round(offset))
+
+
 AC_PROPAGATE, AC_WRITE, AC_STEP = 0, 1, 2     # core.h's operations (the plan as data: _Plan.ops)
 PLAN_TABLE = 4096       # base steps of the plan's period tabulated at most (see _Plan)
 
@@ -181,9 +208,9 @@ class _Plan:
 
     def entry(self, k):
         starting = [u for u in self.order if k % u.ratio == 0]
-        ending = [u for u in self.order if (k + 1) % u.ratio == 0]
-        gs = [(u, k % u.ratio == 0, (k + 1) % u.ratio == 0) for u in self.order
-              if k % u.ratio == 0 or (k + 1) % u.ratio == 0]
+        ending = [u for u in self.order if _steps_at(u, k)]
+        gs = [(u, k % u.ratio == 0, _steps_at(u, k)) for u in self.order
+              if k % u.ratio == 0 or _steps_at(u, k)]
         return starting, ending, gs
 
     def ops(self, k, jacobi=False):
@@ -202,7 +229,24 @@ class _Plan:
                 ops += [(AC_PROPAGATE, u), (AC_WRITE, u)]
             if ends:
                 ops.append((AC_STEP, u))
-        return ops
+        return _grouped(ops)
 
     def __getitem__(self, k):
         return self.table[k % self.period] if self.table is not None else self.entry(k)
+
+
+def _grouped(ops):
+    """Gauss-Seidel's operations with a Model Exchange group (the monolithic reference, issue 44:
+    artibus.runner.reference; units with ``group`` set): the group integrates all its members at
+    the first member's step, so every member's inputs are propagated and written before that step
+    (moved there, in their order); without a group, ops as they are."""
+    first = next((i for i, (kind, u) in enumerate(ops)
+                  if kind == AC_STEP and getattr(u, "group", None) is not None), None)
+    if first is None:
+        return ops
+    group = ops[first][1].group
+    late = [i for i, (kind, u) in enumerate(ops)
+            if i > first and kind != AC_STEP and getattr(u, "group", None) is group]
+    moved = [ops[i] for i in late]
+    rest = [op for i, op in enumerate(ops) if i not in set(late)]
+    return rest[:first] + moved + rest[first:]

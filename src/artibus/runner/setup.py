@@ -55,7 +55,7 @@ class _Setup:
 
     def _units(self, step, where):
         """{path: Unit} of the bench's components, each with its step and its ratio to the base step."""
-        units = {}
+        units, defaults = {}, []
         for path, c in self.bench.components.items():
             try:
                 fmu = Fmu(Path(self._tmp) / c.source, instance_name=path,
@@ -67,6 +67,9 @@ class _Setup:
             h = c.step or (step if step is not None else
                            float(de.stepSize) if de is not None and de.stepSize else None)
             units[path] = Unit(path=path, fmu=fmu, step=h)
+            # sampled: a period the bench states, of a component without Model Exchange (runner.plan.stated_timing)
+            units[path].sampled = bool(c.step) and fmu.md.modelExchange is None
+            defaults.append(c.step or (float(de.stepSize) if de is not None and de.stepSize else None))
             self.units = list(units.values())     # (closed by close() if a later one fails)
         self._default_steps(units, where)
         self.units = list(units.values())
@@ -80,6 +83,8 @@ class _Setup:
                 raise ArtibusError(f"{where}: Component '{u.path}': step {u.step} s is not a "
                                    f"multiple of the base step {self.base_step} s")
             u.ratio = int(round(r))
+        known = [d for d in defaults if d]      # the bench's own base step: its sampled units' timing (_run)
+        self.default_base = min(known) if len(known) == len(defaults) else None
         return units
 
     def _default_steps(self, units, where):

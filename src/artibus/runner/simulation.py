@@ -39,7 +39,7 @@ from artibus.base import ArtibusError
 from artibus.bench import ssp as ssp_mod
 from artibus.fmu import Result, SimulationError
 from artibus.runner.core import _core_stepper
-from artibus.runner.plan import _Plan
+from artibus.runner.plan import _Plan, stated_timing
 from artibus.runner.results import check_room
 from artibus.runner.setup import _Setup
 from artibus.runner.unit import _last_message
@@ -80,7 +80,8 @@ class Simulation(_Setup):
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
                  stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False, fmi=None,
-                 lsbus_wire_time=None, fmi_type=None, relative_tolerance=None, me_method="bdf", input_file=None):
+                 lsbus_wire_time=None, fmi_type=None, relative_tolerance=None, me_method="bdf", input_file=None,
+                 reference=False):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
         the start of each of the component's steps. cut: inputs ("comp.input")
@@ -108,9 +109,17 @@ class Simulation(_Setup):
         relative_tolerance: the ME units' (default: their default experiment's, else
         artibus.fmu.me.BENCH_TOLERANCE); me_method: their CVODE's, "bdf" or "adams". input_file: a
         CSV driving the bench's free inputs, columns COMPONENT.VARIABLE (--input-file, as `simulate`
-        reads one: artibus.fmu.inputs; _Setup._input_file)."""
+        reads one: artibus.fmu.inputs; _Setup._input_file). reference: the bench's monolithic reference
+        (--reference, issue 44: artibus.runner.reference): every component that offers Model Exchange
+        as ME, all of them integrated together in one CVODE (relative tolerance: the one given, else
+        artibus.runner.reference.REFERENCE_TOLERANCE), the others as they are; the same Result."""
         self.can = self.lsbus = None     # the bench's network: a CAN one, or an FMI-LS-BUS one (network)
         self.single_rate = single_rate
+        self.reference, self._group = bool(reference), None
+        if reference:                    # every ME component as ME, in one group (artibus.runner.reference)
+            from artibus.runner.reference import REFERENCE_TOLERANCE
+            fmi_type = "me"
+            relative_tolerance = REFERENCE_TOLERANCE if relative_tolerance is None else relative_tolerance
         self.fmi_type, self.relative_tolerance, self.me_method = fmi_type, relative_tolerance, me_method
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
@@ -142,6 +151,9 @@ class Simulation(_Setup):
                 can_faults = None
             self._setup(step, overrides or {}, record, where, stimuli or {}, can, can_log, can_faults,
                         set(cut or ()), input_file)
+            if reference:
+                from artibus.runner import reference as reference_mod
+                self._group = reference_mod.set_up(self, where)
             if steering is not None:
                 steering.bind(self)
         except BaseException:
@@ -218,6 +230,8 @@ class Simulation(_Setup):
         h = self.base_step
         n = int(round((stop - start) / h))
         check_room(n + 1, len(self.names), self.bench.file)
+        # the sampled units' timing at this run's steps (as set up, or changed since: the reference's group)
+        stated_timing(self.units, getattr(self, "default_base", None), h)
         stepper = _core_stepper(self, _Plan(self.order, n), core)
         stepper.allocate(n)
         wall0 = _time.perf_counter()
@@ -276,6 +290,8 @@ class Simulation(_Setup):
     def close(self):
         if self.network is not None:
             self.network.close()
+        if getattr(self, "_group", None) is not None:       # (the reference's CVODE; the FMUs below)
+            self._group.free()
         for u in getattr(self, "units", []):
             u.fmu.close()
         if getattr(self, "_tmp_owned", False):     # (a cache entry stays: artibus.cache)

@@ -280,31 +280,31 @@ def comparison_kpis(k, calib, fast, e1, gains, ssc, torque):
     K = [
         Kpi("60 m / 100 km/h: initial overshoot, option 1", o["option1"], "m",
             f"larger than option 2's and 3's ({_fmt(o['option2'])}, {_fmt(o['option3'])} m here)", S4,
-            o["option1"] > max(o["option2"], o["option3"]),
+            o["option1"] > max(o["option2"], o["option3"]), bound=max(o["option2"], o["option3"]),
             explain="Option 1 damps on the angle error, so its damping stops at the angle's extrema (the gate); "
                     "that it overshoots most depends on its gain K1, calibrated here. " + dep),
         Kpi("60 m / 100 km/h: initial overshoot, option 2", o["option2"], "m",
             f"at most option 3's, slightly (option 3: {_fmt(o['option3'])} m here)", S4 + " (5.2.4: 'slightly smaller')",
-            o["option2"] <= o["option3"],
+            o["option2"] <= o["option3"], bound=o["option3"],
             explain="The thesis finds option 2's overshoot slightly below option 3's. Option 3 scales the sum of "
                     "options 1 and 2 by K3 (calibrated here): the order depends on K3 and on how much the angle "
                     "term cancels the rate term. " + dep),
         Kpi("60 m / 100 km/h: initial overshoot, baseline", o["baseline"], "m",
             f"above option 2's ({_fmt(o['option2'])} m), below no damping's ({_fmt(o['none'])} m)",
-            S5 + ", Figs. 5.15-5.19", o["option2"] < o["baseline"] < o["none"],
+            S5 + ", Figs. 5.15-5.19", o["option2"] < o["baseline"] < o["none"], bound=(o["option2"], o["none"]),
             explain="The thesis's advantage of option 2 comes from the baseline's sway control switching on "
                     "late (after the swing's peak rate); its threshold is ours (SwayBaseline.LambdaDotSSC, set "
                     "to the thesis's timing) and the margin depends on the damper's torque. " + dep),
         Kpi("60 m / 100 km/h: peak |articulation| after the lane change, option 2", a["option2"], "deg",
             f"below the baseline's ({_fmt(a['baseline'])} deg), 'a considerable advantage'", S5 + ", Fig. 5.16",
-            a["option2"] < a["baseline"] < a["none"],
+            a["option2"] < a["baseline"] < a["none"], bound=a["baseline"],
             explain="The thesis's mechanism: the baseline's sway control comes on late, so the angle before the "
                     "swing and the rate in it are higher. With our threshold the sway control comes on after the "
                     "swing's peak rate, as the thesis describes; the margin depends on the damper's torque, which "
                     "the thesis does not give (see the torque sensitivity below). " + dep),
         Kpi("60 m / 100 km/h: peak |articulation rate| in the swing into the initial overshoot, option 2",
             q["option2"], "deg/s", f"below the baseline's ({_fmt(q['baseline'])} deg/s here)", S5 + ", Fig. 5.17",
-            q["option2"] < q["baseline"],
+            q["option2"] < q["baseline"], bound=q["baseline"],
             explain="The thesis explains option 2's advantage by the baseline's rear swinging into the initial "
                     "overshoot from a higher angle, hence with a higher rate. Here the first half holds (the "
                     "baseline's angle before the swing is the larger) but not the second: option 2 takes more "
@@ -316,7 +316,7 @@ def comparison_kpis(k, calib, fast, e1, gains, ssc, torque):
                     "(-15..20 deg/s), so its rates cannot be compared. " + dep),
         Kpi("60 m / 100 km/h: oscillations above 0.5 deg after the lane change, option 1", k["option1"].oscillations,
             "-", f"more than option 2's ({k['option2'].oscillations}): 'continue farther'", S4,
-            k["option1"].oscillations > k["option2"].oscillations,
+            k["option1"].oscillations > k["option2"].oscillations, bound=k["option2"].oscillations,
             explain="Counted as extrema above 0.5 deg (our threshold; the thesis counts none). " + dep),
         Kpi("60 m / 100 km/h: settling below 1 deg after the lane change, option 2", k["option2"].settling, "s",
             f"no claim (floor only: {_fmt(k['floor'].settling)} s here)", "none: the thesis makes no claim on "
@@ -326,9 +326,9 @@ def comparison_kpis(k, calib, fast, e1, gains, ssc, torque):
     lo = min(kk.min_pct for f, kk in k.items() if f not in ("none",))
     hi = max(kk.peak_pct for f, kk in k.items() if f not in ("none",))
     K.append(Kpi("60 m / 100 km/h: highest damping request of any function", hi, "%", "at most 34", "seed 001, 5.1.1",
-                 hi <= 34 + 1e-9, explain="pctMax (34 %) caps every request: a value above it is a bug."))
+                 hi <= 34 + 1e-9, bound=34.0, explain="pctMax (34 %) caps every request: a value above it is a bug."))
     K.append(Kpi("60 m / 100 km/h: lowest damping request of any function but none", lo, "%", "at least 3.5 (floor)",
-                 "seed 001, 5.1.1", lo >= 3.5 - 1e-9, explain="pctFloor (3.5 %) is always present: a value "
+                 "seed 001, 5.1.1", lo >= 3.5 - 1e-9, bound=3.5, explain="pctFloor (3.5 %) is always present: a value "
                  "below it is a bug."))
     for f in ("option1", "option2", "option3", "revised"):
         K.append(Kpi(f"200 m / 100 km/h: peak damping request, {LABELS[f]}", calib[f], "%", "13.5",
@@ -362,9 +362,11 @@ def comparison_kpis(k, calib, fast, e1, gains, ssc, torque):
     K.append(Kpi("25 m / 50 km/h, steering in the thesis's range: reference models exact (2.3) against "
                  "small-angle (2.9), both with Kc: angle, "
                  "max difference over its peak", ea, "%", "about 0.07", "seed 001, 4.3.1",
-                 abs(ea - 0.07) <= E1_TOLERANCE * 0.07, explain=E1_EXPLAIN))
+                 abs(ea - 0.07) <= E1_TOLERANCE * 0.07, explain=E1_EXPLAIN,
+                 bound=(0.07 * (1 - E1_TOLERANCE), 0.07 * (1 + E1_TOLERANCE))))
     K.append(Kpi("25 m / 50 km/h, steering in the thesis's range: the same, rate", er, "%", "about 0.12", "seed 001, 4.3.1",
-                 abs(er - 0.12) <= E1_TOLERANCE * 0.12, explain=E1_EXPLAIN))
+                 abs(er - 0.12) <= E1_TOLERANCE * 0.12, explain=E1_EXPLAIN,
+                 bound=(0.12 * (1 - E1_TOLERANCE), 0.12 * (1 + E1_TOLERANCE))))
     return K
 
 

@@ -274,11 +274,13 @@ def report(r, out):
     figs = bode_figures(out, kc100, geo)
     kpis = [Kpi("rear-sway resonance at 100 km/h, friction 1", 2 * math.pi * figs.f_peak, "rad/s",
                 "about 4.5 (0.7 Hz; read as 4.0-5.0)", "seed 001, 4.1.2, Fig. 4.2", abs(2 * math.pi * figs.f_peak - 4.5) < 0.5,
+                bound=(4.0, 5.0),
                 explain="The rear-sway resonance depends on the rear section's yaw inertia and the front "
                         "stiffnesses, which the thesis does not give (estimated in Scania18m.ssv), and on the "
                         "tyre model (linear, as the thesis's)."),
             Kpi("10 km/h: plant against reference model gain, up to 10 rad/s (largest difference)", figs.dev10,
                 "dB", "very similar up to 10 rad/s (read as within 1 dB)", "seed 001, Fig. 4.1", figs.dev10 < 1.0,
+                bound=1.0,
                 explain="At 10 km/h the plant should behave kinematically; a difference depends on the tyre "
                         "stiffnesses (the slip at low speed) and on the sine test's amplitude and settling."),
             Kpi("complementary gain Kc at 100 km/h (Scania18mKc.ssv)", kc100, "-", "not given", "seed 001, 4.1.2",

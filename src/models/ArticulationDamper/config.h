@@ -14,4 +14,7 @@ typedef struct {
     int warned;         /* a cylinder length was limited at DAMPER_L_MIN (warned once) */
 } ModelState;
 
+/* exact directional derivatives (fmu.h): damper.c on dual numbers */
+#define MODEL_DIRECTIONAL_DERIVATIVE 1
+
 #endif

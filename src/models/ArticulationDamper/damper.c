@@ -1,23 +1,25 @@
 /* The two-cylinder articulation damper of seed 001 (1.3.1, App. B): see
  * damper.h for the geometry, the valves and the signs. Plain C99, <math.h>
- * only, no allocation. */
+ * only, no allocation. Compiled twice for the FMU: as C on double, and in
+ * damper_dual.cpp on a dual number (DAMPER_REAL) for the directional
+ * derivatives. */
 #include <math.h>
 
 #include "damper.h"
 
-double damper_pset(const DamperParams *p, double pct) {
-    const double u = pct > DAMPER_PCT_MAX ? DAMPER_PCT_MAX : (pct > 0.0 ? pct : 0.0);
+DAMPER_REAL damper_pset(const DamperParams *p, DAMPER_REAL pct) {
+    const DAMPER_REAL u = pct > DAMPER_PCT_MAX ? DAMPER_PCT_MAX : (pct > 0.0 ? pct : 0.0);
     return p->pMax * u / DAMPER_PCT_MAX;              /* 50 % = pMax (seed 001, 5.1.1) */
 }
 
-int damper_geometry(const DamperParams *p, int s, double Lambda, double *L, double *h) {
-    const double c = cos(Lambda), sn = sin(Lambda);
+int damper_geometry(const DamperParams *p, int s, DAMPER_REAL Lambda, DAMPER_REAL *L, DAMPER_REAL *h) {
+    const DAMPER_REAL c = cos(Lambda), sn = sin(Lambda);
     /* seed 001, Fig. B.3 (reconstructed, spec 001 section 1): law of cosines in
      * the triangle articulation point - front pivot - rear pivot */
-    const double L2 = p->Xrear * p->Xrear + p->Yrear * p->Yrear + p->R * p->R
-                      - 2.0 * s * p->R * p->Xrear * sn - 2.0 * p->R * p->Yrear * c;
+    const DAMPER_REAL L2 = p->Xrear * p->Xrear + p->Yrear * p->Yrear + p->R * p->R
+                           - 2.0 * s * p->R * p->Xrear * sn - 2.0 * p->R * p->Yrear * c;
     int limited = 0;
-    double len = L2 > 0.0 ? sqrt(L2) : 0.0;
+    DAMPER_REAL len = L2 > 0.0 ? sqrt(L2) : (DAMPER_REAL)0.0;
     if (!(len >= DAMPER_L_MIN)) { len = DAMPER_L_MIN; limited = 1; }
     *L = len;
     /* h_s = dL_s/dLambda: the lever arm of the cylinder force about the joint */
@@ -49,11 +51,11 @@ int damper_check(const DamperParams *p, double *Lshortest, double *LambdaAt) {
 }
 
 /* the hydraulic torque at 50 % for one direction of motion, |Ldot| >> v0 */
-static double mmax_dir(const DamperParams *p, double Lambda, double dir) {
-    double m = 0.0;
+static DAMPER_REAL mmax_dir(const DamperParams *p, DAMPER_REAL Lambda, double dir) {
+    DAMPER_REAL m = 0.0;
     for (int i = 0; i < 2; i++) {
         const int s = i == 0 ? 1 : -1;
-        double L, h;
+        DAMPER_REAL L, h;
         damper_geometry(p, s, Lambda, &L, &h);
         if (p->bothWays || h * dir < 0.0)            /* this cylinder compresses: it resists */
             m += p->Ap * p->pMax * fabs(h);
@@ -61,24 +63,25 @@ static double mmax_dir(const DamperParams *p, double Lambda, double dir) {
     return m;
 }
 
-double damper_mmax(const DamperParams *p, double Lambda, double dir) {
+DAMPER_REAL damper_mmax(const DamperParams *p, DAMPER_REAL Lambda, double dir) {
     if (dir > 0.0) return mmax_dir(p, Lambda, 1.0);
     if (dir < 0.0) return mmax_dir(p, Lambda, -1.0);
-    const double a = mmax_dir(p, Lambda, 1.0), b = mmax_dir(p, Lambda, -1.0);
+    const DAMPER_REAL a = mmax_dir(p, Lambda, 1.0), b = mmax_dir(p, Lambda, -1.0);
     return a > b ? a : b;                            /* at rest: the larger direction */
 }
 
-int damper_eval(const DamperParams *p, double Lambda, double LambdaDot, double pValve, DamperOut *o) {
+int damper_eval(const DamperParams *p, DAMPER_REAL Lambda, DAMPER_REAL LambdaDot, DAMPER_REAL pValve,
+                DamperOut *o) {
     int limited = 0;
     o->dMdp = 0.0;
     for (int i = 0; i < 2; i++) {
         const int s = i == 0 ? 1 : -1;
         limited |= damper_geometry(p, s, Lambda, &o->L[i], &o->h[i]);
-        const double Ldot = o->h[i] * LambdaDot + 0.0; /* piston speed (seed 001, App. B); + 0.0: no -0 */
+        const DAMPER_REAL Ldot = o->h[i] * LambdaDot + 0.0; /* piston speed (seed 001, App. B); + 0.0: no -0 */
         o->Ldot[i] = Ldot;
         const int active = p->bothWays || Ldot < 0.0; /* compressing: through the valve */
         if (active) {
-            const double t = tanh(Ldot / p->v0);     /* zero force at zero piston speed */
+            const DAMPER_REAL t = tanh(Ldot / p->v0);     /* zero force at zero piston speed */
             o->p[i] = pValve * fabs(t);
             o->F[i] = p->Ap * o->p[i];
             o->dMdp += p->Ap * t * o->h[i];          /* Mjoint = -sum F_signed h_s */
@@ -89,7 +92,7 @@ int damper_eval(const DamperParams *p, double Lambda, double LambdaDot, double p
     }
     o->Mdamp = o->dMdp * pValve;
     /* end stop at LambdaStop (seed 001, App. B: 54 deg) */
-    const double pen = fabs(Lambda) - p->LambdaStop;
+    const DAMPER_REAL pen = fabs(Lambda) - p->LambdaStop;
     o->MstopK = o->MstopC = 0.0;
     if (pen > 0.0) {
         const double sg = Lambda > 0.0 ? 1.0 : -1.0;
@@ -112,13 +115,36 @@ double damper_pressure_step(double pValve, double pSet, double tauP, double h, d
     return pValve + (pValve - pSet) * e;
 }
 
-double damper_pressure_rate(double pValve, double pSet, double tauP) {
-    return tauP > 0.0 ? (pSet - pValve) / tauP : 0.0;   /* tauP dp/dt = pSet - p */
+DAMPER_REAL damper_pressure_rate(DAMPER_REAL pValve, DAMPER_REAL pSet, double tauP) {
+    return tauP > 0.0 ? (pSet - pValve) / tauP : (DAMPER_REAL)0.0;   /* tauP dp/dt = pSet - p */
 }
 
-double damper_step_energy(const DamperOut *o, double LambdaDot, double pInt, double h) {
+DAMPER_REAL damper_step_energy(const DamperOut *o, DAMPER_REAL LambdaDot, DAMPER_REAL pInt, double h) {
     /* dMdp LambdaDot = sum Ap tanh(Ldot_s/v0) Ldot_s: every term of dMdp,
      * Ap tanh(h_s LambdaDot/v0) h_s, has the sign of LambdaDot, so the product
      * is >= 0 in floating point too; MstopC is cStop LambdaDot or 0 */
     return o->dMdp * LambdaDot * pInt + o->MstopC * LambdaDot * h;
+}
+
+DAMPER_REAL damper_valve(const DamperParams *p, DAMPER_REAL pValve, DAMPER_REAL pct, double tauP) {
+    return tauP > 0.0 ? pValve : damper_pset(p, pct);
+}
+
+int damper_outputs(const DamperParams *p, DAMPER_REAL Lambda, DAMPER_REAL LambdaDot, DAMPER_REAL pct,
+                   double tauP, DAMPER_REAL pValve, DAMPER_REAL out[DAMPER_NOUT]) {
+    const DAMPER_REAL pv = damper_valve(p, pValve, pct, tauP);
+    DamperOut o;
+    const int limited = damper_eval(p, Lambda, LambdaDot, pv, &o);
+    out[DAMPER_OUT_MJOINT] = o.Mjoint;
+    for (int i = 0; i < 2; i++) {
+        out[DAMPER_OUT_F + i] = o.F[i];
+        out[DAMPER_OUT_P + i] = o.p[i];
+        out[DAMPER_OUT_L + i] = o.L[i];
+        out[DAMPER_OUT_LDOT + i] = o.Ldot[i];
+    }
+    out[DAMPER_OUT_MMAX] = o.Mmax;
+    out[DAMPER_OUT_DPVALVE] = damper_pressure_rate(pValve, damper_pset(p, pct), tauP);
+    /* the energy over a unit time at this pressure: the power */
+    out[DAMPER_OUT_DEDISS] = damper_step_energy(&o, LambdaDot, pv, 1.0);
+    return limited;
 }

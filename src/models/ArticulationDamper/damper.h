@@ -54,6 +54,14 @@
 #ifndef DAMPER_H
 #define DAMPER_H
 
+/* What depends on the inputs and the state is written on DAMPER_REAL: double
+ * here (damper.c compiled as C, or for an ECU), a dual number in
+ * damper_dual.cpp, which compiles the same damper.c a second time in C++ for
+ * the FMU's directional derivatives (one source of the equations). */
+#ifndef DAMPER_REAL
+#define DAMPER_REAL double
+#endif
+
 #define DAMPER_PCT_MAX 50.0         /* damping percentage at maximum damping (seed 001, 5.1.1) */
 #define DAMPER_L_MIN 0.05           /* shortest cylinder length the geometry may reach [m] */
 #define DAMPER_CHECK_MARGIN 0.1745  /* the geometry is checked over |Lambda| <= LambdaStop + this (10 deg) [rad] */
@@ -73,25 +81,25 @@ typedef struct {
 
 /* everything at one instant; index 0 = left cylinder (s = +1), 1 = right */
 typedef struct {
-    double L[2];        /* cylinder lengths [m] */
-    double h[2];        /* lever arms dL/dLambda [m] */
-    double Ldot[2];     /* piston speeds [m/s], < 0 compressing */
-    double F[2];        /* resisting forces (>= 0) [N] */
-    double p[2];        /* working pressures [Pa] */
-    double Mdamp;       /* hydraulic part of Mjoint [N.m] */
-    double dMdp;        /* d Mdamp / d p_valve [m3]: Mdamp = dMdp p_valve */
-    double MstopK;      /* end stop spring part of Mjoint [N.m] */
-    double MstopC;      /* end stop damper part of Mjoint [N.m] */
-    double Mjoint;      /* the total, counter-clockwise on the rear section [N.m] */
-    double Mmax;        /* hydraulic torque at 50 % for this direction, |Ldot| >> v0 [N.m] */
+    DAMPER_REAL L[2];        /* cylinder lengths [m] */
+    DAMPER_REAL h[2];        /* lever arms dL/dLambda [m] */
+    DAMPER_REAL Ldot[2];     /* piston speeds [m/s], < 0 compressing */
+    DAMPER_REAL F[2];        /* resisting forces (>= 0) [N] */
+    DAMPER_REAL p[2];        /* working pressures [Pa] */
+    DAMPER_REAL Mdamp;       /* hydraulic part of Mjoint [N.m] */
+    DAMPER_REAL dMdp;        /* d Mdamp / d p_valve [m3]: Mdamp = dMdp p_valve */
+    DAMPER_REAL MstopK;      /* end stop spring part of Mjoint [N.m] */
+    DAMPER_REAL MstopC;      /* end stop damper part of Mjoint [N.m] */
+    DAMPER_REAL Mjoint;      /* the total, counter-clockwise on the rear section [N.m] */
+    DAMPER_REAL Mmax;        /* hydraulic torque at 50 % for this direction, |Ldot| >> v0 [N.m] */
 } DamperOut;
 
 /* valve set pressure from the damping percentage, clamped to 0..50 % [Pa] */
-double damper_pset(const DamperParams *p, double pct);
+DAMPER_REAL damper_pset(const DamperParams *p, DAMPER_REAL pct);
 
 /* length and lever arm of cylinder s (+1 left, -1 right) at Lambda; L is not
  * allowed below DAMPER_L_MIN (returns 1 if it had to be limited, else 0) */
-int damper_geometry(const DamperParams *p, int s, double Lambda, double *L, double *h);
+int damper_geometry(const DamperParams *p, int s, DAMPER_REAL Lambda, DAMPER_REAL *L, DAMPER_REAL *h);
 
 /* Checks the geometry: every cylinder stays at least DAMPER_L_MIN long over
  * |Lambda| <= LambdaStop + DAMPER_CHECK_MARGIN. Returns 0 if it does, else the
@@ -102,11 +110,12 @@ int damper_check(const DamperParams *p, double *Lshortest, double *LambdaAt);
 /* The torque magnitude at 50 % for the direction dir (+1: LambdaDot > 0,
  * -1: < 0, 0: the larger of both), once |Ldot| >> v0: the controller's
  * look-up of seed 001, 5.1.3. */
-double damper_mmax(const DamperParams *p, double Lambda, double dir);
+DAMPER_REAL damper_mmax(const DamperParams *p, DAMPER_REAL Lambda, double dir);
 
 /* Every output at (Lambda, LambdaDot) with the valve pressure pValve; returns
  * 1 if a cylinder length had to be limited at DAMPER_L_MIN, else 0. */
-int damper_eval(const DamperParams *p, double Lambda, double LambdaDot, double pValve, DamperOut *o);
+int damper_eval(const DamperParams *p, DAMPER_REAL Lambda, DAMPER_REAL LambdaDot, DAMPER_REAL pValve,
+                DamperOut *o);
 
 /* Over a step h with held inputs: the valve pressure's first-order lag
  * tauP dp/dt = pSet - p solved exactly (tauP = 0: p = pSet at once); returns
@@ -116,11 +125,33 @@ double damper_pressure_step(double pValve, double pSet, double tauP, double h, d
 /* The same lag as an ODE (for an integrator outside, Model Exchange): the
  * rate dpValve/dt = (pSet - pValve)/tauP that damper_pressure_step solves in
  * closed form; 0 for tauP = 0 (the valve is static, pValve is not used) [Pa/s]. */
-double damper_pressure_rate(double pValve, double pSet, double tauP);
+DAMPER_REAL damper_pressure_rate(DAMPER_REAL pValve, DAMPER_REAL pSet, double tauP);
 
 /* The energy the damper dissipates over that step (inputs held), exactly:
  * LambdaDot (dMdp int p dt + MstopC h) >= 0 [J]. The stop spring's work is
  * not dissipated and not counted. */
-double damper_step_energy(const DamperOut *o, double LambdaDot, double pInt, double h);
+DAMPER_REAL damper_step_energy(const DamperOut *o, DAMPER_REAL LambdaDot, DAMPER_REAL pInt, double h);
+
+/* The valve pressure acting now: the lag's state pValve, or the set pressure
+ * of pct when the valve is static (tauP = 0) [Pa]. */
+DAMPER_REAL damper_valve(const DamperParams *p, DAMPER_REAL pValve, DAMPER_REAL pct, double tauP);
+
+/* Every output of the FMU at (Lambda, LambdaDot, pct) and the state pValve
+ * into out[DAMPER_NOUT]: Mjoint, F, p, L, Ldot (2 each), Mmax, and the
+ * derivatives of the states pValve and Ediss; returns damper_eval's. */
+enum { DAMPER_OUT_MJOINT = 0, DAMPER_OUT_F = 1, DAMPER_OUT_P = 3, DAMPER_OUT_L = 5, DAMPER_OUT_LDOT = 7,
+       DAMPER_OUT_MMAX = 9, DAMPER_OUT_DPVALVE = 10, DAMPER_OUT_DEDISS = 11, DAMPER_NOUT = 12 };
+int damper_outputs(const DamperParams *p, DAMPER_REAL Lambda, DAMPER_REAL LambdaDot, DAMPER_REAL pct,
+                   double tauP, DAMPER_REAL pValve, DAMPER_REAL out[DAMPER_NOUT]);
+
+/* damper_outputs and its derivative dout along the seed (dLambda,
+ * dLambdaDot, dpct, dpValve): damper_dual.cpp, the same equations on dual
+ * numbers (for the FMU, not the ECU) */
+#ifdef __cplusplus
+extern "C"
+#endif
+void damper_outputs_tangent(const DamperParams *p, double Lambda, double dLambda, double LambdaDot,
+                            double dLambdaDot, double pct, double dpct, double tauP, double pValve,
+                            double dpValve, double out[DAMPER_NOUT], double dout[DAMPER_NOUT]);
 
 #endif

@@ -16,7 +16,7 @@
 
 /* the valve pressure now: the lag's state, or the set pressure when static */
 static double valve_pressure(ModelInstance *comp) {
-    return D->tauP > 0.0 ? S->pValve : damper_pset(&S->par, D->pct);
+    return damper_valve(&S->par, S->pValve, D->pct, D->tauP);
 }
 
 /* the damper's parameters from the variables */
@@ -60,24 +60,40 @@ Status model_init(ModelInstance *comp) {
     return OK;
 }
 
-void model_outputs(ModelInstance *comp) {
-    DamperOut o;
-    damper_eval(&S->par, D->Lambda, D->LambdaDot, valve_pressure(comp), &o);
-    D->Mjoint = o.Mjoint;
+/* damper_outputs' out[] into d: the values into the model's variables, or
+   their derivatives along a seed into the tangent of
+   model_directional_derivative */
+static void store_outputs(ModelData *d, const double out[DAMPER_NOUT]) {
+    d->Mjoint = out[DAMPER_OUT_MJOINT];
     for (int i = 1; i <= 2; i++) {
-        D->F[i] = o.F[i - 1];
-        D->p[i] = o.p[i - 1];
-        D->L[i] = o.L[i - 1];
-        D->Ldot[i] = o.Ldot[i - 1];
+        d->F[i] = out[DAMPER_OUT_F + i - 1];
+        d->p[i] = out[DAMPER_OUT_P + i - 1];
+        d->L[i] = out[DAMPER_OUT_L + i - 1];
+        d->Ldot[i] = out[DAMPER_OUT_LDOT + i - 1];
     }
-    D->Mmax = o.Mmax;
+    d->Mmax = out[DAMPER_OUT_MMAX];
+    d->der_pValve = out[DAMPER_OUT_DPVALVE];
+    d->der_Ediss = out[DAMPER_OUT_DEDISS];
+}
+
+void model_outputs(ModelInstance *comp) {
+    double out[DAMPER_NOUT];
+    damper_outputs(&S->par, D->Lambda, D->LambdaDot, D->pct, D->tauP, S->pValve, out);
+    store_outputs(D, out);
+    /* the Model Exchange states */
     D->Ediss = S->Ediss;
-    /* the Model Exchange state pValve and the derivatives */
-    double dx[MODEL_NX];
-    model_derivatives(comp, dx);
     D->pValve = S->pValve;
-    D->der_pValve = dx[0];
-    D->der_Ediss = dx[1];
+}
+
+/* Forward mode through damper.c on dual numbers (damper_dual.cpp): the seed of
+ * the inputs Lambda, LambdaDot, pct and the states pValve, Ediss (on which
+ * nothing but Ediss itself depends) */
+Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, ModelData *tangent) {
+    double out[DAMPER_NOUT], dout[DAMPER_NOUT];
+    damper_outputs_tangent(&S->par, D->Lambda, seed->Lambda, D->LambdaDot, seed->LambdaDot, D->pct, seed->pct,
+                           D->tauP, S->pValve, seed->pValve, out, dout);
+    store_outputs(tangent, dout);
+    return OK;
 }
 
 Status model_do_step(ModelInstance *comp, double t, double h) {
@@ -137,12 +153,10 @@ void model_set_x(ModelInstance *comp, const double x[]) {
 }
 
 Status model_derivatives(ModelInstance *comp, double dx[]) {
-    const double pv = valve_pressure(comp);
-    DamperOut o;
-    damper_eval(&S->par, D->Lambda, D->LambdaDot, pv, &o);
-    dx[0] = damper_pressure_rate(S->pValve, damper_pset(&S->par, D->pct), D->tauP);
-    /* the energy over a unit time at this pressure: the power */
-    dx[1] = damper_step_energy(&o, D->LambdaDot, pv, 1.0);
+    double out[DAMPER_NOUT];
+    damper_outputs(&S->par, D->Lambda, D->LambdaDot, D->pct, D->tauP, S->pValve, out);
+    dx[0] = out[DAMPER_OUT_DPVALVE];
+    dx[1] = out[DAMPER_OUT_DEDISS];
     return OK;
 }
 

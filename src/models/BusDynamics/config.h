@@ -11,4 +11,7 @@ typedef struct {
     double zd[6];
 } ModelState;
 
+/* exact directional derivatives (fmu.h): dynamics.cpp on dual numbers */
+#define MODEL_DIRECTIONAL_DERIVATIVE 1
+
 #endif

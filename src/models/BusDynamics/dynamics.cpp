@@ -9,11 +9,56 @@
 
 #include <Eigen/Dense>
 
+#include "dual.hpp"
 #include "dynamics.h"
+
+/* The equations are templated on the scalar type T as well: double for the
+ * simulation, artibus::Dual (src/models/common/dual.hpp) for the directional
+ * derivatives (dyn_eval_tangent): forward-mode differentiation through the one
+ * source of the equations. Eigen takes Dual as a custom scalar type. */
+namespace Eigen {
+template <> struct NumTraits<artibus::Dual> : NumTraits<double> {
+    typedef artibus::Dual Real;
+    typedef artibus::Dual NonInteger;
+    typedef artibus::Dual Nested;
+    typedef artibus::Dual Literal;
+    enum { IsComplex = 0, IsInteger = 0, IsSigned = 1, RequireInitialization = 1,
+           ReadCost = 2, AddCost = 2, MulCost = 4 };
+};
+template <typename BinOp> struct ScalarBinaryOpTraits<artibus::Dual, double, BinOp> {
+    typedef artibus::Dual ReturnType;
+};
+template <typename BinOp> struct ScalarBinaryOpTraits<double, artibus::Dual, BinOp> {
+    typedef artibus::Dual ReturnType;
+};
+}  // namespace Eigen
 
 namespace {
 
-using Vec2 = Eigen::Vector2d;
+using artibus::Dual;
+template <class T> using Vec2T = Eigen::Matrix<T, 2, 1>;
+using Vec2 = Vec2T<double>;
+
+/* the inputs and outputs on T: for double the C structs of dynamics.h, for
+   Dual the same fields on Dual */
+struct DualInputs {
+    Dual Fx[DYN_MAX_AXLES + 1], Mjoint[DYN_MAX_HINGES + 1];
+    Dual cosDelta[DYN_MAX_AXLES + 1], sinDelta[DYN_MAX_AXLES + 1];
+};
+struct DualOut {
+    Dual zdd[DYN_MAX_Q];
+    Dual xCG[DYN_MAX_MODULES + 1], yCG[DYN_MAX_MODULES + 1];
+    Dual vx[DYN_MAX_MODULES + 1], vy[DYN_MAX_MODULES + 1];
+    Dual ax[DYN_MAX_MODULES + 1], ay[DYN_MAX_MODULES + 1];
+    Dual xAxle[DYN_MAX_AXLES + 1], yAxle[DYN_MAX_AXLES + 1];
+    Dual alpha[DYN_MAX_AXLES + 1], Fy[DYN_MAX_AXLES + 1];
+    Dual FjX[DYN_MAX_HINGES + 1], FjY[DYN_MAX_HINGES + 1];
+    Dual xCorner[4 * DYN_MAX_MODULES + 1], yCorner[4 * DYN_MAX_MODULES + 1];
+    Dual v;
+};
+template <class T> struct Types;
+template <> struct Types<double> { using In = DynInputs; using Out = DynOut; };
+template <> struct Types<Dual> { using In = DualInputs; using Out = DualOut; };
 
 /* A point xi ahead of the CG of module m is
  *     r = (x, y) + sum_{j=1..m} l_j e(psi_j)
@@ -28,30 +73,110 @@ void levers(const DynParams *p, int m, double xi, double *l) {
 }
 
 /* cos and sin of the yaw angle of each of N modules, computed once per evaluation */
-template <int N>
+template <int N, class T>
 struct Trig {
-    double c[N + 1], s[N + 1];
-    explicit Trig(const double *z) {
-        for (int m = 1; m <= N; m++) { c[m] = std::cos(z[1 + m]); s[m] = std::sin(z[1 + m]); }
+    T c[N + 1], s[N + 1];
+    explicit Trig(const T *z) {
+        using std::cos;
+        using std::sin;
+        for (int m = 1; m <= N; m++) { c[m] = cos(z[1 + m]); s[m] = sin(z[1 + m]); }
     }
-    Vec2 e(int m) const { return Vec2(c[m], s[m]); }     /* module x axis */
-    Vec2 n(int m) const { return Vec2(-s[m], c[m]); }    /* module y axis */
-    Eigen::Matrix2d A(int m) const {                     /* A_IK of eq. 6 */
-        Eigen::Matrix2d R;
+    Vec2T<T> e(int m) const { return Vec2T<T>(c[m], s[m]); }     /* module x axis */
+    Vec2T<T> n(int m) const { return Vec2T<T>(-s[m], c[m]); }    /* module y axis */
+    Eigen::Matrix<T, 2, 2> A(int m) const {                     /* A_IK of eq. 6 */
+        Eigen::Matrix<T, 2, 2> R;
         R << c[m], -s[m], s[m], c[m];
         return R;
     }
 };
 
+/* M x = b for the symmetric positive definite mass matrix: Cholesky (false if
+   M is not positive definite). On Dual: the values by Cholesky, the
+   derivatives from M dx = db - dM x with the same factor */
+template <int NQ>
+bool solve_spd(const Eigen::Matrix<double, NQ, NQ> &M, const Eigen::Matrix<double, NQ, 1> &b,
+               Eigen::Matrix<double, NQ, 1> &x) {
+    Eigen::LLT<Eigen::Matrix<double, NQ, NQ>> llt(M);
+    if (llt.info() != Eigen::Success) return false;
+    x = llt.solve(b);
+    return true;
+}
+
+template <int NQ>
+bool solve_spd(const Eigen::Matrix<Dual, NQ, NQ> &M, const Eigen::Matrix<Dual, NQ, 1> &b,
+               Eigen::Matrix<Dual, NQ, 1> &x) {
+    const auto v = [](const Dual &a) { return a.v; };
+    const auto d = [](const Dual &a) { return a.d; };
+    const Eigen::Matrix<double, NQ, NQ> M0 = M.unaryExpr(v), dM = M.unaryExpr(d);
+    Eigen::LLT<Eigen::Matrix<double, NQ, NQ>> llt(M0);
+    if (llt.info() != Eigen::Success) return false;
+    const Eigen::Matrix<double, NQ, 1> x0 = llt.solve(b.unaryExpr(v));
+    const Eigen::Matrix<double, NQ, 1> dx = llt.solve(b.unaryExpr(d) - dM * x0);
+    for (int i = 0; i < NQ; i++) x(i) = Dual(x0(i), dx(i));
+    return true;
+}
+
+template <class T>
+T slip(T u, T w, double vSlip) {
+    /* eqs. 25, 26: alpha = gamma - arctan(vy/vx) is the angle from the velocity
+     * of the axle to its wheel plane, i.e. atan2(-w, u) for the velocity (u, w)
+     * in wheel coordinates. |u| keeps the force opposed to the lateral sliding
+     * when reversing; vSlip keeps it finite at standstill: below about vSlip the
+     * tyre acts as a lateral damper C / vSlip instead of dividing by zero. At
+     * u = 1 m/s and vSlip = 0.01 m/s the slip is scaled by 1 - 5e-5. The
+     * second argument is > 0, so atan2 is the plain arctangent of the ratio
+     * (cheaper: it is evaluated for every axle in every right-hand side). */
+    using std::atan;
+    using std::sqrt;
+    return atan(-w / sqrt(u * u + vSlip * vSlip));
+}
+
+template <class T>
+T tyre(const DynParams *p, int a, T alpha) {
+    using std::fabs;
+    using std::tan;
+    const double C = p->C[a], mu = p->mu[a], Fz = p->Fz[a];
+    switch (p->tyreModel) {
+    case TYRE_LINEAR_FRICTION: {
+        /* seed 001: friction scales the cornering stiffness (C_eff = mu C), and
+           the force cannot exceed what the friction carries */
+        const T F = mu * C * alpha;
+        const double Fmax = mu * Fz;
+        return F > Fmax ? T(Fmax) : (F < -Fmax ? T(-Fmax) : F);
+    }
+    case TYRE_FIALA: {
+        /* brush model (Fiala 1954; Pacejka, Tyre and Vehicle Dynamics, 2012,
+           sec. 3.2): cubic in tan(alpha) up to full sliding at
+           tan(alpha_sl) = 3 mu Fz / C, then mu Fz; slope C at alpha = 0 */
+        const double Fmax = mu * Fz;
+        if (!(Fmax > 0.0) || !(C > 0.0)) return T(0.0);
+        const T t = tan(alpha);
+        const double tsl = 3.0 * Fmax / C;
+        if (fabs(t) >= tsl) return T(t > 0 ? Fmax : -Fmax);
+        const T s = t / tsl;   /* -1 .. 1 */
+        return Fmax * (3.0 * s - 3.0 * s * fabs(s) + s * s * s);
+    }
+    case TYRE_LINEAR_SCALED:
+        /* seed 001, 3.1 and eq. C.1: the extensive model's linear tyre, its
+           friction coefficient scaling the tyre coefficient, nothing saturates */
+        return mu * C * alpha;
+    default:
+        return C * alpha;          /* eq. 24 */
+    }
+}
+
 /* The chain of N modules (N + 2 minimal coordinates). The module count is a
  * template parameter so that every matrix has a size known to the compiler
  * (Eigen then unrolls the small products); dyn_eval picks N at run time. */
-template <int N>
+template <int N, class S = double>
 struct Chain {
     static constexpr int NQ = 2 + N;
-    using VecQ = Eigen::Matrix<double, NQ, 1>;
-    using MatQ = Eigen::Matrix<double, NQ, NQ>;
-    using Jac = Eigen::Matrix<double, 2, NQ>;
+    using VecQ = Eigen::Matrix<S, NQ, 1>;
+    using MatQ = Eigen::Matrix<S, NQ, NQ>;
+    using Jac = Eigen::Matrix<S, 2, NQ>;
+    using Vec2 = Vec2T<S>;
+    using In = typename Types<S>::In;
+    using Out = typename Types<S>::Out;
 
     /* position r, velocity v, Jacobian J = dr/dz (eq. 7) and the
        velocity-product term J' z' */
@@ -60,7 +185,7 @@ struct Chain {
         Jac J;
     };
 
-    static Point point(const DynParams *p, const Trig<N> &T, const double *z, const double *zd,
+    static Point point(const DynParams *p, const Trig<N, S> &T, const S *z, const S *zd,
                        int m, double xi) {
         double l[DYN_MAX_MODULES + 1];
         levers(p, m, xi, l);
@@ -71,7 +196,7 @@ struct Chain {
         P.r = Vec2(z[0], z[1]);
         P.Jdzd.setZero();
         for (int j = 1; j <= m; j++) {
-            const double r = zd ? zd[1 + j] : 0.0;
+            const S r = zd ? zd[1 + j] : S(0.0);
             P.r += l[j] * T.e(j);
             P.J.col(1 + j) = l[j] * T.n(j);              /* d(l e(psi))/dpsi = l n(psi) */
             P.Jdzd -= l[j] * r * r * T.e(j);             /* d(l n(psi))/dt psi' = -l e(psi) psi'^2 */
@@ -80,25 +205,16 @@ struct Chain {
         return P;
     }
 
-    static Vec2 position(const DynParams *p, const double *z, int m, double xi) {
-        return point(p, Trig<N>(z), z, nullptr, m, xi).r;
+    static Vec2 position(const DynParams *p, const S *z, int m, double xi) {
+        return point(p, Trig<N, S>(z), z, nullptr, m, xi).r;
     }
 
-    static int eval(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
-                    double *zdd, DynOut *out);
+    static int eval(const DynParams *p, const In *u, const S *z, const S *zd, S *zdd, Out *out);
 };
 }  // namespace
 
 extern "C" double dyn_slip(double u, double w, double vSlip) {
-    /* eqs. 25, 26: alpha = gamma - arctan(vy/vx) is the angle from the velocity
-     * of the axle to its wheel plane, i.e. atan2(-w, u) for the velocity (u, w)
-     * in wheel coordinates. |u| keeps the force opposed to the lateral sliding
-     * when reversing; vSlip keeps it finite at standstill: below about vSlip the
-     * tyre acts as a lateral damper C / vSlip instead of dividing by zero. At
-     * u = 1 m/s and vSlip = 0.01 m/s the slip is scaled by 1 - 5e-5. The
-     * second argument is > 0, so atan2 is the plain arctangent of the ratio
-     * (cheaper: it is evaluated for every axle in every right-hand side). */
-    return std::atan(-w / std::sqrt(u * u + vSlip * vSlip));
+    return slip(u, w, vSlip);
 }
 
 extern "C" void dyn_steer(DynInputs *u, int nAxle) {
@@ -109,32 +225,7 @@ extern "C" void dyn_steer(DynInputs *u, int nAxle) {
 }
 
 extern "C" double dyn_tyre(const DynParams *p, int a, double alpha) {
-    const double C = p->C[a], mu = p->mu[a], Fz = p->Fz[a];
-    switch (p->tyreModel) {
-    case TYRE_LINEAR_FRICTION: {
-        /* seed 001: friction scales the cornering stiffness (C_eff = mu C), and
-           the force cannot exceed what the friction carries */
-        const double F = mu * C * alpha, Fmax = mu * Fz;
-        return F > Fmax ? Fmax : (F < -Fmax ? -Fmax : F);
-    }
-    case TYRE_FIALA: {
-        /* brush model (Fiala 1954; Pacejka, Tyre and Vehicle Dynamics, 2012,
-           sec. 3.2): cubic in tan(alpha) up to full sliding at
-           tan(alpha_sl) = 3 mu Fz / C, then mu Fz; slope C at alpha = 0 */
-        const double Fmax = mu * Fz;
-        if (!(Fmax > 0.0) || !(C > 0.0)) return 0.0;
-        const double t = std::tan(alpha), tsl = 3.0 * Fmax / C;
-        if (std::fabs(t) >= tsl) return t > 0 ? Fmax : -Fmax;
-        const double s = t / tsl;   /* -1 .. 1 */
-        return Fmax * (3.0 * s - 3.0 * s * std::fabs(s) + s * s * s);
-    }
-    case TYRE_LINEAR_SCALED:
-        /* seed 001, 3.1 and eq. C.1: the extensive model's linear tyre, its
-           friction coefficient scaling the tyre coefficient, nothing saturates */
-        return mu * C * alpha;
-    default:
-        return C * alpha;          /* eq. 24 */
-    }
+    return tyre(p, a, alpha);
 }
 
 extern "C" void dyn_point(const DynParams *p, const double *z, int m, double xi,
@@ -150,11 +241,10 @@ extern "C" void dyn_point(const DynParams *p, const double *z, int m, double xi,
     *py = r.y();
 }
 
-template <int N>
-int Chain<N>::eval(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
-                   double *zdd, DynOut *out) {
+template <int N, class S>
+int Chain<N, S>::eval(const DynParams *p, const In *u, const S *z, const S *zd, S *zdd, Out *out) {
     constexpr int nq = NQ;
-    const Trig<N> T(z);
+    const Trig<N, S> T(z);
     MatQ M = MatQ::Zero();
     VecQ h = VecQ::Zero(), q = VecQ::Zero();
     Point Cg[N + 1];                        /* the CG of each module */
@@ -184,11 +274,11 @@ int Chain<N>::eval(const DynParams *p, const DynInputs *u, const double *z, cons
         const int m = p->axleModule[a];
         const double xi = p->xA[a];
         const Vec2 vK(vCgK[m].x(), vCgK[m].y() + xi * zd[1 + m]);   /* eq. 27 */
-        const double cd = u->cosDelta[a], sd = u->sinDelta[a];
-        const double uw = cd * vK.x() + sd * vK.y();           /* eq. 23 applied to the velocity */
-        const double ww = -sd * vK.x() + cd * vK.y();
-        const double alpha = dyn_slip(uw, ww, p->vSlip);
-        const double Fy = dyn_tyre(p, a, alpha);
+        const S cd = u->cosDelta[a], sd = u->sinDelta[a];
+        const S uw = cd * vK.x() + sd * vK.y();                /* eq. 23 applied to the velocity */
+        const S ww = -sd * vK.x() + cd * vK.y();
+        const S alpha = slip(uw, ww, p->vSlip);
+        const S Fy = tyre(p, a, alpha);
         const Vec2 fA(u->Fx[a], Fy);                             /* wheel frame A_i */
         const Vec2 fK(cd * fA.x() - sd * fA.y(), sd * fA.x() + cd * fA.y());   /* eq. 28: A_KA f */
         Fw[a] = T.A(m) * fK;
@@ -210,9 +300,8 @@ int Chain<N>::eval(const DynParams *p, const DynInputs *u, const double *z, cons
         q(1 + k) -= u->Mjoint[k];
     }
 
-    Eigen::LLT<MatQ> llt(M);
-    if (llt.info() != Eigen::Success) return 1;
-    const VecQ acc = llt.solve(q - h);
+    VecQ acc;
+    if (!solve_spd<NQ>(M, q - h, acc)) return 1;
     for (int i = 0; i < nq; i++) zdd[i] = acc(i);
 
     if (out) {
@@ -236,19 +325,71 @@ int Chain<N>::eval(const DynParams *p, const DynInputs *u, const double *z, cons
             out->FjX[k] = FK.x();
             out->FjY[k] = FK.y();
         }
+        /* body outline: front left, front right, rear right, rear left */
+        for (int m = 1; m <= N; m++) {
+            const double lon[4] = { p->lFront[m], p->lFront[m], -p->lRear[m], -p->lRear[m] };
+            const double lat[4] = { 0.5, -0.5, -0.5, 0.5 };
+            for (int c = 0; c < 4; c++) {
+                const int i = 4 * (m - 1) + c + 1;
+                const double w = lat[c] * p->width[m];
+                out->xCorner[i] = out->xCG[m] + lon[c] * T.c[m] - w * T.s[m];
+                out->yCorner[i] = out->yCG[m] + lon[c] * T.s[m] + w * T.c[m];
+            }
+        }
+        using std::hypot;
+        out->v = hypot(zd[0], zd[1]);
     }
     return 0;
 }
 
-extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
-                        const double *zd, double *zdd, DynOut *out) {
+template <class S>
+int eval_n(const DynParams *p, const typename Types<S>::In *u, const S *z, const S *zd, S *zdd,
+           typename Types<S>::Out *out) {
     switch (p->nMod) {
-    case 1: return Chain<1>::eval(p, u, z, zd, zdd, out);
-    case 2: return Chain<2>::eval(p, u, z, zd, zdd, out);
-    case 3: return Chain<3>::eval(p, u, z, zd, zdd, out);
-    case 4: return Chain<4>::eval(p, u, z, zd, zdd, out);
+    case 1: return Chain<1, S>::eval(p, u, z, zd, zdd, out);
+    case 2: return Chain<2, S>::eval(p, u, z, zd, zdd, out);
+    case 3: return Chain<3, S>::eval(p, u, z, zd, zdd, out);
+    case 4: return Chain<4, S>::eval(p, u, z, zd, zdd, out);
     default: return 1;   /* nModules is checked against 1..DYN_MAX_MODULES before */
     }
+}
+
+extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
+                        const double *zd, double *zdd, DynOut *out) {
+    return eval_n<double>(p, u, z, zd, zdd, out);
+}
+
+/* the same equations on dual numbers: the values into out (zdd), their
+   derivatives along (du, dz, dzd) into dout (dzdd) */
+extern "C" int dyn_eval_tangent(const DynParams *p, const DynInputs *u, const DynInputs *du,
+                                const double *z, const double *dz, const double *zd, const double *dzd,
+                                double *zdd, double *dzdd, DynOut *out, DynOut *dout) {
+    DualInputs ui;
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) {
+        const Dual delta(u->delta[a], du->delta[a]);
+        ui.cosDelta[a] = cos(delta);
+        ui.sinDelta[a] = sin(delta);
+        ui.Fx[a] = Dual(u->Fx[a], du->Fx[a]);
+    }
+    for (int k = 1; k <= DYN_MAX_HINGES; k++) ui.Mjoint[k] = Dual(u->Mjoint[k], du->Mjoint[k]);
+    Dual zz[DYN_MAX_Q], zzd[DYN_MAX_Q], zzdd[DYN_MAX_Q];
+    for (int i = 0; i < DYN_MAX_Q; i++) {
+        zz[i] = Dual(z[i], dz[i]);
+        zzd[i] = Dual(zd[i], dzd[i]);
+    }
+    DualOut o;
+    if (eval_n<Dual>(p, &ui, zz, zzd, zzdd, &o)) return 1;
+    const int nq = dyn_nq(p);
+    for (int i = 0; i < nq; i++) { zdd[i] = zzdd[i].v; dzdd[i] = zzdd[i].d; }
+    /* every field of DynOut is a double array or a double: split each pair */
+    const Dual *src = reinterpret_cast<const Dual *>(&o);
+    double *val = reinterpret_cast<double *>(out), *der = reinterpret_cast<double *>(dout);
+    static_assert(sizeof(DualOut) == 2 * sizeof(DynOut), "DualOut mirrors DynOut");
+    for (size_t i = 0; i < sizeof(DynOut) / sizeof(double); i++) {
+        val[i] = src[i].v;
+        der[i] = src[i].d;
+    }
+    return 0;
 }
 
 extern "C" int dyn_static_loads(DynParams *p, double g) {

@@ -45,6 +45,8 @@ typedef struct {
     double Fz[DYN_MAX_AXLES + 1];     /* vertical axle load, N */
     int tyreModel;
     double vSlip;                     /* low-speed blend of the slip angle, m/s (> 0) */
+    double lFront[DYN_MAX_MODULES + 1], lRear[DYN_MAX_MODULES + 1];   /* body outline ahead of and */
+    double width[DYN_MAX_MODULES + 1];                                /* behind the CG, its width, m */
 } DynParams;
 
 typedef struct {
@@ -69,7 +71,11 @@ typedef struct {
     double xAxle[DYN_MAX_AXLES + 1], yAxle[DYN_MAX_AXLES + 1];
     double alpha[DYN_MAX_AXLES + 1], Fy[DYN_MAX_AXLES + 1];      /* slip angle, lateral tyre force (wheel frame) */
     double FjX[DYN_MAX_HINGES + 1], FjY[DYN_MAX_HINGES + 1];     /* hinge force on the rear part, in K_k */
-} DynOut;
+    double xCorner[4 * DYN_MAX_MODULES + 1], yCorner[4 * DYN_MAX_MODULES + 1];
+                                      /* body outline of module m: 4 (m - 1) + 1..4 front left,
+                                         front right, rear right, rear left */
+    double v;                         /* speed of the CG of module 1 */
+} DynOut;                             /* (dynamics.cpp's DualOut mirrors it field by field) */
 
 /* number of minimal coordinates */
 static inline int dyn_nq(const DynParams *p) { return 2 + p->nMod; }
@@ -78,6 +84,14 @@ static inline int dyn_nq(const DynParams *p) { return 2 + p->nMod; }
    fill it too. Returns 0, or 1 if the mass matrix is not positive definite. */
 int dyn_eval(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
              double *zdd, DynOut *out);
+
+/* dyn_eval and its directional derivative, on dual numbers (dynamics.cpp): at
+   (u, z, zd) the values zdd and out as dyn_eval's, and their derivatives along
+   the seed (du: delta, Fx and Mjoint only; dz, dzd) into dzdd and dout. The
+   one source of the equations, Chain::eval, templated on the scalar type. */
+int dyn_eval_tangent(const DynParams *p, const DynInputs *u, const DynInputs *du,
+                     const double *z, const double *dz, const double *zd, const double *dzd,
+                     double *zdd, double *dzdd, DynOut *out, DynOut *dout);
 
 /* the world position of the point xi ahead of the CG of module m */
 void dyn_point(const DynParams *p, const double *z, int m, double xi, double *px, double *py);

@@ -40,6 +40,11 @@ static void make_params(ModelInstance *comp, DynParams *p) {
     }
     p->tyreModel = D->tyreModel;
     p->vSlip = D->vSlip;
+    for (int m = 1; m <= DYN_MAX_MODULES; m++) {
+        p->lFront[m] = D->lFront[m];
+        p->lRear[m] = D->lRear[m];
+        p->width[m] = D->width[m];
+    }
 }
 
 /* the inputs plus the built-in test steering (a lane change for running alone) */
@@ -133,6 +138,51 @@ Status model_init(ModelInstance *comp) {
     return OK;
 }
 
+/* the outputs from dyn_eval's o, the coordinates z, rates zd and their
+   derivatives zdd into d: the values into the model's variables, or their
+   derivatives along a seed into the tangent of model_directional_derivative */
+static void store_outputs(ModelData *d, const DynParams *p, const DynOut *o, const double *z,
+                          const double *zd, const double *zdd) {
+    const int N = p->nMod;
+    for (int m = 1; m <= DYN_MAX_MODULES; m++) {
+        const int on = m <= N;          /* modules beyond nModules read 0 */
+        d->x[m] = on ? o->xCG[m] : 0.0;
+        d->y[m] = on ? o->yCG[m] : 0.0;
+        d->psi[m] = on ? z[1 + m] : 0.0;
+        d->vx[m] = on ? o->vx[m] : 0.0;
+        d->vy[m] = on ? o->vy[m] : 0.0;
+        d->r[m] = on ? zd[1 + m] : 0.0;
+        d->ay[m] = on ? o->ay[m] : 0.0;
+        for (int c = 1; c <= 4; c++) {
+            const int i = 4 * (m - 1) + c;
+            d->xCorner[i] = on ? o->xCorner[i] : 0.0;
+            d->yCorner[i] = on ? o->yCorner[i] : 0.0;
+        }
+    }
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) {
+        const int on = a <= p->nAxle;
+        d->xAxle[a] = on ? o->xAxle[a] : 0.0;
+        d->yAxle[a] = on ? o->yAxle[a] : 0.0;
+        d->alpha[a] = on ? o->alpha[a] : 0.0;
+        d->Fy[a] = on ? o->Fy[a] : 0.0;
+    }
+    for (int k = 1; k <= DYN_MAX_HINGES; k++) {
+        const int on = k < N;
+        d->artAngle[k] = on ? z[1 + k] - z[2 + k] : 0.0;
+        d->artRate[k] = on ? zd[1 + k] - zd[2 + k] : 0.0;
+        d->FjointX[k] = on ? o->FjX[k] : 0.0;
+        d->FjointY[k] = on ? o->FjY[k] : 0.0;
+    }
+    d->v = o->v;
+    /* the Model Exchange states and their second derivatives */
+    for (int i = 0; i < DYN_MAX_Q; i++) {
+        const int on = i < dyn_nq(p);
+        d->z[i + 1] = on ? z[i] : 0.0;
+        d->zd[i + 1] = on ? zd[i] : 0.0;
+        d->zdd[i + 1] = on ? zdd[i] : 0.0;
+    }
+}
+
 void model_outputs(ModelInstance *comp) {
     const ModelState *s = &comp->v.s;
     DynParams p;
@@ -144,50 +194,39 @@ void model_outputs(ModelInstance *comp) {
     memset(&o, 0, sizeof o);
     double zdd[DYN_MAX_Q];
     dyn_eval(&p, &u, s->z, s->zd, zdd, &o);
+    store_outputs(D, &p, &o, s->z, s->zd, zdd);
+}
 
-    const int N = p.nMod;
-    for (int m = 1; m <= DYN_MAX_MODULES; m++) {
-        const int on = m <= N;          /* modules beyond nModules read 0 */
-        D->x[m] = on ? o.xCG[m] : 0.0;
-        D->y[m] = on ? o.yCG[m] : 0.0;
-        D->psi[m] = on ? s->z[1 + m] : 0.0;
-        D->vx[m] = on ? o.vx[m] : 0.0;
-        D->vy[m] = on ? o.vy[m] : 0.0;
-        D->r[m] = on ? s->zd[1 + m] : 0.0;
-        D->ay[m] = on ? o.ay[m] : 0.0;
-        /* body outline: front left, front right, rear right, rear left */
-        const double lon[4] = { D->lFront[m], D->lFront[m], -D->lRear[m], -D->lRear[m] };
-        const double lat[4] = { 0.5, -0.5, -0.5, 0.5 };
-        for (int c = 0; c < 4; c++) {
-            const int i = 4 * (m - 1) + c + 1;
-            if (!on) { D->xCorner[i] = D->yCorner[i] = 0.0; continue; }
-            const double ps = s->z[1 + m], w = lat[c] * D->width[m];
-            D->xCorner[i] = o.xCG[m] + lon[c] * cos(ps) - w * sin(ps);
-            D->yCorner[i] = o.yCG[m] + lon[c] * sin(ps) + w * cos(ps);
-        }
-    }
+/* Forward mode through dynamics.cpp on dual numbers (dyn_eval_tangent): the
+ * seed of the states z[i], zd[i] and of the inputs delta, Fx, Mjoint. */
+Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, ModelData *tangent) {
+    if (check_inputs(comp, comp->v.time)) return Error;
+    const ModelState *s = &comp->v.s;
+    DynParams p;
+    make_params(comp, &p);
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) p.Fz[a] = D->Fz[a];
+    DynInputs u, du;
+    make_inputs(comp, comp->v.time, &u);
+    memset(&du, 0, sizeof du);
     for (int a = 1; a <= DYN_MAX_AXLES; a++) {
-        const int on = a <= p.nAxle;
-        D->xAxle[a] = on ? o.xAxle[a] : 0.0;
-        D->yAxle[a] = on ? o.yAxle[a] : 0.0;
-        D->alpha[a] = on ? o.alpha[a] : 0.0;
-        D->Fy[a] = on ? o.Fy[a] : 0.0;
+        du.delta[a] = seed->delta[a];
+        du.Fx[a] = seed->Fx[a];
     }
-    for (int k = 1; k <= DYN_MAX_HINGES; k++) {
-        const int on = k < N;
-        D->artAngle[k] = on ? s->z[1 + k] - s->z[2 + k] : 0.0;
-        D->artRate[k] = on ? s->zd[1 + k] - s->zd[2 + k] : 0.0;
-        D->FjointX[k] = on ? o.FjX[k] : 0.0;
-        D->FjointY[k] = on ? o.FjY[k] : 0.0;
+    for (int k = 1; k <= DYN_MAX_HINGES; k++) du.Mjoint[k] = seed->Mjoint[k];
+    const int nq = dyn_nq(&p);
+    double dz[DYN_MAX_Q], dzd[DYN_MAX_Q], zdd[DYN_MAX_Q], dzdd[DYN_MAX_Q];
+    for (int i = 0; i < DYN_MAX_Q; i++) {      /* states beyond nModules are held at 0 */
+        dz[i] = i < nq ? seed->z[i + 1] : 0.0;
+        dzd[i] = i < nq ? seed->zd[i + 1] : 0.0;
     }
-    D->v = hypot(s->zd[0], s->zd[1]);
-    /* the Model Exchange states and their second derivatives */
-    for (int i = 0; i < DYN_MAX_Q; i++) {
-        const int on = i < dyn_nq(&p);
-        D->z[i + 1] = on ? s->z[i] : 0.0;
-        D->zd[i + 1] = on ? s->zd[i] : 0.0;
-        D->zdd[i + 1] = on ? zdd[i] : 0.0;
-    }
+    DynOut o, dout;
+    memset(&o, 0, sizeof o);
+    memset(&dout, 0, sizeof dout);
+    if (dyn_eval_tangent(&p, &u, &du, s->z, dz, s->zd, dzd, zdd, dzdd, &o, &dout))
+        return log_error(comp, "t = %.17g: the mass matrix of the equations of motion is not "
+                               "positive definite", comp->v.time);
+    store_outputs(tangent, &p, &dout, dz, dzd, dzdd);
+    return OK;
 }
 
 /* ODE state y = [z, z'] */

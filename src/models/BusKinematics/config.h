@@ -10,4 +10,7 @@ typedef struct {
     int unused;
 } ModelState;
 
+/* exact directional derivatives (fmu.h): kinematics.c on dual numbers */
+#define MODEL_DIRECTIONAL_DERIVATIVE 1
+
 #endif

@@ -85,54 +85,77 @@ Status model_init(ModelInstance *comp) {
     return OK;
 }
 
-static int derivs(ModelInstance *comp, const KinChain *c, double t, const double *y, double *ydot);
+/* the right-hand side's other inputs at time t (kinematics.h) */
+static KinDrive drive(ModelInstance *comp, double t) {
+    const KinDrive dr = { .j = D->j, .prediction = D->predictionModel, .gammaF = gammaF_at(comp, t),
+                          .vk = D->v, .omegaMeas = D->omegaMeas };
+    return dr;
+}
+
+/* kin_outputs' out[] into d: the values into the model's variables, or their
+   derivatives along a seed into the tangent of model_directional_derivative */
+static void store_outputs(ModelData *d, int j, const double out[KIN_NOUT]) {
+    for (int i = 0; i <= KIN_MAX_WAGONS; i++) {
+        d->theta[i] = out[KIN_OUT_THETA + i];
+        d->x[i] = out[KIN_OUT_X + i];
+        d->y[i] = out[KIN_OUT_Y + i];
+        d->omega[i] = out[KIN_OUT_OMEGA + i];
+        d->vel[i] = out[KIN_OUT_VEL + i];
+        d->kappa[i] = out[KIN_OUT_KAPPA + i];
+        if (i >= 1) {
+            d->betaDot[i] = out[KIN_OUT_BETADOT + i - 1];
+            d->betaMax[i] = out[KIN_OUT_BETAMAX + i - 1];
+        }
+    }
+    /* the Model Exchange states and their derivatives (eq. 22) */
+    d->thetaj = d->theta[j];
+    d->xj = d->x[j];
+    d->yj = d->y[j];
+    d->der_thetaj = out[KIN_OUT_YDOT + 0];
+    d->der_xj = out[KIN_OUT_YDOT + 1];
+    d->der_yj = out[KIN_OUT_YDOT + 2];
+}
 
 void model_outputs(ModelInstance *comp) {
     KinChain c;
     make_chain(comp, &c);
-    kin_poses(&c, D->j, D->beta, D->theta, D->x, D->y);
-    KinRates r;
-    kin_rates(&c, gammaF_at(comp, comp->v.time), D->beta, D->v, &r);
-    for (int i = 0; i <= KIN_MAX_WAGONS; i++) {
-        const int on = i <= D->N;       /* segments beyond N read 0 */
-        D->omega[i] = on ? r.omega[i] : 0.0;
-        D->vel[i] = on ? r.vel[i] : 0.0;
-        D->kappa[i] = on ? r.kappa[i] : 0.0;
-        if (!on) D->theta[i] = D->x[i] = D->y[i] = 0.0;
-        if (i >= 1) {
-            D->betaDot[i] = on ? r.betaDot[i] : 0.0;
-            D->betaMax[i] = on ? r.betaMax[i] : 0.0;
-        }
-    }
-    /* the Model Exchange states and their derivatives (eq. 22) */
-    double y[3 + KIN_MAX_WAGONS], ydot[3 + KIN_MAX_WAGONS];
+    const KinDrive dr = drive(comp, comp->v.time);
+    double y[3 + KIN_MAX_WAGONS], out[KIN_NOUT];
     model_get_x(comp, y);
-    derivs(comp, &c, comp->v.time, y, ydot);
-    D->thetaj = y[0];
-    D->xj = y[1];
-    D->yj = y[2];
-    D->der_thetaj = ydot[0];
-    D->der_xj = ydot[1];
-    D->der_yj = ydot[2];
+    kin_outputs(&c, &dr, y, out);
+    store_outputs(D, D->j, out);
+}
+
+/* Forward mode through kinematics.c on dual numbers (kinematics_dual.cpp): the
+ * seed of the states (thetaj, xj, yj, beta) and of the inputs (gammaF, the
+ * steerable wagons' gamma, v, omegaMeas) */
+Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, ModelData *tangent) {
+    if (check_inputs(comp, comp->v.time)) return Error;
+    KinChain c;
+    make_chain(comp, &c);
+    double dgamma[KIN_MAX_WAGONS + 1] = { 0 }, y[3 + KIN_MAX_WAGONS], dy[3 + KIN_MAX_WAGONS];
+    double out[KIN_NOUT], dout[KIN_NOUT];
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++) dgamma[i] = D->steerable[i] ? seed->gamma[i] : 0.0;
+    model_get_x(comp, y);
+    dy[0] = seed->thetaj;
+    dy[1] = seed->xj;
+    dy[2] = seed->yj;
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++) dy[2 + i] = i <= D->N ? seed->beta[i] : 0.0;
+    kin_outputs_tangent(c.N, c.k, c.L, c.Lh, c.gamma, dgamma, D->j, D->predictionModel,
+                        gammaF_at(comp, comp->v.time), seed->gammaF, D->v, seed->v, D->omegaMeas,
+                        seed->omegaMeas, y, dy, out, dout);
+    store_outputs(tangent, D->j, dout);
+    for (int i = 1; i <= KIN_MAX_WAGONS; i++) tangent->beta[i] = dy[2 + i];   /* beta: a state */
+    return OK;
 }
 
 /* The right-hand side of the ODE y = [theta_j, x_j, y_j, beta_1 .. beta_N],
  * for the integrator in doStep and for Model Exchange (whose states are the same, with
- * beta padded to KIN_MAX_WAGONS). Returns the jack-knifed joint (kin_rates),
- * 0 if none; ydot is filled either way. */
+ * beta padded to KIN_MAX_WAGONS): kin_derivs. Returns the jack-knifed joint, 0 if
+ * none; ydot is filled either way. */
 static int derivs(ModelInstance *comp, const KinChain *c, double t, const double *y, double *ydot) {
-    double beta[KIN_MAX_WAGONS + 1] = { 0 };
-    for (int i = 1; i <= c->N; i++) beta[i] = y[2 + i];
-    KinRates r;
-    const int jackknife = kin_rates(c, gammaF_at(comp, t), beta, D->v, &r);
-    const int j = D->j;
-    /* eq. 22; the prediction model (seed 003, sec. V, Fig. 11): the measured
-       angular velocity (omega_1tacho, eq. 51) in place of the model's */
-    ydot[0] = D->predictionModel ? D->omegaMeas : r.omega[j];
-    ydot[1] = r.vel[j] * cos(y[0] + c->gamma[j]);
-    ydot[2] = r.vel[j] * sin(y[0] + c->gamma[j]);
-    for (int i = 1; i <= c->N; i++) ydot[2 + i] = r.betaDot[i];   /* eq. 16 */
-    return jackknife;
+    const KinDrive dr = drive(comp, t);
+    return kin_derivs(c, &dr, y, ydot, NULL);
 }
 
 static int rhs(double t, const double *y, double *ydot, void *user) {

@@ -9,4 +9,7 @@ typedef struct {
     int warnedSpeed;
 } ModelState;
 
+/* exact directional derivatives (fmu.h): lateral3dof.c on dual numbers */
+#define MODEL_DIRECTIONAL_DERIVATIVE 1
+
 #endif

@@ -1,5 +1,8 @@
-/* seed 004, eq. 2: the linear 3-DOF multi-axle model. See lateral3dof.h. */
+/* seed 004, eq. 2: the linear 3-DOF multi-axle model. See lateral3dof.h.
+ * Compiled twice: as C on double, and in lateral3dof_dual.cpp on a dual number
+ * (MA_REAL) for the directional derivatives. */
 #include <math.h>
+#include <stddef.h>
 
 #include "lateral3dof.h"
 
@@ -32,21 +35,21 @@ int ma_prepare(const MaVehicle *veh, MaMass *mm) {
     return 0;
 }
 
-void ma_forces(const MaVehicle *veh, double u, const double x[4], const double delta[],
-               double alpha[], double FY[]) {
-    const double wr = x[0], v = x[1];
+void ma_forces(const MaVehicle *veh, MA_REAL u, const MA_REAL x[4], const MA_REAL delta[],
+               MA_REAL alpha[], MA_REAL FY[]) {
+    const MA_REAL wr = x[0], v = x[1];
     for (int i = 1; i <= veh->n; i++) {
         alpha[i] = (v + veh->l[i] * wr) / u - delta[i];     /* beta + l_i w_r/u - delta_i */
         FY[i] = veh->k[i] * alpha[i];
     }
 }
 
-void ma_derivatives(const MaVehicle *veh, const MaMass *mm, double u, const double delta[],
-                    double Md, const double x[4], double xdot[4], double *a_y) {
-    const double wr = x[0], p = x[2], phi = x[3];
-    double alpha[MA_MAX_AXLES + 1], FY[MA_MAX_AXLES + 1];
+void ma_derivatives(const MaVehicle *veh, const MaMass *mm, MA_REAL u, const MA_REAL delta[],
+                    MA_REAL Md, const MA_REAL x[4], MA_REAL xdot[4], MA_REAL *a_y) {
+    const MA_REAL wr = x[0], p = x[2], phi = x[3];
+    MA_REAL alpha[MA_MAX_AXLES + 1], FY[MA_MAX_AXLES + 1];
     ma_forces(veh, u, x, delta, alpha, FY);
-    double sF = 0.0, sFl = 0.0, sFd = 0.0;
+    MA_REAL sF = 0.0, sFl = 0.0, sFd = 0.0;
     for (int i = 1; i <= veh->n; i++) {
         sF += FY[i];
         sFl += FY[i] * veh->l[i];
@@ -54,14 +57,35 @@ void ma_derivatives(const MaVehicle *veh, const MaMass *mm, double u, const doub
     }
     const double mh = veh->m_b * veh->h_b;
     /* eq. 2, the velocity-dependent and elastic terms moved to the right */
-    const double r0 = sF - mm->M * u * wr;                                   /* lateral */
-    const double r1 = sFl + Md - mm->sum_ml * u * wr;                        /* yaw */
-    const double r2 = sFd - veh->C_phi * p - (veh->K_phi - veh->m_b * MA_G * veh->h_b) * phi
+    const MA_REAL r0 = sF - mm->M * u * wr;                                   /* lateral */
+    const MA_REAL r1 = sFl + Md - mm->sum_ml * u * wr;                        /* yaw */
+    const MA_REAL r2 = sFd - veh->C_phi * p - (veh->K_phi - veh->m_b * MA_G * veh->h_b) * phi
                       + mh * u * wr;                                         /* roll */
-    const double vdot = mm->Minv[0][0] * r0 + mm->Minv[0][1] * r1 + mm->Minv[0][2] * r2;
+    const MA_REAL vdot = mm->Minv[0][0] * r0 + mm->Minv[0][1] * r1 + mm->Minv[0][2] * r2;
     xdot[0] = mm->Minv[1][0] * r0 + mm->Minv[1][1] * r1 + mm->Minv[1][2] * r2;
     xdot[1] = vdot;
     xdot[2] = mm->Minv[2][0] * r0 + mm->Minv[2][1] * r1 + mm->Minv[2][2] * r2;
     xdot[3] = p;                /* phi' = p (eq. 4's fourth row has the sign slipped) */
     if (a_y) *a_y = vdot + u * wr;
+}
+
+void ma_rhs(const MaVehicle *veh, const MaMass *mm, MA_REAL u, const MA_REAL delta[], MA_REAL Md,
+            const MA_REAL y[7], MA_REAL ydot[7]) {
+    ma_derivatives(veh, mm, u, delta, Md, y, ydot, NULL);
+    ydot[4] = y[0];                                  /* psi' = w_r */
+    ydot[5] = u * cos(y[4]) - y[1] * sin(y[4]);      /* the origin's velocity, ground frame */
+    ydot[6] = u * sin(y[4]) + y[1] * cos(y[4]);
+}
+
+void ma_outputs(const MaVehicle *veh, const MaMass *mm, MA_REAL u, const MA_REAL delta[], MA_REAL Md,
+                const MA_REAL y[7], MA_REAL out[MA_NOUT]) {
+    MA_REAL xdot[4], alpha[MA_MAX_AXLES + 1], FY[MA_MAX_AXLES + 1];
+    ma_derivatives(veh, mm, u, delta, Md, y, xdot, &out[MA_OUT_AY]);
+    ma_forces(veh, u, y, delta, alpha, FY);
+    ma_rhs(veh, mm, u, delta, Md, y, &out[MA_OUT_YDOT]);
+    out[MA_OUT_BETA] = y[1] / u;
+    for (int i = 1; i <= MA_MAX_AXLES; i++) {
+        out[MA_OUT_ALPHA + i - 1] = i <= veh->n ? alpha[i] : 0.0;
+        out[MA_OUT_FY + i - 1] = i <= veh->n ? FY[i] : 0.0;
+    }
 }

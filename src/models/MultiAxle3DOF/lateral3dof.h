@@ -14,6 +14,14 @@
 #ifndef LATERAL3DOF_H
 #define LATERAL3DOF_H
 
+/* The equations that depend on the state and the inputs are written on
+ * MA_REAL: double here (lateral3dof.c compiled as C), a dual number in
+ * lateral3dof_dual.cpp, which compiles the same lateral3dof.c a second time in
+ * C++ for the FMU's directional derivatives (one source of the equations). */
+#ifndef MA_REAL
+#define MA_REAL double
+#endif
+
 #define MA_MAX_AXLES 6
 #define MA_G 9.81              /* gravity in the roll equation (m_b g h_b) [m/s2] */
 
@@ -40,12 +48,34 @@ typedef struct {
 int ma_prepare(const MaVehicle *veh, MaMass *mm);
 
 /* Slip angles alpha[1..n] and side forces F_Y[1..n] (eq. 2) at speed u > 0. */
-void ma_forces(const MaVehicle *veh, double u, const double x[4], const double delta[],
-               double alpha[], double FY[]);
+void ma_forces(const MaVehicle *veh, MA_REAL u, const MA_REAL x[4], const MA_REAL delta[],
+               MA_REAL alpha[], MA_REAL FY[]);
 
 /* dx/dt for steering angles delta[1..n] (fixed axles: 0), external yaw
  * moment Md; *a_y (if not NULL) receives the lateral acceleration v' + u w_r. */
-void ma_derivatives(const MaVehicle *veh, const MaMass *mm, double u, const double delta[],
-                    double Md, const double x[4], double xdot[4], double *a_y);
+void ma_derivatives(const MaVehicle *veh, const MaMass *mm, MA_REAL u, const MA_REAL delta[],
+                    MA_REAL Md, const MA_REAL x[4], MA_REAL xdot[4], MA_REAL *a_y);
+
+/* The whole right-hand side with the heading and the path of the origin:
+ * y = [w_r, v, p, phi, psi, x, y], ydot its derivative. */
+void ma_rhs(const MaVehicle *veh, const MaMass *mm, MA_REAL u, const MA_REAL delta[], MA_REAL Md,
+            const MA_REAL y[7], MA_REAL ydot[7]);
+
+/* Every output the model computes, into out[MA_NOUT] at these indices:
+ * ydot (7), beta = v/u, a_y, alpha[1..MA_MAX_AXLES], F_Y[1..MA_MAX_AXLES]
+ * (0 beyond n). */
+enum { MA_OUT_YDOT = 0, MA_OUT_BETA = 7, MA_OUT_AY = 8, MA_OUT_ALPHA = 9,
+       MA_OUT_FY = MA_OUT_ALPHA + MA_MAX_AXLES, MA_NOUT = MA_OUT_FY + MA_MAX_AXLES };
+void ma_outputs(const MaVehicle *veh, const MaMass *mm, MA_REAL u, const MA_REAL delta[], MA_REAL Md,
+                const MA_REAL y[7], MA_REAL out[MA_NOUT]);
+
+/* ma_outputs and its derivative dout along the seed (du, ddelta, dMd, dy):
+ * lateral3dof_dual.cpp, the same equations on dual numbers */
+#ifdef __cplusplus
+extern "C"
+#endif
+void ma_outputs_tangent(const MaVehicle *veh, const MaMass *mm, double u, double du,
+                        const double delta[], const double ddelta[], double Md, double dMd,
+                        const double y[7], const double dy[7], double out[MA_NOUT], double dout[MA_NOUT]);
 
 #endif

@@ -79,41 +79,61 @@ Status model_init(ModelInstance *comp) {
     return OK;
 }
 
+/* the outputs and derivatives of ma_outputs' out[] into d: the values into the
+   model's variables, or their derivatives into the tangent of
+   model_directional_derivative (the states' own fields are not touched) */
+static void store_outputs(ModelData *d, const double out[MA_NOUT]) {
+    d->der_w_r = out[MA_OUT_YDOT + 0];
+    d->der_v = out[MA_OUT_YDOT + 1];
+    d->der_p = out[MA_OUT_YDOT + 2];
+    d->der_x = out[MA_OUT_YDOT + 5];
+    d->der_y = out[MA_OUT_YDOT + 6];
+    d->beta = out[MA_OUT_BETA];
+    d->a_y = out[MA_OUT_AY];
+    for (int i = 1; i <= MA_MAX_AXLES; i++) {
+        d->alpha[i] = out[MA_OUT_ALPHA + i - 1];
+        d->F_Y[i] = out[MA_OUT_FY + i - 1];
+    }
+}
+
 void model_outputs(ModelInstance *comp) {
     MaVehicle veh;
     MaMass mm;
     make_vehicle(comp, &veh);
     ma_prepare(&veh, &mm);
-    const double u = speed(comp);
-    double delta[MA_MAX_AXLES + 1];
+    double delta[MA_MAX_AXLES + 1], y[7], out[MA_NOUT];
     steering(comp, comp->v.time, delta);
-    const double x[4] = { D->w_r, D->v, D->p, D->phi };
-    double xdot[4], alpha[MA_MAX_AXLES + 1], FY[MA_MAX_AXLES + 1];
-    ma_derivatives(&veh, &mm, u, delta, D->M_d, x, xdot, &D->a_y);
-    ma_forces(&veh, u, x, delta, alpha, FY);
-    D->beta = D->v / u;
-    /* the derivatives of the Model Exchange states (the same right-hand side) */
-    double dx[MODEL_NX];
-    model_derivatives(comp, dx);
-    D->der_w_r = dx[0];
-    D->der_v = dx[1];
-    D->der_p = dx[2];
-    D->der_x = dx[5];
-    D->der_y = dx[6];
-    for (int i = 1; i <= MA_MAX_AXLES; i++) {
-        D->alpha[i] = i <= D->n ? alpha[i] : 0.0;
-        D->F_Y[i] = i <= D->n ? FY[i] : 0.0;
-    }
+    model_get_x(comp, y);
+    ma_outputs(&veh, &mm, speed(comp), delta, D->M_d, y, out);
+    store_outputs(D, out);
+}
+
+/* Forward mode through lateral3dof.c on dual numbers (lateral3dof_dual.cpp).
+ * The knowns act as in model_outputs: u only at or above uMin (below, the
+ * equations take the constant uMin), delta[i] only on a steerable axle. */
+Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, ModelData *tangent) {
+    MaVehicle veh;
+    MaMass mm;
+    make_vehicle(comp, &veh);
+    ma_prepare(&veh, &mm);
+    double delta[MA_MAX_AXLES + 1], ddelta[MA_MAX_AXLES + 1] = { 0 }, y[7], dy[7];
+    double out[MA_NOUT], dout[MA_NOUT];
+    steering(comp, comp->v.time, delta);
+    for (int i = 1; i <= MA_MAX_AXLES; i++) ddelta[i] = D->steerable[i] ? seed->delta[i] : 0.0;
+    model_get_x(comp, y);
+    dy[0] = seed->w_r; dy[1] = seed->v; dy[2] = seed->p; dy[3] = seed->phi;
+    dy[4] = seed->psi; dy[5] = seed->x; dy[6] = seed->y;
+    ma_outputs_tangent(&veh, &mm, speed(comp), D->u >= D->uMin ? seed->u : 0.0, delta, ddelta,
+                       D->M_d, seed->M_d, y, dy, out, dout);
+    store_outputs(tangent, dout);
+    return OK;
 }
 
 /* y = [w_r, v, p, phi, psi, x, y] */
 static int rhs(double t, const double *y, double *ydot, void *user) {
     (void)t;
     Solver *s = user;
-    ma_derivatives(&s->veh, &s->mm, s->u, s->delta, s->Md, y, ydot, NULL);
-    ydot[4] = y[0];
-    ydot[5] = s->u * cos(y[4]) - y[1] * sin(y[4]);
-    ydot[6] = s->u * sin(y[4]) + y[1] * cos(y[4]);
+    ma_rhs(&s->veh, &s->mm, s->u, s->delta, s->Md, y, ydot);
     return 0;
 }
 

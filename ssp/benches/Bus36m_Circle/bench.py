@@ -34,6 +34,7 @@ class Bound:
     explain: str = ""
     figure: str = ""
     levels: tuple = ()      # where the plots draw it (dashed), in the KPI's unit
+    edges: tuple = ()       # the bound's edges, where not its levels (Kpi.bound: the co-simulation error's margin)
 
     def label(self, unit):
         return f"paper: {self.paper} {unit} ({self.source})"
@@ -56,7 +57,7 @@ ABOUT6 = Bound(
     "paper's 6 m. It also depends on the manoeuvre: A6's deviation is still growing when the bus leaves "
     "the one full circle (the deviation figure), so a longer circle would give more. What would change "
     "it: the paper's vehicle data and manoeuvre. Steered, the paper's bound (< 1.0 m) does not depend on them and is met (guidedForceMin).",
-    "sensitivity_A6.png", (6.0,))
+    "sensitivity_A6.png", (6.0,), (5.0, 7.0))
 STEERED = Bound("< 1.0 (the whole steered system)", DEV_SRC, lambda d: d < 1.0,
                 "The paper's bound is for its whole steering system (A4, A6 guided, A3, A5 force-minimising) "
                 "on its own bus; ours is estimated (Bus36m.ssv). The deviation depends on the guidance's "
@@ -108,7 +109,7 @@ def graded_kpi(name, value, unit, bounds, quantity, source=""):
         return Kpi(name, value, unit, "", source)
     if isinstance(b, Bound):
         return Kpi(name, value, unit, b.paper, b.source, bool(b.rule(value)), explain=b.explain,
-                   explain_figure=b.figure)
+                   explain_figure=b.figure, bound=b.edges or b.levels or None)
     return Kpi(name, value, unit, b[0], b[2] if len(b) > 2 else source, ungraded=b[1])
 
 

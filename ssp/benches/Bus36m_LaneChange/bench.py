@@ -20,7 +20,7 @@ def kpis(r):
     extra = [
         Kpi("front axle A1: max |lateral error| against what the lane allows", e, "m",
             f"< (lane 3.5 m - body 2.55 m) / 2 = {allowed:.3f}", "ours: the lane's geometry (seed 000 gives none)",
-            e < allowed, explain="The bound is the lane's geometry, not a paper's figure. The error depends on "
+            e < allowed, bound=allowed, explain="The bound is the lane's geometry, not a paper's figure. The error depends on "
                                  "the road-follow driver's look-ahead (Driver.tNear, tFar) and steering-rate "
                                  "limit at 50 km/h; a longer look-ahead or a longer lane change would lower it."),
         Kpi("A4 overshoot beyond the 3.5 m offset", kpi.overshoot(r["Bus.yAxle[4]"], OFFSET), "m"),

@@ -47,7 +47,7 @@ def study(r, out):
             name = "ZS" if zs else "FWS"
             kpis.append(Kpi(f"{name} at {u:g} m/s: side-slip after 10 s", rr["Vehicle.beta"][-1], "rad",
                             "0 (zero side-slip steering)" if zs else "", "seed 004, eq. 3",
-                            abs(rr["Vehicle.beta"][-1]) < 1e-6 if zs else None,
+                            abs(rr["Vehicle.beta"][-1]) < 1e-6 if zs else None, bound=(-1e-6, 1e-6) if zs else None,
                             explain="Zero side-slip steering makes the steady side-slip exactly zero in the linear "
                                     "model (seed 004, eq. 3): a residual means the run did not reach the steady "
                                     "state in 10 s or the gain K(u) is wrong."))

@@ -33,7 +33,7 @@ def kpis(r):
         Kpi(f"oscillations above {damping.OSCILLATION_DEG:g} deg after the lane change", k.oscillations, "-"),
         Kpi(f"settling below {damping.SETTLED_DEG:g} deg after the lane change (no thesis claim)", k.settling, "s"),
         Kpi("max damping request", k.peak_pct, "%", "within 3.5-34", "seed 001, 5.1.1",
-            (3.5 - 1e-9 <= k.min_pct and k.peak_pct <= 34 + 1e-9) if k.peak_pct > 0 else None,
+            (3.5 - 1e-9 <= k.min_pct and k.peak_pct <= 34 + 1e-9) if k.peak_pct > 0 else None, bound=34.0,
             ungraded="" if k.peak_pct > 0 else "no damping (variant none): the damper is off, the bound is a "
                                                "damping function's",
             explain="The floor (pctFloor 3.5 %) and the cap (pctMax 34 %) bound every request of the controller "

@@ -29,11 +29,11 @@ def kpis(r):
         Kpi("rear axle P0: steady radius", R0, "m", f"sqrt(R^2 - L0^2) = {math.sqrt(R**2 - L0**2):.3f}",
             "geometry, front axle on R = 17.5 m"),
         Kpi("wagon axle P1: steady radius", R1, "m", f"sqrt(R0^2 + Lh1^2 - L1^2) = {R1_kin:.3f}",
-            "seed 003 kinematics, steady state", abs(R1 - R1_kin) < 0.01,
+            "seed 003 kinematics, steady state", abs(R1 - R1_kin) < 0.01, bound=(R1_kin - 0.01, R1_kin + 0.01),
             explain="A closed form of the kinematic model: a failure is a bug of BusKinematics, or a run too short "
                     "to reach the steady state on the circle (the fit uses 60 % to 100 % of the circle)."),
         Kpi("max |joint angle beta1|", kpi.peak(r["Bus.beta[1]"]) * DEG, "deg", "< 54 (mechanical limit)",
-            "seed 003 Table I", kpi.peak(r["Bus.beta[1]"]) * DEG < 54,
+            "seed 003 Table I", kpi.peak(r["Bus.beta[1]"]) * DEG < 54, bound=54.0,
             explain="The joint's mechanical limit: beyond it the bus would jack-knife; on this circle it depends on "
                     "the radius (17.5 m) and the Urbino's geometry (Table I)."),
     ]

@@ -46,7 +46,7 @@ def _refuse_inputs(out, bench, design):
 
 def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep", stop_time=None, step=None,
           fixed=None, keep_series=False, scheduler=None, workers=None, client=None, kpi=None, plot=True,
-          progress=sys.stderr, argv=None, retry_failed=False, fmi=None):
+          progress=sys.stderr, argv=None, retry_failed=False, fmi=None, error_every=0):
     """Run the cases of a bench as Dask tasks; returns a SweepResult (its table
     a pyarrow.Table). grid: {name: [values] or "start:stop:step"}; variants:
     [[names]] (each list an axis) or [names] (one axis); design: a design file;
@@ -57,7 +57,10 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
     local cluster of `workers` processes, default one per core). fmi: "2"
     or "3", every FMU's build of that FMI version (the bench's pack with them,
     artibus.bench.ssp.ssp_path: its cases are other cases, their keys hash the
-    FMUs), None as the bench's .ssd names them. See the module's docstring."""
+    FMUs), None as the bench's .ssd names them. error_every: every n-th case (by its
+    index; 0: none) run again with its continuous components' steps halved, each KPI's
+    co-simulation error a column "KPI [unit] cosim error" (worker.error_columns, issue 44).
+    See the module's docstring."""
     axes = []
     for name, values in (grid or {}).items():
         if isinstance(values, str):
@@ -83,6 +86,8 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
         raise ArtibusError(f"--step {step}: must be > 0")
     if stop_time is not None and not stop_time > 0:
         raise ArtibusError(f"--stop-time {stop_time}: must be > 0")
+    if isinstance(error_every, bool) or not isinstance(error_every, int) or error_every < 0:
+        raise ArtibusError(f"--error-every {error_every}: a whole number >= 0 (every n-th case; 0: none)")
     if fmi is not None:
         from artibus.bench import ssp as ssp_mod
         bench = ssp_mod.ssp_path(bench, fmi)
@@ -90,6 +95,8 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
     all_cases = build_cases(info, d, where)
     fixed = {k: typed_value(info, k, v, "--set") for k, v in (fixed or {}).items()}
     settings = {"stop_time": stop_time, "step": step, "fixed": fixed}
+    if error_every:           # (a case with its error estimate is another case; without, the keys as before)
+        settings["error_every"] = error_every
     keys = [case_key(info, c, settings) for c in all_cases]
     out = Path(out)
     _refuse_inputs(out, bench, design)
@@ -122,6 +129,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                 seen.add(keys[i])
                 unique.append(i)
         manifest = {"bench": info.name, "run": str(bench), "method": d.method, "seed": d.seed, "stop_time": stop_time, "step": step,
+                    "error_every": error_every,
                     "fixed": fixed,
                     "axes": [[n, [str(v) for v in vs]] for n, vs in d.axes] if d.method == "grid" else [],
                     "parameters": sorted({k for c in all_cases for k in c}), "keys": keys,
@@ -149,6 +157,7 @@ def sweep(bench, grid=None, variants=None, design=None, cases=None, out="sweep",
                     items = chunks.next()
                     f = client.submit(run_cases, info.name, info.ssp_hash, str(info.ssp), data,
                                       [(keys[i], i, all_cases[i]) for i in items], fixed, stop_time, step, keep_series,
+                                      error_every,
                                       key=f"artibus-cases-{keys[items[0]]}-{len(items)}-{tries[items[0]]}", pure=False, retries=0)
                     running[f] = items
                     return f

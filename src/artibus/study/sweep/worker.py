@@ -150,8 +150,9 @@ def _simulate(ssp, overrides, stop_time, step, content=None):
             sim.close()
 
 
-def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_time, step, keep_series):
-    """One case on a worker: (row, series or None). A failure is a row with its error."""
+def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_time, step, keep_series, error=False):
+    """One case on a worker: (row, series or None). A failure is a row with its error.
+    ``error``: the case's KPIs' co-simulation error estimated too (error_columns)."""
     from artibus.bench import script, ssp as ssp_mod
     t0 = time.perf_counter()
     row = {"status": STATUS_OK, "error": ""}
@@ -171,6 +172,8 @@ def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_ti
                 row[f"{k.name} [{k.unit}]"] = float(v) if v is not None else math.nan
         except Exception as e:
             raise ArtibusError(f"KPI: {type(e).__name__}: {e}") from None
+        if error:
+            row.update(error_columns(bench_name, ssp, overrides, stop, step, row))
         if keep_series:
             series = {n: r[n] for n in r.names}
     except KeyboardInterrupt:
@@ -183,16 +186,38 @@ def run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_ti
     return row, series
 
 
-def run_cases(bench_name, content_hash, ssp_path, ssp_bytes, cases, fixed, stop_time, step, keep_series):
+def error_columns(bench_name, ssp, overrides, stop_time, step, row):
+    """The co-simulation error of each KPI of a case's ``row`` (issue 44): the case run
+    again with the continuous components' steps halved (artibus.report.cosim_error,
+    HALVED: the sampled controllers at their periods), 2 |K(h) - K(h/2)|, a column
+    "KPI [unit] cosim error" each (NaN where either run has no number)."""
+    from artibus.bench import script
+    from artibus.report import cosim_error
+    with cosim_error._configured(cosim_error.HALVED)(ssp, step=step, overrides=overrides) as sim:
+        half = {f"{k.name} [{k.unit}]": cosim_error.number(k.value)
+                for k in script.kpis(bench_name, sim.run(stop_time=stop_time))}
+    out = {}
+    for col, h2 in half.items():
+        v = cosim_error.number(row.get(col))
+        out[f"{col} {ERROR_SUFFIX}"] = 2 * abs(v - h2) if v is not None and h2 is not None else math.nan
+    return out
+
+
+ERROR_SUFFIX = "cosim error"      # a KPI's column "NAME [unit]" and its error's "NAME [unit] cosim error"
+
+
+def run_cases(bench_name, content_hash, ssp_path, ssp_bytes, cases, fixed, stop_time, step, keep_series,
+              error_every=0):
     """A task: several cases [(key, index, case)] in turn on one worker (run_case
     each). For each its table row (_case_row), its case file's bytes and its time
     series' (or None), both Parquet made here (the client only writes them), and
-    the CPU time it took (s)."""
+    the CPU time it took (s). ``error_every``: every n-th case (by its index) with its
+    KPIs' co-simulation errors (error_columns; 0: none)."""
     out = []
     for key, index, case in cases:
         cpu = time.thread_time()
         row, series = run_case(bench_name, content_hash, ssp_path, ssp_bytes, case, fixed, stop_time, step,
-                               keep_series)
+                               keep_series, error=bool(error_every) and index % error_every == 0)
         row = _case_row(key, index, case, row)
         out.append((row, _parquet_bytes(_table([row])),
                     _parquet_bytes(_series_table(series)) if series is not None else None,
