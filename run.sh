@@ -29,6 +29,11 @@ done
 bash scripts/setup.sh --toolchains                  # the Python package, SUNDIALS, the linux FMUs
 t1=$SECONDS
 .venv/bin/artibus demo --report out/demo          # first: the index links it
+# the stability maps (issue 43; linear models: seed 001's sway mode over 50-130 km/h, seed
+# 004's Fig. 4), before the benches for the index's link; at 50, 90, 130 km/h without the friction
+# map: about 11 s (every 20 km/h: 27 s)
+echo "run.sh: the stability maps into out/modes/"
+.venv/bin/artibus modes -o out/modes --speeds 50:130:40 --no-friction
 t2=$SECONDS
 echo "run.sh: every bench with its report into out/ (about 2 min)"
 .venv/bin/artibus run --all --report out
@@ -45,5 +50,5 @@ if [ -n "$failed" ]; then
   exit 1
 fi
 bash scripts/setup.sh --platforms-built
-echo "run.sh: set-up $((t1 - t0)) s, demo $((t2 - t1)) s, benches $((t3 - t2)) s," \
+echo "run.sh: set-up $((t1 - t0)) s, demo and stability maps $((t2 - t1)) s, benches $((t3 - t2)) s," \
   "the other platforms' binaries $((SECONDS - t3)) s more; open out/index.html"

@@ -73,6 +73,24 @@ def test_index_summary_has_every_bench_with_its_marks(site):
     assert f"artibus: {__version__}" in meta and commit in meta and "platform: " in meta and "UTC" in meta
 
 
+def test_index_links_the_stability_maps_only_when_made(tmp_path):
+    """issue 43: ./run.sh makes the stability maps' page into out/modes/ (`artibus modes`); the
+    index links it as "Stability maps (linear models)" when OUT/modes/index.html is there, and
+    has no such link when it is not (`run --all --report` alone does not make it)."""
+    def links():
+        return {a.text_content(): a.get("href") for a in _doc(tmp_path / "index.html").xpath("//a")}
+
+    report.write_index(tmp_path, [], metadata={"date": "today"})
+    assert "modes/index.html" not in links().values()
+    (tmp_path / "modes").mkdir()
+    (tmp_path / "modes" / "index.html").write_text("<html><body>maps</body></html>")
+    report.write_index(tmp_path, [], [("demo/index.html", "Demo", "the demo")], metadata={"date": "today"})
+    got = links()
+    assert got.get("Stability maps (linear models)") == "modes/index.html"
+    assert got.get("Demo") == "demo/index.html"         # the other pages kept
+    assert list(got.values()).count("modes/index.html") == 1
+
+
 def test_a_failing_kpi_is_marked_on_the_index(tmp_path):
     """A ✘ is counted, shown first and linked from the index to its explanation
     on the bench's page; a calibration target and a paper figure of another

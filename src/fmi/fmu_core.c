@@ -735,7 +735,7 @@ static Status dd_prepare(ModelInstance *comp, const char *fn, const unsigned unk
                          const VarInfo ***ku) {
     if ((nK > 0 && (!knowns || !seed)) || (nU > 0 && (!unknowns || !sensitivity)))
         return log_error(comp, "%s: an argument array is NULL", fn);
-    if (core_refresh(comp) > Warning) return Error;
+    if (me_ready(comp) > Warning) return Error;    /* the model initialised; its outputs not needed */
     *ku = layer_calloc(comp, nK + nU + 1, sizeof **ku);
     if (!*ku) return log_error(comp, "%s: out of memory", fn);
     return dd_variables(comp, fn, unknowns, nU, knowns, nK, *ku);

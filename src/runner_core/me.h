@@ -66,6 +66,9 @@ typedef struct {
     fmi3SetFloat64TYPE *fmi3SetFloat64;
     fmi3GetNumberOfContinuousStatesTYPE *fmi3GetNumberOfContinuousStates;
     fmi3GetNumberOfEventIndicatorsTYPE *fmi3GetNumberOfEventIndicators;
+    /* the Jacobian's columns, where the FMU provides them (jacobian below) */
+    fmi2GetDirectionalDerivativeTYPE *fmi2GetDirectionalDerivative;
+    fmi3GetDirectionalDerivativeTYPE *fmi3GetDirectionalDerivative;
 } ac_me_calls;
 
 typedef struct {
@@ -76,6 +79,11 @@ typedef struct {
     int adams;                      /* 1: Adams-Moulton, 0: BDF */
     double rtol;                    /* relative tolerance; absolute: rtol * each state's nominal */
     int completed_step;             /* needsCompletedIntegratorStep */
+    int jacobian;                   /* 1: CVODE's Jacobian from the FMU's directional derivatives
+                                     * (providesDirectionalDerivative(s): FMI 2.0.4 3.2.2 / FMI 3.0
+                                     * 2.2.11), the value references below; 0: CVODE's difference quotients */
+    const unsigned int *x_vrs;      /* nx: the continuous states' value references, in the FMU's order */
+    const unsigned int *dx_vrs;     /* nx: their derivatives' */
     int stop_at_points;             /* 1: CVODE stops at each communication point (inputs may change
                                      * there); 0: it may step beyond and interpolate back (no inputs) */
     double time;                    /* the FMU's time: the start time, then where it is */

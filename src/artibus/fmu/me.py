@@ -11,7 +11,8 @@ here, and to the stepping core its functions' addresses with the facade as the c
 (artibus.runner.unit._RawCalls). Relative tolerance: the one given (--relative-tolerance),
 else the default experiment's, else DEFAULT_TOLERANCE (FMPy's simulate_fmu takes the same);
 absolute: that times each state's nominal value."""
-from ctypes import byref, c_double, c_int, c_void_p, cast
+from pathlib import Path
+from ctypes import byref, c_double, c_int, c_uint, c_void_p, cast
 
 from fmpy.fmi1 import FMICallException
 
@@ -39,7 +40,20 @@ _FMI2 = ("SetTime", "SetContinuousStates", "GetContinuousStates", "GetDerivative
 _FMI3 = ("SetTime", "SetContinuousStates", "GetContinuousStates", "GetContinuousStateDerivatives",
          "GetEventIndicators", "GetNominalsOfContinuousStates", "CompletedIntegratorStep", "EnterEventMode",
          "UpdateDiscreteStates", "EnterContinuousTimeMode", "ExitInitializationMode", "GetFloat64", "SetFloat64",
-         "GetNumberOfContinuousStates", "GetNumberOfEventIndicators")
+         "GetNumberOfContinuousStates", "GetNumberOfEventIndicators", "GetDirectionalDerivative")
+_FMI2 += ("GetDirectionalDerivative",)
+#: functions an FMU may lack (FMI 3.0's sizes after the structural parameters; the Jacobian's columns)
+_OPTIONAL = ("GetNumberOfContinuousStates", "GetNumberOfEventIndicators", "GetDirectionalDerivative")
+
+
+def _fmi3_provides(unzipped):
+    """FMI 3.0's ModelExchange providesDirectionalDerivatives (FMI 3.0 3.3.1), which FMPy 0.3
+    reads under FMI 2.0's name only (and so never finds)"""
+    from lxml import etree
+    if unzipped is None:
+        return False
+    me = etree.parse(str(Path(unzipped) / "modelDescription.xml")).find("ModelExchange")
+    return me is not None and me.get("providesDirectionalDerivatives") == "true"
 
 
 def me_library():
@@ -80,10 +94,11 @@ class Facade:
         names = _FMI3 if fmi == 3 else _FMI2
         for name in names:
             f = getattr(slave.dll, f"fmi{fmi}{name}", None)
-            if f is None and name not in ("GetNumberOfContinuousStates", "GetNumberOfEventIndicators"):
+            if f is None and name not in _OPTIONAL:
                 raise ArtibusError(f"{model.modelName}: its binary lacks fmi{fmi}{name} (Model Exchange)")
             setattr(self.calls, f"fmi{fmi}{name}", cast(f, c_void_p).value if f is not None else None)
         me = model.modelExchange
+        self.unzipped = getattr(slave, "unzipDirectory", None)
         self.struct = s = struct("ac_me")()
         s.component, s.fmi, s.calls = slave.component, fmi, cast(byref(self.calls), c_void_p).value
         s.adams, s.rtol, s.time = int(bool(adams)), tolerance, start_time
@@ -91,6 +106,7 @@ class Facade:
         s.stop_at_points = 1                  # (free_running: an FMU whose inputs never change)
         s.nx = model.numberOfContinuousStates or 0
         s.nz = model.numberOfEventIndicators or 0
+        self._jacobian(model, fmi)
         self.component = cast(byref(s), c_void_p).value
         lib = self.lib
         if fmi == 3:
@@ -104,6 +120,35 @@ class Facade:
                               "getBooleanStatus": _address(lib, "artibus_me_get_boolean_status"),
                               "getRealStatus": _address(lib, "artibus_me_get_real_status")}
         self.exit_function = _address(lib, "artibus_me_exit_initialization")
+
+    def _jacobian(self, model, fmi):
+        """CVODE's Jacobian from the FMU's directional derivatives (me.c's jac) where it provides
+        them (providesDirectionalDerivative: FMI 2.0.4 3.3.1; providesDirectionalDerivatives: FMI 3.0
+        3.3.1) and names each derivative's state (its ``derivative`` attribute, scalars, as many as
+        numberOfContinuousStates); else CVODE's difference quotients, as before."""
+        me, s = model.modelExchange, self.struct
+        self.jacobian_available = False
+        provides = getattr(me, "providesDirectionalDerivative", False) or (fmi == 3 and _fmi3_provides(self.unzipped))
+        ders = [d.variable for d in model.derivatives]
+        states = [getattr(v, "derivative", None) for v in ders]
+        if (not provides or not ders or len(ders) != s.nx or getattr(self.calls, f"fmi{fmi}GetDirectionalDerivative") is None
+                or any(x is None or x.causality == "independent" or getattr(x, "dimensions", None)
+                       or getattr(v, "dimensions", None) for x, v in zip(states, ders))):
+            return
+        self._vrs = ((c_uint * len(ders))(*[x.valueReference for x in states]),
+                     (c_uint * len(ders))(*[v.valueReference for v in ders]))
+        s.x_vrs, s.dx_vrs = (cast(a, c_void_p).value for a in self._vrs)
+        self.jacobian_available = True
+
+    def use_jacobian(self, on=True):
+        """CVODE's Jacobian from the FMU's directional derivatives (where it provides them) instead
+        of CVODE's difference quotients; before the initialisation's end, where CVODE is set up.
+        Off by default: on our plants a column by forward-mode dual numbers costs about 2.3 right-hand
+        sides, so Bus36m_Circle's BusDynamics runs 15 % slower with it (benchmarks/suite.py, 7.)"""
+        if on and not self.jacobian_available:
+            raise ArtibusError("Model Exchange: this FMU provides no directional derivatives of its "
+                               "state derivatives by its states (providesDirectionalDerivative)")
+        self.struct.jacobian = int(bool(on))
 
     def use_method(self, method):
         """CVODE's linear multistep method: "bdf" (backward differentiation, for stiff models:

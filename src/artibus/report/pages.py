@@ -417,13 +417,23 @@ def headline(kpis, n=5):
     return (judged + paper + rest)[:max(n, sum(1 for k in judged if not k.passed))]
 
 
+MODES_PAGE = "modes/index.html"     # issue 43: `artibus modes -o OUT/modes` (artibus.report.modes)
+MODES_TITLE = "Stability maps (linear models)"
+MODES_WHAT = ("seed 001's sway mode over speed with each damping function (damping ratio, root locus), "
+              "seed 004's Fig. 4 checks: FWS against zero side-slip MAS")
+
+
 def write_index(out_dir, summary, pages=(), metadata=None):
     """out_dir/index.html: a summary of every bench (headline KPIs against the
     paper with pass/fail, a thumbnail, a link to its page), links to further
     pages ([(relative href, title, what)], e.g. the comparison page), the run's
-    metadata; summary.csv beside it (every KPI with its unit and its co-simulation error)."""
+    metadata; summary.csv beside it (every KPI with its unit and its co-simulation error).
+    The stability maps' page is linked when out_dir/modes/index.html is there (``artibus modes
+    -o OUT/modes``, made by ./run.sh; `run --all` does not make it, being slow enough)."""
     out_dir = Path(out_dir)
     meta = metadata or run_metadata()
+    if (out_dir / MODES_PAGE).is_file() and MODES_PAGE not in (h for h, _, _ in pages):
+        pages = [*pages, (MODES_PAGE, MODES_TITLE, MODES_WHAT)]
     rows, csv_rows = [], []
     total_pass = total_fail = 0
     for name, d, kpis in summary:
