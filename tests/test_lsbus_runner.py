@@ -17,6 +17,7 @@ What is expected comes from elsewhere, computed here:
 """
 import math
 import struct
+from pathlib import Path
 
 import cantools
 import pytest
@@ -502,3 +503,51 @@ def test_an_fmu_instantiated_only_once_per_process_is_not_two_nodes(tmp_path):
     nodes = {"ecu1": (copy, {"module": 1}), "ecu2": (copy, {"module": 2})}
     with pytest.raises(LsBusError, match=r"FMU ecu2 and ecu1 are one FMU, which says canBeInstantiatedOnlyOnce"):
         Network(nodes)
+
+
+def operations(buf):
+    """[(op code, payload bytes)] of an FMI-LS-BUS buffer (4_2 operations: OP Code u32, Length u32
+    counting the whole operation, then its arguments)"""
+    out, pos = [], 0
+    while pos < len(buf):
+        code, length = struct.unpack_from("<II", buf, pos)
+        out.append((code, bytes(buf[pos + 8:pos + length])))
+        pos += length
+    return out
+
+
+def test_nodes_sending_as_the_standards_example_node_get_each_confirm_at_the_closed_form_time():
+    """Our nodes in the Tx clock's triggered form (as the fmi-ls-bus example node: an output
+    triggered Tx clock, a Configuration at the start, then Transmits) on CanBus with wire time,
+    run by our master: each node's Configuration (OP Code 0x40) reaches the bus at t = 0; each
+    Transmit arrives at the other node at the tick plus the wire times of the frames before it
+    by identifier (as the periodic form's, test above), and its sender gets one Confirm (4_4_1_can.adoc,
+    Confirm: OP Code 0x20, Length 12, the frame's ID) at that same time"""
+    triggered = Path(fmu3("CanBus")).parent / "lsbus-triggered"
+    nodes = {"sensors": (triggered / "SteeringSensors_LSBUS_Triggered.fmu", {}),
+             "ecu": (triggered / "SteeringECU_LSBUS_Triggered.fmu", {"module": 1})}
+    n_ticks = 12
+    with Network(nodes, bus=(fmu3("CanBus"), {"nNodes": 2})) as net:
+        net.run(n_ticks * TS, inputs, {"ecu": list(OUTS)})
+        frames = net.frames
+    to_bus = [(t, src, operations(d)) for t, src, dst, _, d in frames if dst == "bus"]
+    for who in nodes:
+        first = [ops for t, src, ops in to_bus if src == who and t == 0.0]
+        assert any(code == 0x40 for ops in first for code, _ in ops), who        # Configuration first
+    from_bus = [(t, dst, code, p) for t, src, dst, _, d in frames if src == "bus" for code, p in operations(d)]
+    checked = 0
+    for k in range(n_ticks):
+        sent = sorted((struct.unpack_from("<I", p)[0], p[8:8 + struct.unpack_from("<H", p, 6)[0]], src)
+                      for t, src, ops in to_bus if abs(t - k * TS) < 1e-12 for code, p in ops if code == 0x10)
+        t = k * TS
+        for i, d, src in sent:                       # arbitration: lowest identifier first
+            t += wire_time(i, d)
+            other = "ecu" if src == "sensors" else "sensors"
+            during = [x for x in from_bus if k * TS < x[0] < (k + 1) * TS and struct.unpack_from("<I", x[3])[0] == i]
+            got = [x for x in during if x[1] == other and x[2] == 0x10]
+            assert len(got) == 1 and got[0][0] == pytest.approx(t, abs=1e-12), (k, hex(i), got)
+            confirms = [x for x in during if x[1] == src and x[2] == 0x20]
+            assert len(confirms) == 1 and len(confirms[0][3]) == 4, (k, hex(i), confirms)   # Length 12: the ID
+            assert confirms[0][0] == pytest.approx(t, abs=1e-12), (k, hex(i))
+            checked += 1
+    assert checked >= 5 * (n_ticks - 1)              # the sensors' four frames and the ECU's, every tick
