@@ -1,3 +1,3 @@
-from artibus.cli import main
+from artibus.cli import console
 
-raise SystemExit(main())
+console()
