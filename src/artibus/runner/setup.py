@@ -159,13 +159,7 @@ class _Setup:
             if not (_in_core(va) and _in_core(vb)):
                 self._typed_link(c, label, a, va, b, vb)
                 continue
-            if c.mapping is not None:
-                raise ArtibusError(f"{label}: a {c.mapping[0]}MappingTransformation on Real variables "
-                                   f"(a LinearTransformation applies to them)")
-            if c.factor != 1.0 or c.offset != 0.0:
-                f, o = c.factor, c.offset
-            else:
-                f, o = unit_conversion(a.fmu.md, va, b.fmu.md, vb, label)
+            f, o = _real_factor(c, label, a, va, b, vb)
             if vb in b.inputs:
                 raise ArtibusError(f"{label}: input {c.end[0]}.{c.end[1]} is connected twice")
             self.links.append(Link(a, a.output_index(va), b, b.input_index(vb), f, o, f"{c.end[0]}.{c.end[1]}", c))
@@ -427,17 +421,21 @@ def _in_core(v):
     return v.type in ("Real", "Float64") and not v.shape
 
 
-def _real_conversion(c, label, a, va, b, vb):
-    """The conversion of one value of a Real array connection (each element's): the connection's
-    LinearTransformation (SSP 1.0 5.3.4.1: factor and offset), else the units' conversion
-    (unit_conversion), as a scalar Real connection has it; None where it is the identity."""
+def _real_factor(c, label, a, va, b, vb):
+    """(factor, offset) of a Real connection: its LinearTransformation (SSP 1.0 5.3.4.1), else
+    the units' conversion (unit_conversion); a MappingTransformation is refused."""
     if c.mapping is not None:
         raise ArtibusError(f"{label}: a {c.mapping[0]}MappingTransformation on Real variables "
                            f"(a LinearTransformation applies to them)")
     if c.factor != 1.0 or c.offset != 0.0:
-        f, o = c.factor, c.offset
-    else:
-        f, o = unit_conversion(a.fmu.md, va, b.fmu.md, vb, label)
+        return c.factor, c.offset
+    return unit_conversion(a.fmu.md, va, b.fmu.md, vb, label)
+
+
+def _real_conversion(c, label, a, va, b, vb):
+    """The conversion of one value of a Real array connection (each element's), as a scalar Real
+    connection has it (_real_factor); None where it is the identity."""
+    f, o = _real_factor(c, label, a, va, b, vb)
     return None if f == 1.0 and o == 0.0 else (lambda x: f * x + o)
 
 
