@@ -294,6 +294,56 @@ def test_the_plants_say_they_provide_them(plant, version):
             assert root.find(kind).get(a) == "true", (kind, a)
 
 
+@pytest.mark.parametrize("version", (2, 3))
+def test_jacobian_columns_follow_every_change_of_the_point(version, tmp_path):
+    """BusDynamics answers a column of the Jacobian at a point it has already differentiated
+    from what it computed there (an importer asks a column per state): every answer still
+    equals the finite differences at the point as it is now. At one point: the derivatives
+    alone, then derivatives and outputs; a new input value at the same states; new states; the
+    time moved; a seed of 2.5 (2.5 times the column) and a seed on two states at once (the sum
+    of the two columns: J is linear)."""
+    p = Plant("BusDynamics", version, True, tmp_path)
+    try:
+        ders = [d.variable for d in p.md.derivatives]
+        all_unknowns = p.unknowns
+        point = p.random_point(np.random.default_rng(7))
+
+        def check(unknowns, why):
+            p.unknowns = unknowns
+            D, scale = p.finite_differences(point)
+            J = p.jacobian()
+            ok, _ = _check(J, D, scale)
+            assert ok.all(), f"{why}: {np.count_nonzero(~ok)} entries off"
+            return J
+
+        p.set_point(point)
+        J_before = check(ders, "the derivatives alone")
+        check(all_unknowns, "derivatives and outputs at the same point")
+        delta = next(i for i, v in enumerate(p.knowns) if v.name == "delta[1]")
+        point[delta] += 0.05
+        p.set_point(point)
+        J_after = check(ders, "a new steering angle")
+        assert np.abs(J_after - J_before).max() > 1e-3 * np.abs(J_before).max()
+        point[:len(p.states)] = p.random_point(np.random.default_rng(8))[:len(p.states)]
+        p.set_point(point)
+        check(all_unknowns, "new states")
+        (p.fmu.setTime if version == 2 else p.fmu.setTime)(1.25)
+        p.set_point(point)
+        J = check(ders, "the time moved")
+        uu = [v.valueReference for v in ders]
+        ku = [v.valueReference for v in p.knowns]
+        i, j = 3, len(p.states) // 2 + 3           # the yaw angle of module 2, the yaw rate of module 2
+        seed = [0.0] * len(ku)
+        seed[i] = 2.5
+        np.testing.assert_allclose(p.fmu.getDirectionalDerivative(uu, ku, seed), 2.5 * J[:, i], rtol=1e-14, atol=0)
+        seed[j] = 1.0
+        np.testing.assert_allclose(p.fmu.getDirectionalDerivative(uu, ku, seed), 2.5 * J[:, i] + J[:, j],
+                                   rtol=1e-12, atol=1e-12 * np.abs(J).max())
+    finally:
+        p.unknowns = all_unknowns
+        p.close()
+
+
 @pytest.mark.parametrize("plant", PLANTS)
 def test_adjoint_derivative_is_the_transpose(plant, tmp_path):
     """fmi3GetAdjointDerivative: seed^T J for a random seed over the unknowns, J from the

@@ -353,7 +353,8 @@ def test_cli_writes_mat_csv_and_bode_plot(tmp_path):
     (["BusDynamics", "--ssv", "Scania18m", "--set", "psi_start[2]=2.0", "--inputs", "delta[1]"],
      ["BusDynamics", "jack-knifed", "artAngle[1]"]),
     (["MultiAxle3DOF", "--at", "nan"], ["--at nan", "finite"]),
-    (["Scania18m_OpenLoop", "--at", "1"], ["Scania18m_OpenLoop", "--at", "a bench's operating point"]),
+    (["MultiAxle3DOF", "--at", "1", "--steady"], ["--at TIME or --steady, not both"]),
+    (["Scania18m_OpenLoop", "--at", "-1"], ["Scania18m_OpenLoop", "--at -1 s", "before", "start time"]),
 ])
 def test_bad_input_is_one_line_naming_the_fmu_and_the_variable(args, words):
     if not args[0].startswith("Scania"):

@@ -247,11 +247,10 @@ def test_the_fmus_jacobian_in_cvode_gives_the_same_run(bench, fmi):
     from artibus.bench import script
     from artibus.runner import Simulation
     runs, counts = [], []
-    for jac in (False, True):
-        with Simulation(bench, fmi=fmi, fmi_type="me") as sim:
+    for jac in (False, True):          # the Jacobian asked as `run --me-jacobian` asks it
+        with Simulation(bench, fmi=fmi, fmi_type="me", me_jacobian=jac) as sim:
             facade = next(u.fmu.calls.facade for u in sim.units if u.fmu.interface == "me")
             assert facade.jacobian_available
-            facade.use_jacobian(jac)
             r = sim.run()
             runs.append(r)
             counts.append(facade.counts())
@@ -283,3 +282,33 @@ def test_use_jacobian_of_an_fmu_without_directional_derivatives_is_refused():
         assert not facade.jacobian_available
         with pytest.raises(ArtibusError, match="provides no directional derivatives"):
             facade.use_jacobian(True)
+
+
+def test_simulate_me_jacobian_runs_alone_and_refuses_an_fmu_without_derivatives(tmp_path):
+    """`artibus simulate BusDynamics --fmi-type me --me-jacobian` (its test steering on) equals
+    the run with CVODE's difference quotients within the integration's tolerance (every column
+    within 1e-4 of its peak at rtol 1e-6); an FMU without directional derivatives (the
+    Reference-FMUs' VanDerPol) is refused in one line naming the file, no traceback"""
+    import subprocess
+    import sys
+    runs = []
+    for flag in ([], ["--me-jacobian"]):
+        out = tmp_path / f"bus{len(flag)}.csv"
+        subprocess.run([sys.executable, "-m", "artibus", "simulate", "BusDynamics", "--fmi-type", "me", *flag,
+                        "--set", "testSteerAmp=0.05", "--stop-time", "8", "-o", str(out)], check=True,
+                       capture_output=True)
+        runs.append(np.genfromtxt(out, delimiter=",", names=True))
+    a, b = runs
+    assert a.dtype.names == b.dtype.names and len(a) == len(b) == 801
+    for n in a.dtype.names:
+        assert np.abs(a[n] - b[n]).max() <= 1e-4 * max(np.abs(a[n]).max(), 1e-3), n
+    assert np.abs(a["psi1"]).max() > 0.01          # psi[1], rad: the test steering turned the bus
+    path = ROOT / ".tools" / "reference-fmus" / "VanDerPol.fmu"
+    if not path.is_file():
+        pytest.skip("the Reference-FMUs are not built (scripts/build_reference_fmus.sh)")
+    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(path), "--fmi-type", "me",
+                        "--me-jacobian", "-o", str(tmp_path / "v.csv")], capture_output=True, text=True)
+    assert p.returncode != 0 and "Traceback" not in p.stderr
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "VanDerPol.fmu" in lines[0] and "directional derivatives" in lines[0], p.stderr
+    assert not (tmp_path / "v.csv").exists()

@@ -74,15 +74,15 @@ def cmd_linearize(args):
 
 
 def _linearize_bench(args):
-    """`artibus linearize BENCH`: its ME plants with the rest in the loop (artibus.linear.bench);
-    with --amplitude C.V=A the loop's describing function there (artibus.linear.describing)."""
+    """`artibus linearize BENCH`: its ME plants with the rest in the loop (artibus.linear.bench) at its
+    start, at --at TIME of its run or --steady; with --amplitude C.V=A the loop's describing function
+    there (artibus.linear.describing)."""
     from artibus import linearize as lz
     from artibus.base import parse_real
     from artibus.bench.parameters import parse_set
     from artibus.linear import bench as lb, describing
-    if args.at is not None:
-        raise ArtibusError(f"linearize {args.fmu}: --at is for one FMU; a bench's operating point is its "
-                           "start (each component initialised with its values) or --steady")
+    if args.at is not None and args.steady:
+        raise ArtibusError("linearize: --at TIME or --steady, not both")
     if args.ssv:
         raise ArtibusError(f"linearize {args.fmu}: --ssv is for one FMU; a bench binds its own parameter "
                            "sets (change them with --set Component.variable=VALUE or --variant)")
@@ -92,7 +92,10 @@ def _linearize_bench(args):
     if bool(args.bode) != bool(args.plot):
         raise ArtibusError("linearize: --bode IN:OUT and --plot FILE.png go together")
     names = lambda text: [n.strip() for n in text.split(",") if n.strip()] if text else None   # noqa: E731
-    opened = lb.open_bench(args.fmu, args.variant or (), parse_set(args.set), args.exclude or ())
+    if args.at is None:
+        opened = lb.open_bench(args.fmu, args.variant or (), parse_set(args.set), args.exclude or ())
+    else:                      # the bench run to --at, its instances taken as the run left them
+        opened = lb.open_run(args.fmu, args.at, args.variant or (), parse_set(args.set), args.exclude or ())
     try:
         if args.amplitude:
             sig, sep, amp = args.amplitude.partition("=")

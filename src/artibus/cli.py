@@ -12,8 +12,9 @@
   artibus calibrate [-o FILE.ssv]      the damping controller's gains (seed 001, 5.2.2)
   artibus linearize FMU [--steady]     A, B, C, D of one Model Exchange FMU at an operating point (--at T,
                                        --steady); its modes: frequency, damping ratio, dominant state
-  artibus linearize BENCH [--variant V] a bench's ME plants with its controllers in the loop (--exclude C,
-                                       --amplitude C.V=A: the loop's describing function)
+  artibus linearize BENCH [--variant V] a bench's ME plants with its controllers in the loop (--at T: at a
+                                       time of its run, --steady, --exclude C, --amplitude C.V=A: the
+                                       loop's describing function)
   artibus modes -o DIR                 stability maps over speed (seed 001's sway, seed 004's FWS/MAS), a page
   artibus can decode LOG [--csv OUT]   a CAN log (.blf, .asc) decoded through the DBC
   artibus can plot LOG [--signal S]    a CAN log's frame timing and decoded signals as a PNG
@@ -118,7 +119,7 @@ def cmd_run(args):
                 checked=lambda out: setattr(args, "_out", out), fmi=args.fmi,
                 inputs=_given(args.ssv, "an --ssv file") + _given([args.input_file], "the --input-file"),
                 fmi_type=_fmi_type(args.fmi_type), relative_tolerance=args.tolerance, me_method=args.me_method,
-                input_file=args.input_file, reference=args.reference)
+                me_jacobian=args.me_jacobian, input_file=args.input_file, reference=args.reference)
     return 0
 
 
@@ -233,7 +234,8 @@ def cmd_simulate(args):
                           outputs=args.record,
                           start_time=args.start_time, output_interval=args.output_interval,
                           tolerance=args.tolerance, logging=args.fmi_logging, messages=messages,
-                          events=events, interface=interface, me_method=args.me_method or "bdf")
+                          events=events, interface=interface, me_method=args.me_method or "bdf",
+                          me_jacobian=args.me_jacobian)
     except KeyboardInterrupt as e:      # Ctrl-C, SIGTERM: the results so far as OUT.partial.csv
         save_partial(e, out)
         raise
@@ -346,6 +348,9 @@ def build_parser():
                         "controllers, the driver, the ECUs and the network as they are")
     s.add_argument("--me-method", choices=["bdf", "adams"], default=None,
                    help="the Model Exchange FMUs' integrator: CVODE's BDF (default, stiff-safe) or Adams")
+    s.add_argument("--me-jacobian", action="store_true",
+                   help="the Model Exchange FMUs' Jacobian from their directional derivatives where they "
+                        "provide them (default: CVODE's difference quotients)")
     s.add_argument("--input-file", metavar="CSV",
                    help="drive the bench's free (unconnected) inputs: a time column, a column per input "
                         "COMPONENT.VARIABLE (as simulate's --input-file)")
@@ -416,9 +421,10 @@ def build_parser():
                    help="a bench's component left out: what it drives becomes an open input (repeatable)")
     s.add_argument("--amplitude", metavar="C.V=A",
                    help="a bench's loop linearised by its first harmonic at amplitude A of plant output C.V")
-    g = s.add_mutually_exclusive_group()
-    g.add_argument("--at", type=arg_real, metavar="TIME", help="simulate (ME, inputs held) to TIME first, s")
-    g.add_argument("--steady", action="store_true", help="simulate until the dynamic states are at rest")
+    # (--at and --steady exclude each other: said in one line by cmd_linearize, not by argparse's usage)
+    s.add_argument("--at", type=arg_real, metavar="TIME",
+                   help="simulate to TIME first, s (one FMU: ME, inputs held; a bench: its run)")
+    s.add_argument("--steady", action="store_true", help="simulate until the dynamic states are at rest")
     s.add_argument("--ssv", help="a parameter set (.ssv, or a name in ssp/parameters) for the FMU")
     s.add_argument("--set", action="append", metavar="NAME=VALUE", help="a parameter or an input's held value")
     s.add_argument("--inputs", metavar="A,B", help="the inputs (default: every continuous Real input)")

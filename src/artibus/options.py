@@ -75,6 +75,9 @@ def add_simulate_options(s):
                         "(default: Co-Simulation where the FMU has it)")
     s.add_argument("--me-method", choices=["bdf", "adams"], default=None,
                    help="Model Exchange: CVODE's BDF (default, stiff-safe) or Adams")
+    s.add_argument("--me-jacobian", action="store_true",
+                   help="Model Exchange: CVODE's Jacobian from the FMU's directional derivatives "
+                        "(default: its difference quotients)")
     s.add_argument("--fmi-logging", "--debug-logging", "--log-fmi-calls", action="store_true", dest="fmi_logging",
                    help="the FMU logs (loggingOn): its messages printed to stderr")
     s.add_argument("-o", "--output", "--output-file", metavar="FILE", dest="output",

@@ -129,6 +129,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     ENTER("fmi2EnterInitializationMode", M_EnterInit);
     comp->v.state = S_INIT_MODE;
     comp->dirty = true;
+    comp->generation++;     /* a value changed: caches keyed on it are stale */
     return fmi2OK;
 }
 

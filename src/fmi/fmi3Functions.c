@@ -185,6 +185,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     if (status > Warning) return ST(status);
     comp->v.state = S_INIT_MODE;
     comp->dirty = true;
+    comp->generation++;     /* a value changed: caches keyed on it are stale */
     return fmi3OK;
 }
 

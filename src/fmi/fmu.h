@@ -99,7 +99,15 @@ typedef struct ModelInstance {
                                initialisation and where the FMU state is saved
                                or restored */
     bool dirty;             /* outputs must be recalculated before a get */
+    unsigned long generation;   /* counts the changes of values from outside (a set, a
+                               restored state, a new mode: wherever dirty is set); a
+                               model's cache of a derived quantity keys on it together
+                               with the time and states, which steps change */
     void *solver;           /* model-owned resources (CVODE memory, tables) */
+    ModelData *ddSeed;      /* the directional derivatives' seed, zero between calls
+                               (made at the first call, fmu_core.c: dd_forward) */
+    bool ddOutputs;         /* model_directional_derivative: an output is among the
+                               unknowns (else state derivatives only) */
     char *capture;          /* non-NULL on the layer's scratch instance that checks
                                a state's parameters: the first error message goes
                                here (512 bytes), nothing to the importer */
@@ -200,7 +208,8 @@ Status model_event_update(ModelInstance *comp, bool *terminate, double *tNext);
  * writes the seed into `seed`, a ModelData that is zero but at the knowns'
  * fields, and `tangent` starts as a copy of it. The model sets, at the
  * current state, inputs and time (v), every output and derivative field of
- * `tangent` to the derivative of that variable along the seed: forward-mode
+ * `tangent` (the outputs' fields may be left when comp->ddOutputs is false: no
+ * output is among the unknowns) to the derivative of that variable along the seed: forward-mode
  * differentiation of the same equations model_outputs evaluates. Error
  * (logged) where the equations are not defined there. */
 #ifdef MODEL_DIRECTIONAL_DERIVATIVE

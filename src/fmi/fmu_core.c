@@ -162,12 +162,14 @@ Status core_init_instance(ModelInstance *comp, const char *fn, const char *insta
     comp->stopTime = INFINITY;
     vars_set_start_values(&comp->v.d);
     comp->restart = comp->forget = comp->dirty = true;
+    comp->generation++;     /* a value changed: caches keyed on it are stale */
     return OK;
 }
 
 void core_free_instance(ModelInstance *comp) {
     if (!comp) return;
     model_free(comp);
+    if (comp->ddSeed) layer_free(comp, comp->ddSeed);
     if (comp->resourceDir) layer_free(comp, comp->resourceDir);
     if (comp->instanceName) layer_free(comp, comp->instanceName);
     layer_free(comp, comp);
@@ -229,6 +231,7 @@ Status core_reset(ModelInstance *comp) {
     comp->stopTime = INFINITY;
     comp->tolerance = 0.0;
     comp->restart = comp->forget = comp->dirty = true;
+    comp->generation++;     /* a value changed: caches keyed on it are stale */
     return OK;
 }
 
@@ -301,6 +304,7 @@ Status core_check_range(ModelInstance *comp, const char *fn, const VarInfo *v, d
 /* after a value was stored: outputs and the integrator must follow it */
 void core_changed(ModelInstance *comp) {
     comp->dirty = true;
+    comp->generation++;     /* a value changed: caches keyed on it are stale */
     comp->restart = true;
 }
 
@@ -452,11 +456,13 @@ static Status restore(ModelInstance *comp, const char *fn, const FmuState *s) {
         comp->v = *old;
         layer_free(comp, old);
         comp->dirty = comp->restart = comp->forget = true;
+        comp->generation++;     /* a value changed: caches keyed on it are stale */
         return log_error(comp, "%s: the state could not be restored", fn);
     }
     layer_free(comp, old);
     comp->restart = comp->forget = true;
     comp->dirty = true;
+    comp->generation++;     /* a value changed: caches keyed on it are stale */
     log_event(comp, "%s: state restored at t = %g", fn, comp->v.time);
     return OK;
 }
@@ -626,6 +632,7 @@ Status core_set_time(ModelInstance *comp, const char *fn, double time) {
     if (comp->v.time != time) {
         comp->v.time = time;
         comp->dirty = true;
+        comp->generation++;     /* a value changed: caches keyed on it are stale */
     }
     return OK;
 }
@@ -638,6 +645,7 @@ Status core_set_x(ModelInstance *comp, const char *fn, const double x[], size_t 
                                          fn, i, X_NAME[i], x[i]));
     model_set_x(comp, x);
     comp->dirty = true;
+    comp->generation++;     /* a value changed: caches keyed on it are stale */
     return OK;
 }
 
@@ -696,6 +704,7 @@ static bool is_state(const VarInfo *v) {
    the value references of both looked up, the VarInfo into ku[] */
 static Status dd_variables(ModelInstance *comp, const char *fn, const unsigned unknowns[], size_t nU,
                            const unsigned knowns[], size_t nK, const VarInfo **ku) {
+    comp->ddOutputs = false;
     for (size_t j = 0; j < nK; j++) {
         const VarInfo *v = core_lookup(comp, fn, T_REAL, knowns[j]);
         if (!v) return Error;
@@ -712,45 +721,58 @@ static Status dd_variables(ModelInstance *comp, const char *fn, const unsigned u
             return log_error(comp, "%s: unknown %s (value reference %u) is neither an output nor a state "
                                    "derivative (FMI 3.0, 2.2.11)", fn, v->name, unknowns[i]);
         ku[nK + i] = v;
+        if (v->causality == C_OUTPUT) comp->ddOutputs = true;
     }
     return OK;
 }
 
-/* one forward pass: tangent of every output and derivative along seed[] on ku[0..nK) */
+/* one forward pass: tangent of every output and derivative along seed[] on ku[0..nK).
+   The seed is the instance's ModelData of zeros (comp->ddSeed, made once: a Jacobian is
+   asked for a column at a time) with the seeds written at the knowns and taken out after */
 static Status dd_forward(ModelInstance *comp, const char *fn, const VarInfo **ku, size_t nK,
                          const double seed[], ModelData *tangent) {
-    ModelData sd;
-    memset(&sd, 0, sizeof sd);
-    for (size_t j = 0; j < nK; j++) {
+    for (size_t j = 0; j < nK; j++)
         if (!isfinite(seed[j]))
             return log_error(comp, "%s: the seed of %s is %g", fn, ku[j]->name, seed[j]);
-        *field_of(&sd, ku[j]) += seed[j];      /* a known named twice: the seeds add (J is linear) */
-    }
-    *tangent = sd;
-    return model_directional_derivative(comp, &sd, tangent);
+    if (!comp->ddSeed && !(comp->ddSeed = layer_calloc(comp, 1, sizeof(ModelData))))
+        return log_error(comp, "%s: out of memory", fn);
+    ModelData *sd = comp->ddSeed;
+    for (size_t j = 0; j < nK; j++)
+        *field_of(sd, ku[j]) += seed[j];      /* a known named twice: the seeds add (J is linear) */
+    *tangent = *sd;
+    const Status status = model_directional_derivative(comp, sd, tangent);
+    for (size_t j = 0; j < nK; j++) *field_of(sd, ku[j]) = 0.0;
+    return status;
 }
 
+/* ku: the knowns' and unknowns' VarInfo, in `small` (DD_SMALL entries) when they fit
+   there, else allocated (freed by dd_release) */
+#define DD_SMALL 64
 static Status dd_prepare(ModelInstance *comp, const char *fn, const unsigned unknowns[], size_t nU,
                          const unsigned knowns[], size_t nK, const double seed[], const double sensitivity[],
-                         const VarInfo ***ku) {
+                         const VarInfo **small, const VarInfo ***ku) {
     if ((nK > 0 && (!knowns || !seed)) || (nU > 0 && (!unknowns || !sensitivity)))
         return log_error(comp, "%s: an argument array is NULL", fn);
     if (me_ready(comp) > Warning) return Error;    /* the model initialised; its outputs not needed */
-    *ku = layer_calloc(comp, nK + nU + 1, sizeof **ku);
+    *ku = nK + nU <= DD_SMALL ? small : layer_calloc(comp, nK + nU + 1, sizeof **ku);
     if (!*ku) return log_error(comp, "%s: out of memory", fn);
     return dd_variables(comp, fn, unknowns, nU, knowns, nK, *ku);
+}
+
+static void dd_release(ModelInstance *comp, const VarInfo **small, const VarInfo **ku) {
+    if (ku && ku != small) layer_free(comp, (void *)ku);
 }
 
 Status core_directional_derivative(ModelInstance *comp, const char *fn, const unsigned unknowns[],
                                    size_t nUnknowns, const unsigned knowns[], size_t nKnowns,
                                    const double seed[], double sensitivity[]) {
-    const VarInfo **ku = NULL;
+    const VarInfo *small[DD_SMALL], **ku = NULL;
     ModelData t;
-    Status status = dd_prepare(comp, fn, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity, &ku);
+    Status status = dd_prepare(comp, fn, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity, small, &ku);
     if (status <= Warning) status = dd_forward(comp, fn, ku, nKnowns, seed, &t);
     for (size_t i = 0; status <= Warning && i < nUnknowns; i++)
         sensitivity[i] = *field_of(&t, ku[nKnowns + i]);
-    if (ku) layer_free(comp, (void *)ku);
+    dd_release(comp, small, ku);
     return status > Warning ? leave(comp, status) : status;
 }
 
@@ -758,10 +780,10 @@ Status core_directional_derivative(ModelInstance *comp, const char *fn, const un
 Status core_adjoint_derivative(ModelInstance *comp, const char *fn, const unsigned unknowns[],
                                size_t nUnknowns, const unsigned knowns[], size_t nKnowns,
                                const double seed[], double sensitivity[]) {
-    const VarInfo **ku = NULL;
+    const VarInfo *small[DD_SMALL], **ku = NULL;
     ModelData t;
     /* seed has nUnknowns entries, sensitivity nKnowns (FMI 3.0, 2.2.11) */
-    Status status = dd_prepare(comp, fn, unknowns, nUnknowns, knowns, nKnowns, sensitivity, seed, &ku);
+    Status status = dd_prepare(comp, fn, unknowns, nUnknowns, knowns, nKnowns, sensitivity, seed, small, &ku);
     for (size_t i = 0; status <= Warning && i < nUnknowns; i++)
         if (!isfinite(seed[i])) status = log_error(comp, "%s: the seed of %s is %g", fn, ku[nKnowns + i]->name, seed[i]);
     for (size_t j = 0; status <= Warning && j < nKnowns; j++) {
@@ -771,7 +793,7 @@ Status core_adjoint_derivative(ModelInstance *comp, const char *fn, const unsign
         for (size_t i = 0; status <= Warning && i < nUnknowns; i++) s += seed[i] * *field_of(&t, ku[nKnowns + i]);
         sensitivity[j] = s;
     }
-    if (ku) layer_free(comp, (void *)ku);
+    dd_release(comp, small, ku);
     return status > Warning ? leave(comp, status) : status;
 }
 

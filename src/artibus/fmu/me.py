@@ -142,9 +142,11 @@ class Facade:
 
     def use_jacobian(self, on=True):
         """CVODE's Jacobian from the FMU's directional derivatives (where it provides them) instead
-        of CVODE's difference quotients; before the initialisation's end, where CVODE is set up.
-        Off by default: on our plants a column by forward-mode dual numbers costs about 2.3 right-hand
-        sides, so Bus36m_Circle's BusDynamics runs 15 % slower with it (benchmarks/suite.py, 7.)"""
+        of CVODE's difference quotients; before the initialisation's end, where CVODE is set up
+        (run/simulate --me-jacobian). Our plants give every column from one forward pass on vector
+        dual numbers (BusDynamics: dyn_eval_jacobian), cheaper than the right-hand sides the
+        difference quotients take; Bus36m_Circle's BusDynamics runs 1.02-1.05 x as fast with it
+        (benchmarks/suite.py, 7.). Off by default: the default runs repeat earlier ones bit for bit."""
         if on and not self.jacobian_available:
             raise ArtibusError("Model Exchange: this FMU provides no directional derivatives of its "
                                "state derivatives by its states (providesDirectionalDerivative)")

@@ -102,7 +102,7 @@ def _text(x, kind):
 
 def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
              outputs=None, start_time=0.0, output_interval=None, tolerance=None, logging=False,
-             messages=None, events=(), interface="cs", me_method="bdf", on_result=None):
+             messages=None, events=(), interface="cs", me_method="bdf", me_jacobian=False, on_result=None):
     """Simulate one FMU (FMI 2.0 or 3.0, Co-Simulation or Model Exchange).
 
     parameters: {name: value} set in initialization mode (checked against
@@ -118,7 +118,7 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
     messages: a list the FMU's log messages are added to when the run ends, however.
     interface: "cs" (Co-Simulation) or "me" (Model Exchange: the FMU integrated between the
     communication points with CVODE, its events handled, artibus.fmu.me; me_method "bdf" or
-    "adams", CVODE's method).
+    "adams", CVODE's method; me_jacobian: CVODE's Jacobian from the FMU's directional derivatives).
     events: times the inputs jump (artibus.fmu.inputs.InputTable.events): the steps are cut
     there and the point recorded, where the FMU takes a variable communication step
     (canHandleVariableCommunicationStepSize), as FMPy's simulate_fmu does.
@@ -152,6 +152,12 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         clocks = _schedule(fmu, path) if event_mode else None
         if me:                           # CVODE's method; no input changes: CVODE steps freely
             fmu.calls.facade.use_method(me_method)
+            if me_jacobian and not fmu.calls.facade.jacobian_available:
+                raise ArtibusError(f"{path}: --me-jacobian: {fmu.md.modelName} provides no directional "
+                                   "derivatives of its state derivatives by its states "
+                                   "(providesDirectionalDerivative is not true)")
+            if me_jacobian:
+                fmu.calls.facade.use_jacobian()
             if not inputs:
                 fmu.calls.facade.free_running()
         try:

@@ -19,7 +19,8 @@ only integrate its energy) is a static map of its inputs (its outputs read in Co
 Mode, FMI 2.0.4 3.2.1, FMI 3.0 3.2.1). The operating point: the bench's start values (each
 component initialised with its bound parameters, each controller stepped one sample with the
 loop's values propagated to it, PASSES passes), or (``steady``) the plants integrated with the loop's values held until their dynamic
-states rest, the loop updated, twice."""
+states rest, the loop updated, twice; or (``at``, open_run) the bench's state at a time of its run: the
+components' own instances as the run left them there."""
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -53,28 +54,50 @@ class Element:
 class Opened:
     """The bench's components instantiated and initialised (``elements``), the signals' values at
     the operating point (``values``: (component, variable) -> value), the open inputs (``open``:
-    external name -> the (component, variable) ends it feeds); closed by ``close``."""
+    external name -> the (component, variable) ends it feeds); closed by ``close``. ``run``: a
+    Simulation run to time ``at`` whose instances are taken as they are (open_run), else None."""
 
-    def __init__(self, bench, ssp_file, exclude, overrides):
+    def __init__(self, bench, ssp_file, exclude, overrides, run=None, at=None):
         self.bench, self.ssp_file = bench, ssp_file
         self.elements, self.values, self.t0 = {}, {}, float(bench.start_time or 0.0)
+        self.run, self.at = run, at
+        if run is not None:
+            self.t0 = float(at)
         self.feeds = {}                       # (comp, var) input -> ((comp, var) source, factor, offset)
         self.open = {}                        # external input name -> [(comp, var), ...]
         self._dirs = []
+        self.notes = []                       # what the closed loop's report says of the point
         try:
-            self._instantiate(exclude, overrides)
+            self._check_exclude(exclude)
+            if run is None:
+                self._instantiate(exclude, overrides)
+            else:
+                self._adopt(exclude)
         except BaseException:
             self.close()
             raise
 
-    def _instantiate(self, exclude, overrides):
-        from artibus import cache
-        from artibus.fmu.instance import Fmu, read_model
+    def _check_exclude(self, exclude):
         unknown = [n for n in exclude if n not in self.bench.components]
         if unknown:
             from artibus.bench.parameters import suggest
             raise ArtibusError(f"{self.bench.file}: --exclude {unknown[0]}: no such component (its components: "
                                f"{', '.join(self.bench.components)}){suggest(unknown[0], self.bench.components)}")
+
+    def _adopt(self, exclude):
+        """The run's instances as the elements, in the states the run left them at ``at``: a Model
+        Exchange one a plant (the run integrated it as ME; _classify makes one without dynamic
+        states static), a Co-Simulation one a controller (its step the run's)."""
+        for u in self.run.units:
+            if u.path in exclude:
+                continue
+            role = "plant" if u.fmu.interface == "me" else "controller"
+            self.elements[u.path] = Element(u.path, u.fmu, role, step=float(u.step))
+        self._wire(exclude)
+
+    def _instantiate(self, exclude, overrides):
+        from artibus import cache
+        from artibus.fmu.instance import Fmu, read_model
         d, temporary = cache.unpacked(self.ssp_file)
         if temporary:
             self._dirs.append(d)
@@ -183,6 +206,8 @@ class Opened:
             el.inst.close()
         for d in self._dirs:
             shutil.rmtree(d, ignore_errors=True)
+        if self.run is not None:              # the run's instances (closed above) and its files
+            self.run.close()
 
     # --- the loop as a map from the plants' outputs and the open inputs to the plants' inputs ----
 
@@ -290,7 +315,8 @@ def _save_controllers(opened):
     """Each controller's state saved at the start, the loop's values propagated, then each stepped
     one sample with them (a controller's first sample may reset its filters to the measured values,
     as DampingController's reference model does) and its state saved there: every evaluation of the
-    loop starts from it."""
+    loop starts from it. At a time of a run (``opened.at``) the state the run left is the one
+    saved: it has had its samples."""
     for el in opened.elements.values():
         if el.role == "controller":
             if not getattr(el.inst.md.coSimulation, "canGetAndSetFMUstate", False):
@@ -300,6 +326,8 @@ def _save_controllers(opened):
                                    f"{el.name} (what it drives becomes an open input)")
             el.state, el.t = el.inst.slave.getFMUState(), opened.t0
     opened.propagate()
+    if opened.at is not None:
+        return
     for el in opened.elements.values():
         if el.role == "controller":
             opened._evaluate(el)
@@ -339,9 +367,9 @@ def _classify(opened, step, derivatives):
                            "set its states or read its derivatives")
 
 
-def open_bench(bench, variants=(), sets=None, exclude=()):
-    """The bench (a name or an .ssp) opened at its start values, variants and ``sets``
-    ({"Component.variable": value}) applied: an Opened (close it)."""
+def _read(bench, variants, sets):
+    """(path, bench, overrides) of the bench (a name or an .ssp): its variants' values and
+    ``sets`` ({"Component.variable": value}), each set's component checked."""
     from artibus.bench import ssp
     path = ssp.ssp_path(bench)
     b = ssp.read(path)
@@ -353,14 +381,90 @@ def open_bench(bench, variants=(), sets=None, exclude=()):
             raise ArtibusError(f"--set {k}={v}: expected Component.variable, a component of {b.name} "
                                f"({', '.join(b.components)}){suggest(comp, b.components)}")
         overrides[k] = v
+    return path, b, overrides
+
+
+def open_bench(bench, variants=(), sets=None, exclude=()):
+    """The bench (a name or an .ssp) opened at its start values, variants and ``sets``
+    ({"Component.variable": value}) applied: an Opened (close it)."""
+    path, b, overrides = _read(bench, variants, sets)
     return Opened(b, str(path), tuple(exclude), overrides)
 
 
+def _check_at(b, at):
+    """--at: a finite time from the bench's start to its stop time."""
+    import math
+    start, stop = float(b.start_time or 0.0), b.stop_time
+    if not math.isfinite(at):
+        raise ArtibusError(f"{b.file}: --at {at!r}: a finite time from {b.name}'s start {start:g} s "
+                           f"to its stop time{f' {float(stop):g} s' if stop is not None else ''}")
+    if at < start:
+        raise ArtibusError(f"{b.file}: --at {at:g} s is before {b.name}'s start time {start:g} s")
+    if stop is not None and at > float(stop) + 1e-9 * max(1.0, abs(float(stop))):
+        raise ArtibusError(f"{b.file}: --at {at:g} s is after {b.name}'s stop time {float(stop):g} s "
+                           "(its run ends there)")
+
+
+def open_run(bench, at, variants=(), sets=None, exclude=()):
+    """The bench run by artibus's runner from its start to time ``at`` (artibus.runner.Simulation,
+    as `artibus run --fmi-type me` runs it, the variants and ``sets`` applied) and opened there: an
+    Opened whose elements are the run's own instances (close it: the run goes with it).
+
+    Why the run's instances and not fresh ones set from the run's FMU states: the plants' continuous
+    states, every controller's internal state (filters, reference model, integrators) and the inputs
+    each was last given are then exactly the run's, and nothing is copied between instances (which
+    would need each FMU to serialise its state: canSerializeFMUstate, FMI 2.0.4 2.1.8, FMI 3.0
+    "Getting and Setting the Complete FMU State"; the controllers' states are still saved and
+    restored in their own instance for the loop's differences, _save_controllers). The plants run as
+    Model Exchange (FMI 2.0.4 3, FMI 3.0 3): their continuous states are what the linearisation sets
+    and moves, which a Co-Simulation build (its solver inside) does not expose; the runner's ME
+    integration gives the same KPIs (artibus.fmu.me.BENCH_TOLERANCE). The point's time is the run's communication point nearest
+    ``at`` (a bench steps on a fixed base step), said in ``notes`` when it is not ``at``."""
+    from artibus.runner.simulation import Simulation
+    path, b, overrides = _read(bench, variants, sets)
+    _check_at(b, float(at))
+    start = float(b.start_time or 0.0)
+    sim = Simulation(path, overrides=overrides, fmi_type="me")
+    try:
+        if round((float(at) - start) / sim.base_step) < 1:       # the start itself: no step to run
+            sim.close()
+            opened = open_bench(bench, variants, sets, exclude)
+            if float(at) != start:
+                opened.notes.append(f"--at {float(at):g} s: the run's nearest communication point is its "
+                                    f"start t = {start:g} s (its base step {sim.base_step:g} s)")
+            return opened
+        t_end = _run_to(sim, b, float(at))
+        opened = Opened(sim.bench, str(sim.ssp), tuple(exclude), overrides, run=sim, at=t_end)
+    except BaseException:
+        sim.close()
+        raise
+    if abs(t_end - float(at)) > 1e-9 * max(1.0, abs(t_end)):
+        opened.notes.append(f"--at {float(at):g} s: the run's nearest communication point t = {t_end:g} s "
+                            f"(its base step {sim.base_step:g} s)")
+    return opened
+
+
+def _run_to(sim, b, at):
+    """The Simulation run to ``at``: the time it reached (its last communication point); a run
+    that a component ended before is an error naming it."""
+    result = sim.run(stop_time=at)
+    t_end = float(result.array()[-1, 0])
+    end = getattr(result, "terminated", None)
+    if end is not None:
+        raise ArtibusError(f"{b.file}: {end.component} ended the run at t = {end.time:g} s ({end.how}), "
+                           f"before the operating point --at {at:g} s")
+    return t_end
+
+
 def linearize_bench(bench, variants=(), sets=None, exclude=(), steady=False, inputs=None, outputs=None,
-                    step=lz.STEP, derivatives="auto", steady_limit=lz.STEADY_LIMIT):
-    """The closed-loop linear model of the bench (a BenchLinear) at its start (or ``steady``):
-    ``inputs``/``outputs``: names "Component.variable" of open inputs and plant outputs (default all)."""
-    opened = open_bench(bench, variants, sets, exclude)
+                    step=lz.STEP, derivatives="auto", steady_limit=lz.STEADY_LIMIT, at=None):
+    """The closed-loop linear model of the bench (a BenchLinear) at its start, at time ``at`` of its
+    run (open_run) or ``steady``: ``inputs``/``outputs``: names "Component.variable" of open inputs
+    and plant outputs (default all)."""
+    if at is not None and steady:
+        raise ArtibusError("linearize: --at TIME or --steady, not both")
+    opened = open_bench(bench, variants, sets, exclude) if at is None else open_run(bench, at, variants, sets,
+                                                                                    exclude)
     try:
         return linear_of(opened, steady, inputs, outputs, step, derivatives, steady_limit)
     finally:
@@ -386,6 +490,10 @@ def linear_of(opened, steady=False, inputs=None, outputs=None, step=lz.STEP, der
     lin = lz.Linear(A_cl, B_cl, C_cl, D_cl, states, ins, outs, fmu=opened.bench.name, time=opened.t0,
                     method="closed loop A + B K C (artibus.linear.bench)")
     lin.dynamic = [f"{e.name}.{n}" for e in opened.plants() for n in e.lin.dynamic]
+    if opened.at is not None:
+        lin.notes.append(f"at t = {opened.t0:g} s of the bench's run (artibus.runner, its ME components as "
+                         "Model Exchange): every plant's states and every controller's state the run's there")
+    lin.notes += opened.notes
     if times:
         lin.notes.append("steady: each plant integrated with the loop's values held until its dynamic states "
                          "rest (" + ", ".join(f"{n} to t = {t:g} s" for n, t in times.items()) + "), twice")

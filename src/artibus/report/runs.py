@@ -16,7 +16,8 @@ from artibus.runner.results import check_results_file
 def run_benches(benches, every=False, variants=None, user=None, stop_time=None, step=None, record=None,
                 algorithm="gauss-seidel", can=None, can_log=None, can_faults=None, report=None, output=None,
                 progress=False, checked=None, log=print, single_rate=False, fmi=None, inputs=(),
-                fmi_type=None, relative_tolerance=None, me_method=None, input_file=None, reference=False):
+                fmi_type=None, relative_tolerance=None, me_method=None, me_jacobian=False, input_file=None,
+                reference=False):
     """Run each bench (names or .ssp paths) with its variants (``variants``: names, as
     ``--variant``), then the user's values (``user``: {"comp.var": value}, from
     --ssv and --set); ``every``: the benches are all of ssp/benches/ (``--all``:
@@ -35,7 +36,7 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     build of the benches' FMUs, None (as each bench's .ssd names them), "2" or
     "3" (--fmi; artibus.bench.fmi); the extra runs use the same. ``fmi_type`` "me" (--fmi-type):
     every FMU that has Model Exchange runs as ME at ``relative_tolerance`` with CVODE's ``me_method``
-    (runner.Simulation). ``input_file``: a CSV driving the benches' free inputs (--input-file,
+    (with ``me_jacobian`` its Jacobian from the FMUs' directional derivatives; runner.Simulation). ``input_file``: a CSV driving the benches' free inputs (--input-file,
     columns COMPONENT.VARIABLE; runner.Simulation). ``reference``: each bench's monolithic reference
     (--reference, artibus.runner.reference). Returns
     [(bench, report directory, KPIs)] of the benches with a report. The drawing
@@ -47,8 +48,9 @@ def run_benches(benches, every=False, variants=None, user=None, stop_time=None, 
     summary = []
     kept = {}
     settings = dict(step=step, record=record, algorithm=algorithm, can=can, fmi=fmi)
-    if fmi_type is not None or relative_tolerance is not None or me_method:      # (Model Exchange, issue 38)
-        settings.update(fmi_type=fmi_type, relative_tolerance=relative_tolerance, me_method=me_method or "bdf")
+    if fmi_type is not None or relative_tolerance is not None or me_method or me_jacobian:   # (Model Exchange)
+        settings.update(fmi_type=fmi_type, relative_tolerance=relative_tolerance, me_method=me_method or "bdf",
+                        me_jacobian=bool(me_jacobian))
     if input_file is not None:
         settings.update(input_file=input_file)
     if reference:

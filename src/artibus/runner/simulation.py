@@ -80,7 +80,7 @@ class Simulation(_Setup):
 
     def __init__(self, ssp, step=None, overrides=None, record=None, algorithm="gauss-seidel",
                  stimuli=None, can=None, can_log=None, can_faults=None, cut=None, single_rate=False, fmi=None,
-                 lsbus_wire_time=None, fmi_type=None, relative_tolerance=None, me_method="bdf", input_file=None,
+                 lsbus_wire_time=None, fmi_type=None, relative_tolerance=None, me_method="bdf", me_jacobian=False, input_file=None,
                  reference=False):
         """stimuli: {"comp.input": f(t)} added to the input (to its connection's
         value, or to its start value when it is not connected), sampled at
@@ -107,7 +107,9 @@ class Simulation(_Setup):
         "me" (every FMU that has Model Exchange runs as ME, integrated by the stepping core's ME
         facade, artibus.fmu.me; the others in Co-Simulation), or {component: "cs" | "me"};
         relative_tolerance: the ME units' (default: their default experiment's, else
-        artibus.fmu.me.BENCH_TOLERANCE); me_method: their CVODE's, "bdf" or "adams". input_file: a
+        artibus.fmu.me.BENCH_TOLERANCE); me_method: their CVODE's, "bdf" or "adams"; me_jacobian:
+        CVODE's Jacobian from the directional derivatives of the ME units that provide them (else
+        its difference quotients; artibus.fmu.me.Facade.use_jacobian). input_file: a
         CSV driving the bench's free inputs, columns COMPONENT.VARIABLE (--input-file, as `simulate`
         reads one: artibus.fmu.inputs; _Setup._input_file). reference: the bench's monolithic reference
         (--reference, issue 44: artibus.runner.reference): every component that offers Model Exchange
@@ -121,6 +123,7 @@ class Simulation(_Setup):
             fmi_type = "me"
             relative_tolerance = REFERENCE_TOLERANCE if relative_tolerance is None else relative_tolerance
         self.fmi_type, self.relative_tolerance, self.me_method = fmi_type, relative_tolerance, me_method
+        self.me_jacobian = bool(me_jacobian)
         if algorithm not in ("gauss-seidel", "jacobi"):
             raise ArtibusError(f"algorithm '{algorithm}': expected gauss-seidel or jacobi")
         self.algorithm = algorithm
@@ -186,6 +189,8 @@ class Simulation(_Setup):
             if getattr(u.fmu.calls, "facade", None) is not None:      # Model Exchange: its integrator's tolerance
                 from artibus.fmu.me import bench_tolerance
                 u.fmu.calls.facade.use_method(self.me_method)
+                if self.me_jacobian and u.fmu.calls.facade.jacobian_available:
+                    u.fmu.calls.facade.use_jacobian()
                 u.fmu.enter_initialization_mode(start, bench_tolerance(u.fmu.md, self.relative_tolerance))
             else:
                 u.fmu.enter_initialization_mode(start)

@@ -25,6 +25,6 @@ extern "C" void damper_outputs_tangent(const damper_dual::DamperParams *p, doubl
                                 Dual(pValve, dpValve), o);
     for (int i = 0; i < damper_dual::DAMPER_NOUT; i++) {
         out[i] = o[i].v;
-        dout[i] = o[i].d;
+        dout[i] = o[i].d[0];
     }
 }

@@ -7,29 +7,37 @@
  * right-hand side, and Eigen unrolls the small products. */
 #include <cmath>
 
+/* Eigen's small fixed-size expressions inlined whole: on the vector dual type
+   (dyn_eval_jacobian) GCC otherwise calls every scalar operation of a product
+   as a function (3x slower); on double it changes no result (no reordering,
+   no contraction: strict IEEE arithmetic either way) */
+#if defined(__GNUC__) && !defined(EIGEN_STRONG_INLINE)
+#define EIGEN_STRONG_INLINE inline __attribute__((always_inline))
+#endif
 #include <Eigen/Dense>
 
 #include "dual.hpp"
 #include "dynamics.h"
 
 /* The equations are templated on the scalar type T as well: double for the
- * simulation, artibus::Dual (src/models/common/dual.hpp) for the directional
- * derivatives (dyn_eval_tangent): forward-mode differentiation through the one
- * source of the equations. Eigen takes Dual as a custom scalar type. */
+ * simulation, artibus::Dual (src/models/common/dual.hpp) for a directional
+ * derivative (dyn_eval_tangent) and artibus::DualN<2 nq> for the Jacobian of
+ * every state at once (dyn_eval_jacobian): forward-mode differentiation
+ * through the one source of the equations. Eigen takes them as custom scalars. */
 namespace Eigen {
-template <> struct NumTraits<artibus::Dual> : NumTraits<double> {
-    typedef artibus::Dual Real;
-    typedef artibus::Dual NonInteger;
-    typedef artibus::Dual Nested;
-    typedef artibus::Dual Literal;
+template <int K> struct NumTraits<artibus::DualN<K>> : NumTraits<double> {
+    typedef artibus::DualN<K> Real;
+    typedef artibus::DualN<K> NonInteger;
+    typedef artibus::DualN<K> Nested;
+    typedef artibus::DualN<K> Literal;
     enum { IsComplex = 0, IsInteger = 0, IsSigned = 1, RequireInitialization = 1,
-           ReadCost = 2, AddCost = 2, MulCost = 4 };
+           ReadCost = 2, AddCost = 2, MulCost = 4 };   /* as double: Eigen unrolls the small products */
 };
-template <typename BinOp> struct ScalarBinaryOpTraits<artibus::Dual, double, BinOp> {
-    typedef artibus::Dual ReturnType;
+template <int K, typename BinOp> struct ScalarBinaryOpTraits<artibus::DualN<K>, double, BinOp> {
+    typedef artibus::DualN<K> ReturnType;
 };
-template <typename BinOp> struct ScalarBinaryOpTraits<double, artibus::Dual, BinOp> {
-    typedef artibus::Dual ReturnType;
+template <int K, typename BinOp> struct ScalarBinaryOpTraits<double, artibus::DualN<K>, BinOp> {
+    typedef artibus::DualN<K> ReturnType;
 };
 }  // namespace Eigen
 
@@ -40,25 +48,24 @@ template <class T> using Vec2T = Eigen::Matrix<T, 2, 1>;
 using Vec2 = Vec2T<double>;
 
 /* the inputs and outputs on T: for double the C structs of dynamics.h, for
-   Dual the same fields on Dual */
-struct DualInputs {
-    Dual Fx[DYN_MAX_AXLES + 1], Mjoint[DYN_MAX_HINGES + 1];
-    Dual cosDelta[DYN_MAX_AXLES + 1], sinDelta[DYN_MAX_AXLES + 1];
+   a dual type the same fields on it */
+template <class S> struct DualInputs {
+    S Fx[DYN_MAX_AXLES + 1], Mjoint[DYN_MAX_HINGES + 1];
+    S cosDelta[DYN_MAX_AXLES + 1], sinDelta[DYN_MAX_AXLES + 1];
 };
-struct DualOut {
-    Dual zdd[DYN_MAX_Q];
-    Dual xCG[DYN_MAX_MODULES + 1], yCG[DYN_MAX_MODULES + 1];
-    Dual vx[DYN_MAX_MODULES + 1], vy[DYN_MAX_MODULES + 1];
-    Dual ax[DYN_MAX_MODULES + 1], ay[DYN_MAX_MODULES + 1];
-    Dual xAxle[DYN_MAX_AXLES + 1], yAxle[DYN_MAX_AXLES + 1];
-    Dual alpha[DYN_MAX_AXLES + 1], Fy[DYN_MAX_AXLES + 1];
-    Dual FjX[DYN_MAX_HINGES + 1], FjY[DYN_MAX_HINGES + 1];
-    Dual xCorner[4 * DYN_MAX_MODULES + 1], yCorner[4 * DYN_MAX_MODULES + 1];
-    Dual v;
+template <class S> struct DualOut {
+    S zdd[DYN_MAX_Q];
+    S xCG[DYN_MAX_MODULES + 1], yCG[DYN_MAX_MODULES + 1];
+    S vx[DYN_MAX_MODULES + 1], vy[DYN_MAX_MODULES + 1];
+    S ax[DYN_MAX_MODULES + 1], ay[DYN_MAX_MODULES + 1];
+    S xAxle[DYN_MAX_AXLES + 1], yAxle[DYN_MAX_AXLES + 1];
+    S alpha[DYN_MAX_AXLES + 1], Fy[DYN_MAX_AXLES + 1];
+    S FjX[DYN_MAX_HINGES + 1], FjY[DYN_MAX_HINGES + 1];
+    S xCorner[4 * DYN_MAX_MODULES + 1], yCorner[4 * DYN_MAX_MODULES + 1];
+    S v;
 };
-template <class T> struct Types;
+template <class T> struct Types { using In = DualInputs<T>; using Out = DualOut<T>; };
 template <> struct Types<double> { using In = DynInputs; using Out = DynOut; };
-template <> struct Types<Dual> { using In = DualInputs; using Out = DualOut; };
 
 /* A point xi ahead of the CG of module m is
  *     r = (x, y) + sum_{j=1..m} l_j e(psi_j)
@@ -102,17 +109,20 @@ bool solve_spd(const Eigen::Matrix<double, NQ, NQ> &M, const Eigen::Matrix<doubl
     return true;
 }
 
-template <int NQ>
-bool solve_spd(const Eigen::Matrix<Dual, NQ, NQ> &M, const Eigen::Matrix<Dual, NQ, 1> &b,
-               Eigen::Matrix<Dual, NQ, 1> &x) {
-    const auto v = [](const Dual &a) { return a.v; };
-    const auto d = [](const Dual &a) { return a.d; };
-    const Eigen::Matrix<double, NQ, NQ> M0 = M.unaryExpr(v), dM = M.unaryExpr(d);
+template <int NQ, int K>
+bool solve_spd(const Eigen::Matrix<artibus::DualN<K>, NQ, NQ> &M, const Eigen::Matrix<artibus::DualN<K>, NQ, 1> &b,
+               Eigen::Matrix<artibus::DualN<K>, NQ, 1> &x) {
+    using D = artibus::DualN<K>;
+    const Eigen::Matrix<double, NQ, NQ> M0 = M.unaryExpr([](const D &a) { return a.v; });
     Eigen::LLT<Eigen::Matrix<double, NQ, NQ>> llt(M0);
     if (llt.info() != Eigen::Success) return false;
-    const Eigen::Matrix<double, NQ, 1> x0 = llt.solve(b.unaryExpr(v));
-    const Eigen::Matrix<double, NQ, 1> dx = llt.solve(b.unaryExpr(d) - dM * x0);
-    for (int i = 0; i < NQ; i++) x(i) = Dual(x0(i), dx(i));
+    const Eigen::Matrix<double, NQ, 1> x0 = llt.solve(b.unaryExpr([](const D &a) { return a.v; }));
+    for (int i = 0; i < NQ; i++) x(i) = D(x0(i));
+    for (int k = 0; k < K; k++) {           /* seed k: M dx = db - dM x */
+        const auto dk = [k](const D &a) { return a.d[k]; };
+        const Eigen::Matrix<double, NQ, 1> dx = llt.solve(b.unaryExpr(dk) - M.unaryExpr(dk) * x0);
+        for (int i = 0; i < NQ; i++) x(i).d[k] = dx(i);
+    }
     return true;
 }
 
@@ -301,7 +311,7 @@ int Chain<N, S>::eval(const DynParams *p, const In *u, const S *z, const S *zd, 
     }
 
     VecQ acc;
-    if (!solve_spd<NQ>(M, q - h, acc)) return 1;
+    if (!solve_spd(M, VecQ(q - h), acc)) return 1;
     for (int i = 0; i < nq; i++) zdd[i] = acc(i);
 
     if (out) {
@@ -364,7 +374,7 @@ extern "C" int dyn_eval(const DynParams *p, const DynInputs *u, const double *z,
 extern "C" int dyn_eval_tangent(const DynParams *p, const DynInputs *u, const DynInputs *du,
                                 const double *z, const double *dz, const double *zd, const double *dzd,
                                 double *zdd, double *dzdd, DynOut *out, DynOut *dout) {
-    DualInputs ui;
+    DualInputs<Dual> ui;
     for (int a = 1; a <= DYN_MAX_AXLES; a++) {
         const Dual delta(u->delta[a], du->delta[a]);
         ui.cosDelta[a] = cos(delta);
@@ -377,19 +387,82 @@ extern "C" int dyn_eval_tangent(const DynParams *p, const DynInputs *u, const Dy
         zz[i] = Dual(z[i], dz[i]);
         zzd[i] = Dual(zd[i], dzd[i]);
     }
-    DualOut o;
+    DualOut<Dual> o;
     if (eval_n<Dual>(p, &ui, zz, zzd, zzdd, &o)) return 1;
     const int nq = dyn_nq(p);
-    for (int i = 0; i < nq; i++) { zdd[i] = zzdd[i].v; dzdd[i] = zzdd[i].d; }
+    for (int i = 0; i < nq; i++) { zdd[i] = zzdd[i].v; dzdd[i] = zzdd[i].d[0]; }
     /* every field of DynOut is a double array or a double: split each pair */
     const Dual *src = reinterpret_cast<const Dual *>(&o);
     double *val = reinterpret_cast<double *>(out), *der = reinterpret_cast<double *>(dout);
-    static_assert(sizeof(DualOut) == 2 * sizeof(DynOut), "DualOut mirrors DynOut");
+    static_assert(sizeof(DualOut<Dual>) == 2 * sizeof(DynOut), "DualOut mirrors DynOut");
     for (size_t i = 0; i < sizeof(DynOut) / sizeof(double); i++) {
         val[i] = src[i].v;
-        der[i] = src[i].d;
+        der[i] = src[i].d[0];
     }
     return 0;
+}
+
+/* vector mode for N modules: the seeds of the states at once, seed j the unit
+   vector of z[j] (j < nq) or of zd[j - nq]; the inputs held. Without the
+   outputs, the seeds of x and y (z[0], z[1]) are left out: the equations of
+   motion do not depend on where the bus is (eq. 3: M, G z' and the tyre forces
+   are functions of the yaw angles and the velocities alone; x and y enter the
+   positions only), so their columns of zdd are 0. F: the seed of x and y given. */
+template <int N, bool F>
+int eval_jacobian(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
+                  double *zdd, double (*dzdd)[DYN_MAX_Q], DynOut *out, DynOut *dout) {
+    constexpr int NQ = 2 + N, J0 = F ? 0 : 2, K = 2 * NQ - J0;   /* seed k: state k + J0 of [z, zd] */
+    using D = artibus::DualN<K>;
+    DualInputs<D> ui;
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) {
+        ui.cosDelta[a] = D(u->cosDelta[a]);
+        ui.sinDelta[a] = D(u->sinDelta[a]);
+        ui.Fx[a] = D(u->Fx[a]);
+    }
+    for (int k = 1; k <= DYN_MAX_HINGES; k++) ui.Mjoint[k] = D(u->Mjoint[k]);
+    D zz[DYN_MAX_Q], zzd[DYN_MAX_Q], zzdd[DYN_MAX_Q];
+    for (int i = 0; i < DYN_MAX_Q; i++) {
+        zz[i] = D(z[i]);
+        zzd[i] = D(zd[i]);
+        if (i < NQ) {
+            if (i >= J0) zz[i].d[i - J0] = 1.0;
+            zzd[i].d[NQ + i - J0] = 1.0;
+        }
+    }
+    DualOut<D> o;
+    if (Chain<N, D>::eval(p, &ui, zz, zzd, zzdd, F ? &o : nullptr)) return 1;
+    for (int i = 0; i < NQ; i++) {
+        zdd[i] = zzdd[i].v;
+        for (int j = 0; j < J0; j++) dzdd[j][i] = 0.0;
+        for (int k = 0; k < K; k++) dzdd[k + J0][i] = zzdd[i].d[k];
+    }
+    if (!F) return 0;
+    const D *src = reinterpret_cast<const D *>(&o);
+    double *val = reinterpret_cast<double *>(out);
+    static_assert(sizeof(DualOut<D>) == sizeof(D) * (sizeof(DynOut) / sizeof(double)), "DualOut mirrors DynOut");
+    for (size_t i = 0; i < sizeof(DynOut) / sizeof(double); i++) {
+        val[i] = src[i].v;
+        for (int j = 0; j < K; j++) reinterpret_cast<double *>(&dout[j])[i] = src[i].d[j];
+    }
+    return 0;
+}
+
+template <int N>
+int eval_jacobian_n(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
+                    double *zdd, double (*dzdd)[DYN_MAX_Q], DynOut *out, DynOut *dout) {
+    return out ? eval_jacobian<N, true>(p, u, z, zd, zdd, dzdd, out, dout)
+               : eval_jacobian<N, false>(p, u, z, zd, zdd, dzdd, nullptr, nullptr);
+}
+
+extern "C" int dyn_eval_jacobian(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
+                                 double *zdd, double (*dzdd)[DYN_MAX_Q], DynOut *out, DynOut *dout) {
+    switch (p->nMod) {
+    case 1: return eval_jacobian_n<1>(p, u, z, zd, zdd, dzdd, out, dout);
+    case 2: return eval_jacobian_n<2>(p, u, z, zd, zdd, dzdd, out, dout);
+    case 3: return eval_jacobian_n<3>(p, u, z, zd, zdd, dzdd, out, dout);
+    case 4: return eval_jacobian_n<4>(p, u, z, zd, zdd, dzdd, out, dout);
+    default: return 1;
+    }
 }
 
 extern "C" int dyn_static_loads(DynParams *p, double g) {

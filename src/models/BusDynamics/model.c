@@ -11,13 +11,38 @@
 
 #define GRAVITY 9.81
 
+/* the Jacobian with respect to the states at one point, all 2 nq columns
+   from one vector-mode pass: an importer asks for it a column at a time (one
+   fmi2GetDirectionalDerivative per state), the later columns are read from
+   here while the point is the same: no value set from outside (the layer's
+   generation), the same time and states */
+typedef struct {
+    bool valid, outputs;    /* outputs: dout holds the outputs' columns too */
+    unsigned long generation;
+    double time, z[DYN_MAX_Q], zd[DYN_MAX_Q];
+    DynParams p;
+    double dzdd[2 * DYN_MAX_Q][DYN_MAX_Q];
+    DynOut dout[2 * DYN_MAX_Q];
+} JacobianCache;
+
 typedef struct {
     ModelInstance *comp;
-    Ode *ode;
+    Ode *ode;           /* doStep's integrator (Co-Simulation), made at the first step */
     DynParams p;
     DynInputs u;        /* the inputs of the current step */
     bool uHeld;         /* they hold over the step (no test steering): rhs() reuses them */
+    JacobianCache jac;  /* Model Exchange: model_directional_derivative's columns */
 } Solver;
+
+/* comp->solver, made on first use (doStep or the Jacobian) */
+static Solver *solver_of(ModelInstance *comp) {
+    if (!comp->solver) {
+        Solver *sv = comp->solver = calloc(1, sizeof(Solver));
+        if (!sv) return NULL;
+        sv->comp = comp;
+    }
+    return comp->solver;
+}
 
 static void make_params(ModelInstance *comp, DynParams *p) {
     memset(p, 0, sizeof *p);
@@ -138,6 +163,16 @@ Status model_init(ModelInstance *comp) {
     return OK;
 }
 
+/* the Model Exchange states z, zd and their derivatives zd, zdd into d */
+static void store_states(ModelData *d, const DynParams *p, const double *z, const double *zd, const double *zdd) {
+    for (int i = 0; i < DYN_MAX_Q; i++) {
+        const int on = i < dyn_nq(p);
+        d->z[i + 1] = on ? z[i] : 0.0;
+        d->zd[i + 1] = on ? zd[i] : 0.0;
+        d->zdd[i + 1] = on ? zdd[i] : 0.0;
+    }
+}
+
 /* the outputs from dyn_eval's o, the coordinates z, rates zd and their
    derivatives zdd into d: the values into the model's variables, or their
    derivatives along a seed into the tangent of model_directional_derivative */
@@ -174,13 +209,7 @@ static void store_outputs(ModelData *d, const DynParams *p, const DynOut *o, con
         d->FjointY[k] = on ? o->FjY[k] : 0.0;
     }
     d->v = o->v;
-    /* the Model Exchange states and their second derivatives */
-    for (int i = 0; i < DYN_MAX_Q; i++) {
-        const int on = i < dyn_nq(p);
-        d->z[i + 1] = on ? z[i] : 0.0;
-        d->zd[i + 1] = on ? zd[i] : 0.0;
-        d->zdd[i + 1] = on ? zdd[i] : 0.0;
-    }
+    store_states(d, p, z, zd, zdd);
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -197,10 +226,95 @@ void model_outputs(ModelInstance *comp) {
     store_outputs(D, &p, &o, s->z, s->zd, zdd);
 }
 
+/* the one state whose seed is not 0 when nothing else is seeded (a column of
+   the Jacobian, or a multiple of one): its index j into [z, zd] (0 .. 2 nq);
+   NO_SEED when no state of the chain and no input is seeded (the padding
+   states beyond nModules are held at 0: their columns are 0), else -1 */
+#define NO_SEED (-2)
+static int single_state_seed(const ModelData *seed, int nq) {
+    for (int a = 1; a <= DYN_MAX_AXLES; a++)
+        if (seed->delta[a] != 0.0 || seed->Fx[a] != 0.0) return -1;
+    for (int k = 1; k <= DYN_MAX_HINGES; k++)
+        if (seed->Mjoint[k] != 0.0) return -1;
+    int j = NO_SEED;
+    for (int i = 0; i < 2 * nq; i++)
+        if ((i < nq ? seed->z[i + 1] : seed->zd[i - nq + 1]) != 0.0) {
+            if (j != NO_SEED) return -1;
+            j = i;
+        }
+    return j;
+}
+
+/* the cache at this point, with the outputs' columns if asked: filled by one
+   vector-mode pass (dyn_eval_jacobian) when the point moved */
+static const JacobianCache *jacobian_at(ModelInstance *comp, bool outputs) {
+    const ModelState *st = &comp->v.s;
+    Solver *sv = solver_of(comp);
+    if (!sv) return log_error(comp, "out of memory"), NULL;
+    JacobianCache *c = &sv->jac;
+    const size_t nz = sizeof(double) * DYN_MAX_Q;
+    if (c->valid && (c->outputs || !outputs) && c->generation == comp->generation && c->time == comp->v.time
+        && !memcmp(c->z, st->z, nz) && !memcmp(c->zd, st->zd, nz))
+        return c;
+    DynInputs u;
+    double zdd[DYN_MAX_Q];
+    DynOut o;
+    make_params(comp, &c->p);
+    for (int a = 1; a <= DYN_MAX_AXLES; a++) c->p.Fz[a] = D->Fz[a];
+    make_inputs(comp, comp->v.time, &u);
+    memset(&o, 0, sizeof o);
+    c->valid = false;
+    if (dyn_eval_jacobian(&c->p, &u, st->z, st->zd, zdd, c->dzdd, outputs ? &o : NULL, outputs ? c->dout : NULL))
+        return log_error(comp, "t = %.17g: the mass matrix of the equations of motion is not "
+                               "positive definite", comp->v.time), NULL;
+    c->generation = comp->generation;
+    c->time = comp->v.time;
+    memcpy(c->z, st->z, nz);
+    memcpy(c->zd, st->zd, nz);
+    c->valid = true;
+    c->outputs = outputs;
+    return c;
+}
+
+/* column j of the Jacobian times s (j = NO_SEED: none) into the tangent: the
+   outputs' part only when the layer asks for an output (comp->ddOutputs) */
+static Status jacobian_column(ModelInstance *comp, int j, double s, ModelData *tangent) {
+    const JacobianCache *c = jacobian_at(comp, comp->ddOutputs);
+    if (!c) return Error;
+    const int nq = dyn_nq(&c->p);
+    double dz[DYN_MAX_Q] = { 0 }, dzd[DYN_MAX_Q] = { 0 }, dzdd[DYN_MAX_Q] = { 0 };
+    DynOut scaled;
+    const DynOut *dout = &scaled;
+    if (j == NO_SEED) {
+        memset(&scaled, 0, sizeof scaled);
+    } else {
+        if (j < nq) dz[j] = s;
+        else dzd[j - nq] = s;
+        for (int i = 0; i < nq; i++) dzdd[i] = s * c->dzdd[j][i];
+        if (!c->outputs) {
+            store_states(tangent, &c->p, dz, dzd, dzdd);
+            return OK;
+        }
+        if (s == 1.0) {
+            dout = &c->dout[j];
+        } else {
+            const double *col = (const double *)&c->dout[j];   /* every field of DynOut is a double */
+            double *f = (double *)&scaled;
+            for (size_t i = 0; i < sizeof scaled / sizeof(double); i++) f[i] = s * col[i];
+        }
+    }
+    store_outputs(tangent, &c->p, dout, dz, dzd, dzdd);
+    return OK;
+}
+
 /* Forward mode through dynamics.cpp on dual numbers (dyn_eval_tangent): the
- * seed of the states z[i], zd[i] and of the inputs delta, Fx, Mjoint. */
+ * seed of the states z[i], zd[i] and of the inputs delta, Fx, Mjoint. A seed
+ * of one state alone (a column of the Jacobian) from jacobian_column. */
 Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, ModelData *tangent) {
     if (check_inputs(comp, comp->v.time)) return Error;
+    const int nq = 2 + D->nModules, j = single_state_seed(seed, nq);
+    if (j >= 0 || j == NO_SEED)
+        return jacobian_column(comp, j, j < 0 ? 0.0 : j < nq ? seed->z[j + 1] : seed->zd[j - nq + 1], tangent);
     const ModelState *s = &comp->v.s;
     DynParams p;
     make_params(comp, &p);
@@ -213,11 +327,10 @@ Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, 
         du.Fx[a] = seed->Fx[a];
     }
     for (int k = 1; k <= DYN_MAX_HINGES; k++) du.Mjoint[k] = seed->Mjoint[k];
-    const int nq = dyn_nq(&p);
-    double dz[DYN_MAX_Q], dzd[DYN_MAX_Q], zdd[DYN_MAX_Q], dzdd[DYN_MAX_Q];
-    for (int i = 0; i < DYN_MAX_Q; i++) {      /* states beyond nModules are held at 0 */
-        dz[i] = i < nq ? seed->z[i + 1] : 0.0;
-        dzd[i] = i < nq ? seed->zd[i + 1] : 0.0;
+    double dz[DYN_MAX_Q] = { 0 }, dzd[DYN_MAX_Q] = { 0 }, zdd[DYN_MAX_Q], dzdd[DYN_MAX_Q];
+    for (int i = 0; i < nq; i++) {      /* states beyond nModules are held at 0 */
+        dz[i] = seed->z[i + 1];
+        dzd[i] = seed->zd[i + 1];
     }
     DynOut o, dout;
     memset(&o, 0, sizeof o);
@@ -240,11 +353,9 @@ static int rhs(double t, const double *y, double *ydot, void *user) {
 
 Status model_do_step(ModelInstance *comp, double t, double h) {
     if (check_inputs(comp, t)) return Error;
-    Solver *sv = comp->solver;
-    if (!sv) {
-        sv = comp->solver = calloc(1, sizeof(Solver));
-        if (!sv) return log_error(comp, "out of memory");
-        sv->comp = comp;
+    Solver *sv = solver_of(comp);
+    if (!sv) return log_error(comp, "out of memory");
+    if (!sv->ode) {
         sv->ode = ode_new(comp, 2 * (2 + D->nModules), rhs, 0, NULL, sv,
                           D->solver == 2 ? ODE_ERK : D->solver == 1 ? ODE_ADAMS : ODE_BDF,
                           D->rtol, D->atol);

@@ -40,6 +40,6 @@ extern "C" void kin_outputs_tangent(int N, int k, const double L[], const double
     kin_dual::kin_outputs(&c, &dr, yy, o);
     for (int i = 0; i < kin_dual::KIN_NOUT; i++) {
         out[i] = o[i].v;
-        dout[i] = o[i].d;
+        dout[i] = o[i].d[0];
     }
 }

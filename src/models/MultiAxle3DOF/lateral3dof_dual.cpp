@@ -27,6 +27,6 @@ extern "C" void ma_outputs_tangent(const MaVehicle *veh, const MaMass *mm, doubl
     ma_dual::ma_outputs(veh, mm, artibus::Dual(u, du), dl, artibus::Dual(Md, dMd), yy, o);
     for (int i = 0; i < MA_NOUT; i++) {
         out[i] = o[i].v;
-        dout[i] = o[i].d;
+        dout[i] = o[i].d[0];
     }
 }

@@ -1,72 +1,134 @@
-/* A dual number a + b eps (eps^2 = 0) for forward-mode differentiation: the
- * models' C equations, written on a real type (MA_REAL, ...), are compiled a
- * second time in C++ on Dual, and the eps part of every result is its
- * derivative along the seed put into the eps parts of the arguments: exact to
- * rounding, from the one source of the equations (fmu.h:
- * model_directional_derivative). Comparisons look at the value only, so a
- * branch takes the same side as the double build. Only what the models use. */
+/* A dual number a + b1 eps1 + .. + bK epsK (eps_i eps_j = 0) for forward-mode
+ * differentiation: the models' C equations, written on a real type (MA_REAL,
+ * ...), are compiled a second time in C++ on Dual, and the eps parts of every
+ * result are its derivatives along the seeds put into the eps parts of the
+ * arguments: exact to rounding, from the one source of the equations (fmu.h:
+ * model_directional_derivative). Dual (K = 1) is one seed; DualN<K> carries K
+ * seeds through one evaluation (vector mode: a whole Jacobian in one pass, the
+ * values and every elementary function computed once). Comparisons look at the
+ * value only, so a branch takes the same side as the double build. Only what
+ * the models use. */
 #ifndef ARTIBUS_DUAL_HPP
 #define ARTIBUS_DUAL_HPP
 
 #include <cmath>
 
+/* every operation inlined: on K seeds an operation is a loop the compiler
+   would otherwise call, and Eigen's expressions on custom scalars nest them */
+#if defined(__GNUC__)
+#define ARTIBUS_DUAL_INLINE inline __attribute__((always_inline))
+#else
+#define ARTIBUS_DUAL_INLINE inline
+#endif
+
 namespace artibus {
 
-struct Dual {
-    double v, d;      /* value, derivative along the seed */
-    Dual(double value = 0.0, double deriv = 0.0) : v(value), d(deriv) {}
-    Dual &operator+=(const Dual &b) { d += b.d; v += b.v; return *this; }
-    Dual &operator-=(const Dual &b) { d -= b.d; v -= b.v; return *this; }
-    Dual &operator*=(const Dual &b) { d = d * b.v + v * b.d; v *= b.v; return *this; }
-    Dual &operator/=(const Dual &b) { d = (d * b.v - v * b.d) / (b.v * b.v); v /= b.v; return *this; }
+template <int K>
+struct DualN {
+    double v;         /* value */
+    double d[K];      /* derivatives along the K seeds */
+    ARTIBUS_DUAL_INLINE DualN(double value = 0.0, double deriv = 0.0) : v(value) {
+        d[0] = deriv;
+        for (int k = 1; k < K; k++) d[k] = 0.0;
+    }
+    ARTIBUS_DUAL_INLINE DualN &operator+=(const DualN &b) { for (int k = 0; k < K; k++) d[k] += b.d[k]; v += b.v; return *this; }
+    ARTIBUS_DUAL_INLINE DualN &operator-=(const DualN &b) { for (int k = 0; k < K; k++) d[k] -= b.d[k]; v -= b.v; return *this; }
+    ARTIBUS_DUAL_INLINE DualN &operator*=(const DualN &b) {
+        for (int k = 0; k < K; k++) d[k] = d[k] * b.v + v * b.d[k];
+        v *= b.v;
+        return *this;
+    }
+    ARTIBUS_DUAL_INLINE DualN &operator/=(const DualN &b) {
+        for (int k = 0; k < K; k++) d[k] = (d[k] * b.v - v * b.d[k]) / (b.v * b.v);
+        v /= b.v;
+        return *this;
+    }
+    /* a constant: no derivative parts to combine */
+    ARTIBUS_DUAL_INLINE DualN &operator+=(double b) { v += b; return *this; }
+    ARTIBUS_DUAL_INLINE DualN &operator-=(double b) { v -= b; return *this; }
+    ARTIBUS_DUAL_INLINE DualN &operator*=(double b) { for (int k = 0; k < K; k++) d[k] *= b; v *= b; return *this; }
+    ARTIBUS_DUAL_INLINE DualN &operator/=(double b) { for (int k = 0; k < K; k++) d[k] /= b; v /= b; return *this; }
 };
 
-inline Dual operator+(Dual a, const Dual &b) { return a += b; }
-inline Dual operator-(Dual a, const Dual &b) { return a -= b; }
-inline Dual operator*(Dual a, const Dual &b) { return a *= b; }
-inline Dual operator/(Dual a, const Dual &b) { return a /= b; }
-inline Dual operator-(const Dual &a) { return Dual(-a.v, -a.d); }
-inline Dual operator+(const Dual &a) { return a; }
+using Dual = DualN<1>;
 
-inline bool operator<(const Dual &a, const Dual &b) { return a.v < b.v; }
-inline bool operator>(const Dual &a, const Dual &b) { return a.v > b.v; }
-inline bool operator<=(const Dual &a, const Dual &b) { return a.v <= b.v; }
-inline bool operator>=(const Dual &a, const Dual &b) { return a.v >= b.v; }
-inline bool operator==(const Dual &a, const Dual &b) { return a.v == b.v; }
-inline bool operator!=(const Dual &a, const Dual &b) { return a.v != b.v; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator+(DualN<K> a, const DualN<K> &b) { return a += b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator-(DualN<K> a, const DualN<K> &b) { return a -= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator*(DualN<K> a, const DualN<K> &b) { return a *= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator/(DualN<K> a, const DualN<K> &b) { return a /= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator+(DualN<K> a, double b) { return a += b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator-(DualN<K> a, double b) { return a -= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator*(DualN<K> a, double b) { return a *= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator/(DualN<K> a, double b) { return a /= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator+(double a, DualN<K> b) { return b += a; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator-(double a, const DualN<K> &b) { return DualN<K>(a) -= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator*(double a, DualN<K> b) { return b *= a; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator/(double a, const DualN<K> &b) { return DualN<K>(a) /= b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator-(DualN<K> a) {
+    a.v = -a.v;
+    for (int k = 0; k < K; k++) a.d[k] = -a.d[k];
+    return a;
+}
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> operator+(const DualN<K> &a) { return a; }
 
-/* the chain rule, f(a) + f'(a) a.d eps */
-inline Dual sin(const Dual &a) { return Dual(std::sin(a.v), std::cos(a.v) * a.d); }
-inline Dual cos(const Dual &a) { return Dual(std::cos(a.v), -std::sin(a.v) * a.d); }
-inline Dual tan(const Dual &a) {
+/* comparisons on the values; a constant on either side */
+#define ARTIBUS_DUAL_COMPARE(op)                                                                  \
+    template <int K> ARTIBUS_DUAL_INLINE bool operator op(const DualN<K> &a, const DualN<K> &b) { return a.v op b.v; } \
+    template <int K> ARTIBUS_DUAL_INLINE bool operator op(const DualN<K> &a, double b) { return a.v op b; }            \
+    template <int K> ARTIBUS_DUAL_INLINE bool operator op(double a, const DualN<K> &b) { return a op b.v; }
+ARTIBUS_DUAL_COMPARE(<)
+ARTIBUS_DUAL_COMPARE(>)
+ARTIBUS_DUAL_COMPARE(<=)
+ARTIBUS_DUAL_COMPARE(>=)
+ARTIBUS_DUAL_COMPARE(==)
+ARTIBUS_DUAL_COMPARE(!=)
+#undef ARTIBUS_DUAL_COMPARE
+
+/* the chain rule, f(a) + f'(a) a.d eps: the value f(a) and the factor f'(a) once */
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> chain(double f, double df, const DualN<K> &a) {
+    DualN<K> r(f);
+    for (int k = 0; k < K; k++) r.d[k] = df * a.d[k];
+    return r;
+}
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> sin(const DualN<K> &a) { return chain(std::sin(a.v), std::cos(a.v), a); }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> cos(const DualN<K> &a) { return chain(std::cos(a.v), -std::sin(a.v), a); }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> tan(const DualN<K> &a) {
     const double t = std::tan(a.v);
-    return Dual(t, (1.0 + t * t) * a.d);
+    return chain(t, 1.0 + t * t, a);
 }
-inline Dual atan(const Dual &a) { return Dual(std::atan(a.v), a.d / (1.0 + a.v * a.v)); }
-inline Dual atan2(const Dual &y, const Dual &x) {
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> atan(const DualN<K> &a) { return chain(std::atan(a.v), 1.0 / (1.0 + a.v * a.v), a); }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> atan2(const DualN<K> &y, const DualN<K> &x) {
     const double r2 = x.v * x.v + y.v * y.v;
-    return Dual(std::atan2(y.v, x.v), (x.v * y.d - y.v * x.d) / r2);
+    DualN<K> r(std::atan2(y.v, x.v));
+    for (int k = 0; k < K; k++) r.d[k] = (x.v * y.d[k] - y.v * x.d[k]) / r2;
+    return r;
 }
-inline Dual sqrt(const Dual &a) {
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> sqrt(const DualN<K> &a) {
     const double s = std::sqrt(a.v);
-    return Dual(s, a.d / (2.0 * s));
+    return chain(s, 1.0 / (2.0 * s), a);
 }
-inline Dual hypot(const Dual &a, const Dual &b) {
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> hypot(const DualN<K> &a, const DualN<K> &b) {
     const double h = std::hypot(a.v, b.v);
-    return Dual(h, h > 0.0 ? (a.v * a.d + b.v * b.d) / h : 0.0);
+    DualN<K> r(h);
+    for (int k = 0; k < K; k++) r.d[k] = h > 0.0 ? (a.v * a.d[k] + b.v * b.d[k]) / h : 0.0;
+    return r;
 }
-inline Dual exp(const Dual &a) {
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> exp(const DualN<K> &a) {
     const double e = std::exp(a.v);
-    return Dual(e, e * a.d);
+    return chain(e, e, a);
 }
-inline Dual tanh(const Dual &a) {
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> tanh(const DualN<K> &a) {
     const double t = std::tanh(a.v);
-    return Dual(t, (1.0 - t * t) * a.d);
+    return chain(t, 1.0 - t * t, a);
 }
-inline Dual fabs(const Dual &a) { return a.v < 0.0 ? -a : a; }
-inline Dual fmax(const Dual &a, const Dual &b) { return a.v >= b.v ? a : b; }
-inline Dual fmin(const Dual &a, const Dual &b) { return a.v <= b.v ? a : b; }
-inline bool isfinite(const Dual &a) { return std::isfinite(a.v) && std::isfinite(a.d); }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> fabs(const DualN<K> &a) { return a.v < 0.0 ? -a : a; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> fmax(const DualN<K> &a, const DualN<K> &b) { return a.v >= b.v ? a : b; }
+template <int K> ARTIBUS_DUAL_INLINE DualN<K> fmin(const DualN<K> &a, const DualN<K> &b) { return a.v <= b.v ? a : b; }
+template <int K> ARTIBUS_DUAL_INLINE bool isfinite(const DualN<K> &a) {
+    bool f = std::isfinite(a.v);
+    for (int k = 0; k < K; k++) f = f && std::isfinite(a.d[k]);
+    return f;
+}
 
 }  // namespace artibus
 
