@@ -1,4 +1,6 @@
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -55,6 +57,18 @@ def fmu_file(name):
     path = fmu_dir() / f"{name}.fmu"
     assert path.is_file(), f"{path} not built: run the set-up command of the README"
     return path
+
+
+def need_fmus(*names):
+    """skip the test where one of the FMUs ``names`` is not built"""
+    for n in names:
+        if not (fmu_dir() / f"{n}.fmu").is_file():
+            pytest.skip(f"{n}.fmu not built")
+
+
+def run_artibus(*args):
+    """``python -m artibus ARGS...`` as a user runs it: the finished process, its output as text"""
+    return subprocess.run([sys.executable, "-m", "artibus", *map(str, args)], capture_output=True, text=True)
 
 
 def packer_inputs(fmu, tmp_path):

@@ -10,26 +10,17 @@ artibus.linear.bench, artibus.linear.describing, artibus.study.modes, `artibus l
   thesis gives (5.2.4: option 1 worse than options 2 and 3; 5.1.1: the floor always there);
 - bad input: a bench without Model Exchange plants, an unknown input, a jack-knifed point."""
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from conftest import need_fmus as need, run_artibus as run_cli
+
 ROOT = Path(__file__).resolve().parents[1]
 FMUS = ROOT / "fmus"
 W = np.geomspace(0.1, 60, 300)          # rad/s: 0.016-9.5 Hz, Fig. 4's range and beyond
 
-
-def need(*names):
-    for n in names:
-        if not (FMUS / f"{n}.fmu").is_file():
-            pytest.skip(f"{n}.fmu not built")
-
-
-def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "artibus", *map(str, args)], capture_output=True, text=True)
 
 
 # --- seed 004 ----------------------------------------------------------------------------------

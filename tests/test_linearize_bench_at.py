@@ -11,30 +11,16 @@ numbers the linearisation printed:
   controller at its 34 % limit) the sway mode has moved; back on the straight (14 s, the speed
   within 0.1 % of the set one) the modes are the start's again;
 - bad input (--at with --steady, before the start, after the stop time, not finite): one line."""
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-FMUS = ROOT / "fmus"
+from conftest import need_fmus as need, run_artibus as run_cli
+
 BENCH = "Scania18m_Damping"
 PLANT = ("BusDynamics", "ArticulationDamper", "DampingController", "SwayBaseline", "RoadFollowDriver")
 #: the plant's outputs that are functions of its states alone (no feedthrough from its inputs)
 KINEMATIC = ["Bus.xAxle[1]", "Bus.yAxle[1]", "Bus.psi[1]", "Bus.vx[1]", "Bus.vx[2]", "Bus.artAngle[1]",
              "Bus.artRate[1]"]
-
-
-def need(*names):
-    for n in names:
-        if not (FMUS / f"{n}.fmu").is_file():
-            pytest.skip(f"{n}.fmu not built")
-
-
-def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "artibus", *map(str, args)], capture_output=True, text=True)
 
 
 def recorded(fmi_type, T):

@@ -12,16 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <cvode/cvode.h>
-#include <nvector/nvector_serial.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
-
-#if SUNDIALS_VERSION_MAJOR >= 7
-#define ME_COMM SUN_COMM_NULL
-#else
-#define ME_COMM NULL
-#endif
+#include "cv_dense.h"
 
 /* event iterations (newDiscreteStatesNeeded / discreteStatesNeedUpdate) before an error,
  * and events at one instant (an FMU whose time event never moves on) */
@@ -31,12 +22,7 @@
 #define MAX_NUM_STEPS 100000
 
 typedef struct {
-    SUNContext ctx;
-    void *mem;
-    N_Vector y, abstol;
-    SUNMatrix A;
-    SUNLinearSolver LS;
-    size_t n;                        /* CVODE's states: nx, or one of its own when nx = 0 */
+    cv_dense cv;                     /* CVODE on nx states, or one of its own when nx = 0 */
     double *nominal;                 /* nx */
 } me_solver;
 
@@ -222,32 +208,12 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *g, void *p) {
     return 0;
 }
 
-#if SUNDIALS_VERSION_MAJOR >= 7
-static void cv_error(int line, const char *func, const char *file, const char *msg,
-                     SUNErrCode code, void *p, SUNContext ctx) {
-    (void)line, (void)file, (void)ctx;
-    ac_me *me = p;
-    if (!me->message[0])
-        say(me, "CVODE %s (flag %d): %s", func, (int)code, msg);
-}
-#else
-static void cv_error(int code, const char *module, const char *func, char *msg, void *p) {
-    ac_me *me = p;
-    if (code < 0 && !me->message[0])      /* the right-hand side's own message, if it gave one, first */
-        say(me, "%s %s (flag %d): %s", module, func, code, msg);
-}
-#endif
-
 /* the absolute tolerances: rtol * |nominal| of each state (as FMPy's CVodeSolver takes them) */
 static fmi2Status tolerances(ac_me *me, me_solver *s) {
-    double *a = N_VGetArrayPointer(s->abstol);
     fmi2Status st = get_nominals(me, s->nominal);
     if (st > fmi2Warning)
         return call_failed(me, "GetNominalsOfContinuousStates", st, me->time);
-    for (size_t i = 0; i < s->n; i++) {
-        const double nominal = i < me->nx ? fabs(s->nominal[i]) : 1.0;
-        a[i] = me->rtol * (isfinite(nominal) && nominal > 0 ? nominal : 1.0);
-    }
+    cv_dense_abstol(&s->cv, s->nominal, me->nx, me->rtol);
     return fmi2OK;
 }
 
@@ -256,12 +222,12 @@ static fmi2Status tolerances(ac_me *me, me_solver *s) {
  * is of the old equations either way) */
 static fmi2Status restart(ac_me *me) {
     me_solver *s = me->solver;
-    fmi2Status st = get_states(me, N_VGetArrayPointer(s->y));
+    fmi2Status st = get_states(me, N_VGetArrayPointer(s->cv.y));
     if (st > fmi2Warning)
         return call_failed(me, "GetContinuousStates", st, me->time);
     if ((st = tolerances(me, s)) > fmi2Warning)
         return st;
-    if (CVodeReInit(s->mem, me->time, s->y) != CV_SUCCESS || CVodeSVtolerances(s->mem, me->rtol, s->abstol))
+    if (!cv_dense_restart(&s->cv, me->time, me->rtol))
         return say(me, "CVODE could not restart at t = %.17g", me->time), fmi2Error;
     me->restarts++;
     return fmi2OK;
@@ -270,18 +236,7 @@ static fmi2Status restart(ac_me *me) {
 static void solver_free(me_solver *s) {
     if (!s)
         return;
-    if (s->mem)
-        CVodeFree(&s->mem);
-    if (s->LS)
-        SUNLinSolFree(s->LS);
-    if (s->A)
-        SUNMatDestroy(s->A);
-    if (s->y)
-        N_VDestroy(s->y);
-    if (s->abstol)
-        N_VDestroy(s->abstol);
-    if (s->ctx)
-        SUNContext_Free(&s->ctx);
+    cv_dense_free(&s->cv);
     free(s->nominal);
     free(s);
 }
@@ -293,40 +248,21 @@ static fmi2Status solver_new(ac_me *me) {
     if (!s)
         return say(me, "out of memory"), fmi2Fatal;
     me->solver = s;
-    s->n = me->nx ? me->nx : 1;
-    s->nominal = calloc(s->n, sizeof(double));
-    if (!s->nominal || SUNContext_Create(ME_COMM, &s->ctx))
+    s->nominal = calloc(me->nx ? me->nx : 1, sizeof(double));
+    if (!s->nominal || !cv_dense_create(&s->cv, me->nx, me->adams, me->message, sizeof me->message))
         return say(me, "out of memory"), fmi2Fatal;
-#if SUNDIALS_VERSION_MAJOR >= 7
-    SUNContext_ClearErrHandlers(s->ctx);
-    SUNContext_PushErrHandler(s->ctx, cv_error, me);
-#endif
-    s->y = N_VNew_Serial((sunindextype)s->n, s->ctx);
-    s->abstol = N_VNew_Serial((sunindextype)s->n, s->ctx);
-    s->mem = CVodeCreate(me->adams ? CV_ADAMS : CV_BDF, s->ctx);
-    if (!s->y || !s->abstol || !s->mem)
-        return say(me, "out of memory"), fmi2Fatal;
-    N_VConst(0.0, s->y);
-#if SUNDIALS_VERSION_MAJOR < 7
-    CVodeSetErrHandlerFn(s->mem, cv_error, me);
-#endif
-    fmi2Status st = get_states(me, N_VGetArrayPointer(s->y));
+    fmi2Status st = get_states(me, N_VGetArrayPointer(s->cv.y));
     if (st > fmi2Warning)
         return call_failed(me, "GetContinuousStates", st, me->time);
     if ((st = tolerances(me, s)) > fmi2Warning)
         return st;
-    s->A = SUNDenseMatrix((sunindextype)s->n, (sunindextype)s->n, s->ctx);
-    s->LS = s->A ? SUNLinSol_Dense(s->y, s->A, s->ctx) : NULL;
-    if (CVodeInit(s->mem, rhs, me->time, s->y) != CV_SUCCESS || CVodeSetUserData(s->mem, me) != CV_SUCCESS
-        || CVodeSVtolerances(s->mem, me->rtol, s->abstol) != CV_SUCCESS || !s->LS
-        || CVodeSetLinearSolver(s->mem, s->LS, s->A) != CV_SUCCESS
-        || CVodeSetMaxNumSteps(s->mem, MAX_NUM_STEPS) != CV_SUCCESS
-        || (me->jacobian && me->nx && CVodeSetJacFn(s->mem, jac) != CV_SUCCESS)
-        || (me->nz && CVodeRootInit(s->mem, (int)me->nz, roots) != CV_SUCCESS))
+    if (!cv_dense_init(&s->cv, rhs, me->time, me, me->rtol, MAX_NUM_STEPS)
+        || (me->jacobian && me->nx && CVodeSetJacFn(s->cv.mem, jac) != CV_SUCCESS)
+        || (me->nz && CVodeRootInit(s->cv.mem, (int)me->nz, roots) != CV_SUCCESS))
         return say(me, "CVODE could not be set up for %zu states and %zu event indicators (rtol %g)",
                    me->nx, me->nz, me->rtol), fmi2Error;
     if (me->nz)
-        CVodeSetNoInactiveRootWarn(s->mem);
+        CVodeSetNoInactiveRootWarn(s->cv.mem);
     return fmi2OK;
 }
 
@@ -443,11 +379,11 @@ static fmi2Status integrate(ac_me *me, double tout, int time_event, int *event) 
     sunrealtype tret = me->time;
     long before = 0, after = 0;
     *event = 0;
-    CVodeSetStopTime(s->mem, time_event || me->stop_at_points ? tout : INFINITY);
-    CVodeGetNumSteps(s->mem, &before);
+    CVodeSetStopTime(s->cv.mem, time_event || me->stop_at_points ? tout : INFINITY);
+    CVodeGetNumSteps(s->cv.mem, &before);
     me->message[0] = 0;
-    const int flag = CVode(s->mem, tout, s->y, &tret, CV_NORMAL);
-    CVodeGetNumSteps(s->mem, &after);
+    const int flag = CVode(s->cv.mem, tout, s->cv.y, &tret, CV_NORMAL);
+    CVodeGetNumSteps(s->cv.mem, &after);
     me->steps += after - before;
     if (flag < 0) {
         char why[sizeof me->message];
@@ -463,7 +399,7 @@ static fmi2Status integrate(ac_me *me, double tout, int time_event, int *event) 
     if ((st = set_time(me, tret)) > fmi2Warning)
         return call_failed(me, "SetTime", st, tret);
     me->time = tret;
-    if ((st = set_states(me, N_VGetArrayPointer(s->y))) > fmi2Warning)
+    if ((st = set_states(me, N_VGetArrayPointer(s->cv.y))) > fmi2Warning)
         return call_failed(me, "SetContinuousStates", st, tret);
     if (flag == CV_ROOT_RETURN) {
         me->state_events++;

@@ -20,26 +20,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <cvode/cvode.h>
-#include <nvector/nvector_serial.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
-
-#if SUNDIALS_VERSION_MAJOR >= 7
-#define GROUP_COMM SUN_COMM_NULL
-#else
-#define GROUP_COMM NULL
-#endif
+#include "cv_dense.h"
 
 #define MAX_EVENTS_AT_ONE_TIME 1000
 #define MAX_NUM_STEPS 500000
 
 typedef struct {
-    SUNContext ctx;
-    void *mem;
-    N_Vector y, abstol;
-    SUNMatrix A;
-    SUNLinearSolver LS;
+    cv_dense cv;                     /* CVODE on every member's states (at least 1) */
     size_t n, nz;                    /* states (at least 1), event indicators */
     size_t *x0, *z0;                 /* each member's first state, first indicator (n_members + 1) */
     double *nominal;
@@ -120,28 +107,12 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *z, void *p) {
     return 0;
 }
 
-#if SUNDIALS_VERSION_MAJOR >= 7
-static void cv_error(int line, const char *func, const char *file, const char *msg, SUNErrCode code, void *p,
-                     SUNContext ctx) {
-    (void)line, (void)file, (void)ctx;
-    ac_me_group *g = p;
-    if (!g->message[0])
-        say(g, "CVODE %s (flag %d): %s", func, (int)code, msg);
-}
-#else
-static void cv_error(int code, const char *module, const char *func, char *msg, void *p) {
-    ac_me_group *g = p;
-    if (code < 0 && !g->message[0])
-        say(g, "%s %s (flag %d): %s", module, func, code, msg);
-}
-#endif
-
 /* y from every member's states, the absolute tolerances from their nominals */
 static fmi2Status gather(ac_me_group *g) {
     group_solver *s = g->solver;
-    double *y = N_VGetArrayPointer(s->y), *a = N_VGetArrayPointer(s->abstol);
+    double *y = N_VGetArrayPointer(s->cv.y);
     fmi2Status st;
-    N_VConst(0.0, s->y);
+    N_VConst(0.0, s->cv.y);
     for (int i = 0; i < g->n_members; i++) {
         ac_me *m = g->members[i];
         if ((st = me_fmu_get_states(m, y + s->x0[i])) > fmi2Warning)
@@ -149,28 +120,14 @@ static fmi2Status gather(ac_me_group *g) {
         if ((st = me_fmu_get_nominals(m, s->nominal + s->x0[i])) > fmi2Warning)
             return me_fmu_failed(m, "GetNominalsOfContinuousStates", st, g->time), member_failed(g, i, st);
     }
-    for (size_t j = 0; j < s->n; j++) {
-        const double nominal = fabs(s->nominal[j]);
-        a[j] = g->rtol * (isfinite(nominal) && nominal > 0 ? nominal : 1.0);
-    }
+    cv_dense_abstol(&s->cv, s->nominal, s->x0[g->n_members], g->rtol);
     return fmi2OK;
 }
 
 static void solver_free(group_solver *s) {
     if (!s)
         return;
-    if (s->mem)
-        CVodeFree(&s->mem);
-    if (s->LS)
-        SUNLinSolFree(s->LS);
-    if (s->A)
-        SUNMatDestroy(s->A);
-    if (s->y)
-        N_VDestroy(s->y);
-    if (s->abstol)
-        N_VDestroy(s->abstol);
-    if (s->ctx)
-        SUNContext_Free(&s->ctx);
+    cv_dense_free(&s->cv);
     free(s->x0), free(s->z0), free(s->nominal), free(s->roots), free(s->due);
     free(s);
 }
@@ -209,34 +166,17 @@ static fmi2Status solver_new(ac_me_group *g) {
         if (!g->members[i]->solver)
             return say(g, "member '%s' stepped before its initialisation's end", g->members[i]->name), fmi2Error;
     g->time = g->members[0]->time;
-    if (!layout(g, s) || SUNContext_Create(GROUP_COMM, &s->ctx))
+    if (!layout(g, s) || !cv_dense_create(&s->cv, s->n, g->adams, g->message, sizeof g->message))
         return say(g, "out of memory"), fmi2Fatal;
-#if SUNDIALS_VERSION_MAJOR >= 7
-    SUNContext_ClearErrHandlers(s->ctx);
-    SUNContext_PushErrHandler(s->ctx, cv_error, g);
-#endif
-    s->y = N_VNew_Serial((sunindextype)s->n, s->ctx);
-    s->abstol = N_VNew_Serial((sunindextype)s->n, s->ctx);
-    s->mem = CVodeCreate(g->adams ? CV_ADAMS : CV_BDF, s->ctx);
-    if (!s->y || !s->abstol || !s->mem)
-        return say(g, "out of memory"), fmi2Fatal;
-#if SUNDIALS_VERSION_MAJOR < 7
-    CVodeSetErrHandlerFn(s->mem, cv_error, g);
-#endif
     if ((st = gather(g)) > fmi2Warning)
         return st;
-    s->A = SUNDenseMatrix((sunindextype)s->n, (sunindextype)s->n, s->ctx);
-    s->LS = s->A ? SUNLinSol_Dense(s->y, s->A, s->ctx) : NULL;
-    if (CVodeInit(s->mem, rhs, g->time, s->y) != CV_SUCCESS || CVodeSetUserData(s->mem, g) != CV_SUCCESS
-        || CVodeSVtolerances(s->mem, g->rtol, s->abstol) != CV_SUCCESS || !s->LS
-        || CVodeSetLinearSolver(s->mem, s->LS, s->A) != CV_SUCCESS
-        || CVodeSetMaxNumSteps(s->mem, MAX_NUM_STEPS) != CV_SUCCESS
-        || (s->nz && CVodeRootInit(s->mem, (int)s->nz, roots) != CV_SUCCESS))
+    if (!cv_dense_init(&s->cv, rhs, g->time, g, g->rtol, MAX_NUM_STEPS)
+        || (s->nz && CVodeRootInit(s->cv.mem, (int)s->nz, roots) != CV_SUCCESS))
         return say(g, "CVODE could not be set up for the group's %zu states and %zu event indicators (rtol %g)",
                    s->n, s->nz, g->rtol), fmi2Error;
     if (s->nz)
-        CVodeSetNoInactiveRootWarn(s->mem);
-    return evaluate(g, g->time, N_VGetArrayPointer(s->y));
+        CVodeSetNoInactiveRootWarn(s->cv.mem);
+    return evaluate(g, g->time, N_VGetArrayPointer(s->cv.y));
 }
 
 /* CVODE from every member's states at g->time (after an event or a changed discrete input) */
@@ -245,10 +185,10 @@ static fmi2Status restart(ac_me_group *g) {
     fmi2Status st;
     if ((st = gather(g)) > fmi2Warning)
         return st;
-    if (CVodeReInit(s->mem, g->time, s->y) != CV_SUCCESS || CVodeSVtolerances(s->mem, g->rtol, s->abstol))
+    if (!cv_dense_restart(&s->cv, g->time, g->rtol))
         return say(g, "CVODE could not restart the group at t = %.17g", g->time), fmi2Error;
     g->restarts++;
-    return evaluate(g, g->time, N_VGetArrayPointer(s->y));
+    return evaluate(g, g->time, N_VGetArrayPointer(s->cv.y));
 }
 
 /* the group ends the simulation at g->time: every member says so as a Co-Simulation FMU would */
@@ -305,11 +245,11 @@ static fmi2Status integrate(ac_me_group *g, double tout, int *event) {
     long before = 0, after = 0;
     fmi2Status st;
     *event = 0;
-    CVodeSetStopTime(s->mem, tout);
-    CVodeGetNumSteps(s->mem, &before);
+    CVodeSetStopTime(s->cv.mem, tout);
+    CVodeGetNumSteps(s->cv.mem, &before);
     g->message[0] = 0;
-    const int flag = CVode(s->mem, tout, s->y, &tret, CV_NORMAL);
-    CVodeGetNumSteps(s->mem, &after);
+    const int flag = CVode(s->cv.mem, tout, s->cv.y, &tret, CV_NORMAL);
+    CVodeGetNumSteps(s->cv.mem, &after);
     g->steps += after - before;
     if (flag < 0) {
         char why[sizeof g->message];
@@ -322,10 +262,10 @@ static fmi2Status integrate(ac_me_group *g, double tout, int *event) {
         return fmi2Error;
     }
     g->time = tret;
-    if ((st = evaluate(g, tret, N_VGetArrayPointer(s->y))) > fmi2Warning)
+    if ((st = evaluate(g, tret, N_VGetArrayPointer(s->cv.y))) > fmi2Warning)
         return st;
     if (flag == CV_ROOT_RETURN) {
-        CVodeGetRootInfo(s->mem, s->roots);
+        CVodeGetRootInfo(s->cv.mem, s->roots);
         for (int i = 0; i < g->n_members; i++)
             for (size_t j = s->z0[i]; j < s->z0[i + 1]; j++)
                 if (s->roots[j])
