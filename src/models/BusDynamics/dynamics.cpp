@@ -10,8 +10,9 @@
 /* Eigen's small fixed-size expressions inlined whole: on the vector dual type
    (dyn_eval_jacobian) GCC otherwise calls every scalar operation of a product
    as a function (3x slower); on double it changes no result (no reordering,
-   no contraction: strict IEEE arithmetic either way) */
-#if defined(__GNUC__) && !defined(EIGEN_STRONG_INLINE)
+   no contraction: strict IEEE arithmetic either way). Only where the compiler
+   optimises: in a debug build forced inlining costs compile time for nothing */
+#if defined(__GNUC__) && defined(__OPTIMIZE__) && !defined(EIGEN_STRONG_INLINE)
 #define EIGEN_STRONG_INLINE inline __attribute__((always_inline))
 #endif
 #include <Eigen/Dense>
@@ -402,16 +403,16 @@ extern "C" int dyn_eval_tangent(const DynParams *p, const DynInputs *u, const Dy
     return 0;
 }
 
-/* vector mode for N modules: the seeds of the states at once, seed j the unit
-   vector of z[j] (j < nq) or of zd[j - nq]; the inputs held. Without the
-   outputs, the seeds of x and y (z[0], z[1]) are left out: the equations of
-   motion do not depend on where the bus is (eq. 3: M, G z' and the tyre forces
-   are functions of the yaw angles and the velocities alone; x and y enter the
-   positions only), so their columns of zdd are 0. F: the seed of x and y given. */
-template <int N, bool F>
+/* vector mode for N modules: the seeds of the states at once, seed k the unit
+   vector of psi_(k+1) (z[k + 2], k < N) or of zd[k - N]; the inputs held. x and
+   y (z[0], z[1]) are not seeded: the equations of motion do not depend on where
+   the bus is (eq. 3: M, G z' and the tyre forces are functions of the yaw angles
+   and the velocities alone; x and y enter the positions only, outputs not
+   computed here), so their columns of zdd are 0. */
+template <int N>
 int eval_jacobian(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
-                  double *zdd, double (*dzdd)[DYN_MAX_Q], DynOut *out, DynOut *dout) {
-    constexpr int NQ = 2 + N, J0 = F ? 0 : 2, K = 2 * NQ - J0;   /* seed k: state k + J0 of [z, zd] */
+                  double *zdd, double (*dzdd)[DYN_MAX_Q]) {
+    constexpr int NQ = 2 + N, K = 2 * NQ - 2;   /* seed k: state k + 2 of [z, zd] */
     using D = artibus::DualN<K>;
     DualInputs<D> ui;
     for (int a = 1; a <= DYN_MAX_AXLES; a++) {
@@ -425,42 +426,26 @@ int eval_jacobian(const DynParams *p, const DynInputs *u, const double *z, const
         zz[i] = D(z[i]);
         zzd[i] = D(zd[i]);
         if (i < NQ) {
-            if (i >= J0) zz[i].d[i - J0] = 1.0;
-            zzd[i].d[NQ + i - J0] = 1.0;
+            if (i >= 2) zz[i].d[i - 2] = 1.0;
+            zzd[i].d[NQ + i - 2] = 1.0;
         }
     }
-    DualOut<D> o;
-    if (Chain<N, D>::eval(p, &ui, zz, zzd, zzdd, F ? &o : nullptr)) return 1;
+    if (Chain<N, D>::eval(p, &ui, zz, zzd, zzdd, nullptr)) return 1;
     for (int i = 0; i < NQ; i++) {
         zdd[i] = zzdd[i].v;
-        for (int j = 0; j < J0; j++) dzdd[j][i] = 0.0;
-        for (int k = 0; k < K; k++) dzdd[k + J0][i] = zzdd[i].d[k];
-    }
-    if (!F) return 0;
-    const D *src = reinterpret_cast<const D *>(&o);
-    double *val = reinterpret_cast<double *>(out);
-    static_assert(sizeof(DualOut<D>) == sizeof(D) * (sizeof(DynOut) / sizeof(double)), "DualOut mirrors DynOut");
-    for (size_t i = 0; i < sizeof(DynOut) / sizeof(double); i++) {
-        val[i] = src[i].v;
-        for (int j = 0; j < K; j++) reinterpret_cast<double *>(&dout[j])[i] = src[i].d[j];
+        dzdd[0][i] = dzdd[1][i] = 0.0;
+        for (int k = 0; k < K; k++) dzdd[k + 2][i] = zzdd[i].d[k];
     }
     return 0;
 }
 
-template <int N>
-int eval_jacobian_n(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
-                    double *zdd, double (*dzdd)[DYN_MAX_Q], DynOut *out, DynOut *dout) {
-    return out ? eval_jacobian<N, true>(p, u, z, zd, zdd, dzdd, out, dout)
-               : eval_jacobian<N, false>(p, u, z, zd, zdd, dzdd, nullptr, nullptr);
-}
-
 extern "C" int dyn_eval_jacobian(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
-                                 double *zdd, double (*dzdd)[DYN_MAX_Q], DynOut *out, DynOut *dout) {
+                                 double *zdd, double (*dzdd)[DYN_MAX_Q]) {
     switch (p->nMod) {
-    case 1: return eval_jacobian_n<1>(p, u, z, zd, zdd, dzdd, out, dout);
-    case 2: return eval_jacobian_n<2>(p, u, z, zd, zdd, dzdd, out, dout);
-    case 3: return eval_jacobian_n<3>(p, u, z, zd, zdd, dzdd, out, dout);
-    case 4: return eval_jacobian_n<4>(p, u, z, zd, zdd, dzdd, out, dout);
+    case 1: return eval_jacobian<1>(p, u, z, zd, zdd, dzdd);
+    case 2: return eval_jacobian<2>(p, u, z, zd, zdd, dzdd);
+    case 3: return eval_jacobian<3>(p, u, z, zd, zdd, dzdd);
+    case 4: return eval_jacobian<4>(p, u, z, zd, zdd, dzdd);
     default: return 1;
     }
 }

@@ -93,13 +93,11 @@ int dyn_eval_tangent(const DynParams *p, const DynInputs *u, const DynInputs *du
                      const double *z, const double *dz, const double *zd, const double *dzd,
                      double *zdd, double *dzdd, DynOut *out, DynOut *dout);
 
-/* dyn_eval and its Jacobian with respect to the states, in one pass on
-   vector dual numbers (dynamics.cpp): the values zdd and out as dyn_eval's;
-   for seed j (j < nq: z[j], else zd[j - nq]; 2 nq seeds) the derivatives
-   dzdd[j][0 .. nq) and dout[j] (out and dout NULL: zdd and dzdd alone). The
-   inputs are held. */
+/* dyn_eval's zdd and its Jacobian with respect to the states, in one pass on
+   vector dual numbers (dynamics.cpp): for state j of [z, zd] (2 nq of them)
+   dzdd[j][0 .. nq). The inputs are held; no outputs. */
 int dyn_eval_jacobian(const DynParams *p, const DynInputs *u, const double *z, const double *zd,
-                      double *zdd, double (*dzdd)[DYN_MAX_Q], DynOut *out, DynOut *dout);
+                      double *zdd, double (*dzdd)[DYN_MAX_Q]);
 
 /* the world position of the point xi ahead of the CG of module m */
 void dyn_point(const DynParams *p, const double *z, int m, double xi, double *px, double *py);

@@ -11,18 +11,17 @@
 
 #define GRAVITY 9.81
 
-/* the Jacobian with respect to the states at one point, all 2 nq columns
-   from one vector-mode pass: an importer asks for it a column at a time (one
-   fmi2GetDirectionalDerivative per state), the later columns are read from
-   here while the point is the same: no value set from outside (the layer's
-   generation), the same time and states */
+/* d(der x)/dx at one point, all its columns from one vector-mode pass: an
+   importer integrating the model asks for it a column at a time (one
+   fmi2GetDirectionalDerivative per state, unknowns the derivatives), the later
+   columns are read from here while the point is the same: no value set from
+   outside (the layer's generation), the same time and states */
 typedef struct {
-    bool valid, outputs;    /* outputs: dout holds the outputs' columns too */
+    bool valid;
     unsigned long generation;
     double time, z[DYN_MAX_Q], zd[DYN_MAX_Q];
     DynParams p;
     double dzdd[2 * DYN_MAX_Q][DYN_MAX_Q];
-    DynOut dout[2 * DYN_MAX_Q];
 } JacobianCache;
 
 typedef struct {
@@ -31,7 +30,7 @@ typedef struct {
     DynParams p;
     DynInputs u;        /* the inputs of the current step */
     bool uHeld;         /* they hold over the step (no test steering): rhs() reuses them */
-    JacobianCache jac;  /* Model Exchange: model_directional_derivative's columns */
+    JacobianCache jac;  /* Model Exchange: model_directional_derivative's d(der x)/dx */
 } Solver;
 
 /* comp->solver, made on first use (doStep or the Jacobian) */
@@ -163,10 +162,10 @@ Status model_init(ModelInstance *comp) {
     return OK;
 }
 
-/* the Model Exchange states z, zd and their derivatives zd, zdd into d */
-static void store_states(ModelData *d, const DynParams *p, const double *z, const double *zd, const double *zdd) {
+/* the Model Exchange states z, zd and their derivatives zd, zdd (nq of each) into d */
+static void store_states(ModelData *d, int nq, const double *z, const double *zd, const double *zdd) {
     for (int i = 0; i < DYN_MAX_Q; i++) {
-        const int on = i < dyn_nq(p);
+        const int on = i < nq;
         d->z[i + 1] = on ? z[i] : 0.0;
         d->zd[i + 1] = on ? zd[i] : 0.0;
         d->zdd[i + 1] = on ? zdd[i] : 0.0;
@@ -209,7 +208,7 @@ static void store_outputs(ModelData *d, const DynParams *p, const DynOut *o, con
         d->FjointY[k] = on ? o->FjY[k] : 0.0;
     }
     d->v = o->v;
-    store_states(d, p, z, zd, zdd);
+    store_states(d, dyn_nq(p), z, zd, zdd);
 }
 
 void model_outputs(ModelInstance *comp) {
@@ -245,26 +244,24 @@ static int single_state_seed(const ModelData *seed, int nq) {
     return j;
 }
 
-/* the cache at this point, with the outputs' columns if asked: filled by one
-   vector-mode pass (dyn_eval_jacobian) when the point moved */
-static const JacobianCache *jacobian_at(ModelInstance *comp, bool outputs) {
+/* the cache at this point: filled by one vector-mode pass (dyn_eval_jacobian)
+   when the point moved */
+static const JacobianCache *jacobian_at(ModelInstance *comp) {
     const ModelState *st = &comp->v.s;
     Solver *sv = solver_of(comp);
     if (!sv) return log_error(comp, "out of memory"), NULL;
     JacobianCache *c = &sv->jac;
     const size_t nz = sizeof(double) * DYN_MAX_Q;
-    if (c->valid && (c->outputs || !outputs) && c->generation == comp->generation && c->time == comp->v.time
-        && !memcmp(c->z, st->z, nz) && !memcmp(c->zd, st->zd, nz))
+    if (c->valid && c->generation == comp->generation && c->time == comp->v.time && !memcmp(c->z, st->z, nz)
+        && !memcmp(c->zd, st->zd, nz))
         return c;
     DynInputs u;
     double zdd[DYN_MAX_Q];
-    DynOut o;
     make_params(comp, &c->p);
     for (int a = 1; a <= DYN_MAX_AXLES; a++) c->p.Fz[a] = D->Fz[a];
     make_inputs(comp, comp->v.time, &u);
-    memset(&o, 0, sizeof o);
     c->valid = false;
-    if (dyn_eval_jacobian(&c->p, &u, st->z, st->zd, zdd, c->dzdd, outputs ? &o : NULL, outputs ? c->dout : NULL))
+    if (dyn_eval_jacobian(&c->p, &u, st->z, st->zd, zdd, c->dzdd))
         return log_error(comp, "t = %.17g: the mass matrix of the equations of motion is not "
                                "positive definite", comp->v.time), NULL;
     c->generation = comp->generation;
@@ -272,38 +269,19 @@ static const JacobianCache *jacobian_at(ModelInstance *comp, bool outputs) {
     memcpy(c->z, st->z, nz);
     memcpy(c->zd, st->zd, nz);
     c->valid = true;
-    c->outputs = outputs;
     return c;
 }
 
-/* column j of the Jacobian times s (j = NO_SEED: none) into the tangent: the
-   outputs' part only when the layer asks for an output (comp->ddOutputs) */
+/* column j of d(der x)/dx times s into the tangent's states and derivatives */
 static Status jacobian_column(ModelInstance *comp, int j, double s, ModelData *tangent) {
-    const JacobianCache *c = jacobian_at(comp, comp->ddOutputs);
+    const JacobianCache *c = jacobian_at(comp);
     if (!c) return Error;
     const int nq = dyn_nq(&c->p);
     double dz[DYN_MAX_Q] = { 0 }, dzd[DYN_MAX_Q] = { 0 }, dzdd[DYN_MAX_Q] = { 0 };
-    DynOut scaled;
-    const DynOut *dout = &scaled;
-    if (j == NO_SEED) {
-        memset(&scaled, 0, sizeof scaled);
-    } else {
-        if (j < nq) dz[j] = s;
-        else dzd[j - nq] = s;
-        for (int i = 0; i < nq; i++) dzdd[i] = s * c->dzdd[j][i];
-        if (!c->outputs) {
-            store_states(tangent, &c->p, dz, dzd, dzdd);
-            return OK;
-        }
-        if (s == 1.0) {
-            dout = &c->dout[j];
-        } else {
-            const double *col = (const double *)&c->dout[j];   /* every field of DynOut is a double */
-            double *f = (double *)&scaled;
-            for (size_t i = 0; i < sizeof scaled / sizeof(double); i++) f[i] = s * col[i];
-        }
-    }
-    store_outputs(tangent, &c->p, dout, dz, dzd, dzdd);
+    if (j < nq) dz[j] = s;
+    else dzd[j - nq] = s;
+    for (int i = 0; i < nq; i++) dzdd[i] = s * c->dzdd[j][i];
+    store_states(tangent, nq, dz, dzd, dzdd);
     return OK;
 }
 
@@ -313,12 +291,23 @@ static Status jacobian_column(ModelInstance *comp, int j, double s, ModelData *t
 Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, ModelData *tangent) {
     if (check_inputs(comp, comp->v.time)) return Error;
     const int nq = 2 + D->nModules, j = single_state_seed(seed, nq);
-    if (j >= 0 || j == NO_SEED)
-        return jacobian_column(comp, j, j < 0 ? 0.0 : j < nq ? seed->z[j + 1] : seed->zd[j - nq + 1], tangent);
+    double dz[DYN_MAX_Q] = { 0 }, dzd[DYN_MAX_Q] = { 0 }, zdd[DYN_MAX_Q], dzdd[DYN_MAX_Q] = { 0 };
+    if (j >= 0 && !comp->ddOutputs)      /* a column of d(der x)/dx: no output asked */
+        return jacobian_column(comp, j, j < nq ? seed->z[j + 1] : seed->zd[j - nq + 1], tangent);
+    if (j == NO_SEED && !comp->ddOutputs) {      /* a padding state's column, or a zero seed */
+        store_states(tangent, nq, dz, dzd, dzdd);
+        return OK;
+    }
     const ModelState *s = &comp->v.s;
     DynParams p;
     make_params(comp, &p);
     for (int a = 1; a <= DYN_MAX_AXLES; a++) p.Fz[a] = D->Fz[a];
+    DynOut o, dout;
+    memset(&dout, 0, sizeof dout);
+    if (j == NO_SEED) {
+        store_outputs(tangent, &p, &dout, dz, dzd, dzdd);
+        return OK;
+    }
     DynInputs u, du;
     make_inputs(comp, comp->v.time, &u);
     memset(&du, 0, sizeof du);
@@ -327,14 +316,11 @@ Status model_directional_derivative(ModelInstance *comp, const ModelData *seed, 
         du.Fx[a] = seed->Fx[a];
     }
     for (int k = 1; k <= DYN_MAX_HINGES; k++) du.Mjoint[k] = seed->Mjoint[k];
-    double dz[DYN_MAX_Q] = { 0 }, dzd[DYN_MAX_Q] = { 0 }, zdd[DYN_MAX_Q], dzdd[DYN_MAX_Q];
     for (int i = 0; i < nq; i++) {      /* states beyond nModules are held at 0 */
         dz[i] = seed->z[i + 1];
         dzd[i] = seed->zd[i + 1];
     }
-    DynOut o, dout;
     memset(&o, 0, sizeof o);
-    memset(&dout, 0, sizeof dout);
     if (dyn_eval_tangent(&p, &u, &du, s->z, dz, s->zd, dzd, zdd, dzdd, &o, &dout))
         return log_error(comp, "t = %.17g: the mass matrix of the equations of motion is not "
                                "positive definite", comp->v.time);

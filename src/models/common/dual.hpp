@@ -15,7 +15,7 @@
 
 /* every operation inlined: on K seeds an operation is a loop the compiler
    would otherwise call, and Eigen's expressions on custom scalars nest them */
-#if defined(__GNUC__)
+#if defined(__GNUC__) && defined(__OPTIMIZE__)
 #define ARTIBUS_DUAL_INLINE inline __attribute__((always_inline))
 #else
 #define ARTIBUS_DUAL_INLINE inline
