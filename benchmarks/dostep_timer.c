@@ -7,31 +7,15 @@
  * in which the process was descheduled or interrupted does not count (on a busy machine
  * the plain total of N steps varies by 15-35 %, the fastest block by a few %). */
 #define BLOCK 1000
-#include <dlfcn.h>
-#include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 
-#include "fmi2Functions.h"
 #include "fmi3Functions.h"
-
-static void log_fmi2(fmi2ComponentEnvironment e, fmi2String i, fmi2Status s, fmi2String c, fmi2String m, ...) {
-    (void)e; (void)i; (void)c;
-    if (s > fmi2Warning) fprintf(stderr, "%s\n", m);
-}
+#include "fmi_timer.h"
 
 static void log_fmi3(fmi3InstanceEnvironment e, fmi3Status s, fmi3String c, fmi3String m) {
     (void)e; (void)c;
     if (s > fmi3Warning) fprintf(stderr, "%s\n", m);
 }
-
-static double now_ns(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e9 + ts.tv_nsec;
-}
-
-#define SYM(T, name) T name = (T)dlsym(lib, #name); if (!name) { fprintf(stderr, "no %s\n", #name); return 1; }
 
 int main(int argc, char **argv) {
     if (argc != 7) { fprintf(stderr, "usage: dostep_timer 2|3 BINARY TOKEN RESOURCES STEP N\n"); return 2; }

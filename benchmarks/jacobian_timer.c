@@ -12,31 +12,15 @@
  * (a block in which the process was descheduled does not count). */
 #define BLOCK 200
 #define MAX_X 64
-#include <dlfcn.h>
-#include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 
-#include "fmi2Functions.h"
-
-static void log_fmi2(fmi2ComponentEnvironment e, fmi2String i, fmi2Status s, fmi2String c, fmi2String m, ...) {
-    (void)e; (void)i; (void)c;
-    if (s > fmi2Warning) fprintf(stderr, "%s\n", m);
-}
-
-static double now_ns(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e9 + ts.tv_nsec;
-}
+#include "fmi_timer.h"
 
 static size_t parse_vrs(const char *text, fmi2ValueReference *vrs) {
     size_t n = 0;
     for (char *end; *text && n < MAX_X; text = *end ? end + 1 : end) vrs[n++] = (fmi2ValueReference)strtoul(text, &end, 10);
     return n;
 }
-
-#define SYM(T, name) T name = (T)dlsym(lib, #name); if (!name) { fprintf(stderr, "no %s\n", #name); return 1; }
 
 int main(int argc, char **argv) {
     if (argc != 7) { fprintf(stderr, "usage: jacobian_timer BINARY GUID RESOURCES N X_VRS DX_VRS\n"); return 2; }

@@ -92,10 +92,7 @@ def _linearize_bench(args):
     if bool(args.bode) != bool(args.plot):
         raise ArtibusError("linearize: --bode IN:OUT and --plot FILE.png go together")
     names = lambda text: [n.strip() for n in text.split(",") if n.strip()] if text else None   # noqa: E731
-    if args.at is None:
-        opened = lb.open_bench(args.fmu, args.variant or (), parse_set(args.set), args.exclude or ())
-    else:                      # the bench run to --at, its instances taken as the run left them
-        opened = lb.open_run(args.fmu, args.at, args.variant or (), parse_set(args.set), args.exclude or ())
+    opened = lb.open_bench(args.fmu, args.variant or (), parse_set(args.set), args.exclude or (), args.at)
     try:
         if args.amplitude:
             sig, sep, amp = args.amplitude.partition("=")

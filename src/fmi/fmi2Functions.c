@@ -128,8 +128,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     ENTER("fmi2EnterInitializationMode", M_EnterInit);
     comp->v.state = S_INIT_MODE;
-    comp->dirty = true;
-    comp->generation++;     /* a value changed: caches keyed on it are stale */
+    core_dirty(comp);
     return fmi2OK;
 }
 

@@ -184,8 +184,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
                                                 tolerance, startTime, stopTimeDefined, stopTime);
     if (status > Warning) return ST(status);
     comp->v.state = S_INIT_MODE;
-    comp->dirty = true;
-    comp->generation++;     /* a value changed: caches keyed on it are stale */
+    core_dirty(comp);
     return fmi3OK;
 }
 

@@ -100,8 +100,8 @@ typedef struct ModelInstance {
                                or restored */
     bool dirty;             /* outputs must be recalculated before a get */
     unsigned long generation;   /* counts the changes of values from outside (a set, a
-                               restored state, a new mode: wherever dirty is set); a
-                               model's cache of a derived quantity keys on it together
+                               restored state, a new mode: core_dirty, which sets dirty);
+                               a model's cache of a derived quantity keys on it together
                                with the time and states, which steps change */
     void *solver;           /* model-owned resources (CVODE memory, tables) */
     ModelData *ddSeed;      /* the directional derivatives' seed, zero between calls

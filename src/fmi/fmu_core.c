@@ -161,8 +161,8 @@ Status core_init_instance(ModelInstance *comp, const char *fn, const char *insta
     comp->v.state = S_INSTANTIATED;
     comp->stopTime = INFINITY;
     vars_set_start_values(&comp->v.d);
-    comp->restart = comp->forget = comp->dirty = true;
-    comp->generation++;     /* a value changed: caches keyed on it are stale */
+    comp->restart = comp->forget = true;
+    core_dirty(comp);
     return OK;
 }
 
@@ -230,8 +230,8 @@ Status core_reset(ModelInstance *comp) {
     comp->v.state = S_INSTANTIATED;
     comp->stopTime = INFINITY;
     comp->tolerance = 0.0;
-    comp->restart = comp->forget = comp->dirty = true;
-    comp->generation++;     /* a value changed: caches keyed on it are stale */
+    comp->restart = comp->forget = true;
+    core_dirty(comp);
     return OK;
 }
 
@@ -301,10 +301,14 @@ Status core_check_range(ModelInstance *comp, const char *fn, const VarInfo *v, d
     return OK;
 }
 
+void core_dirty(ModelInstance *comp) {
+    comp->dirty = true;
+    comp->generation++;
+}
+
 /* after a value was stored: outputs and the integrator must follow it */
 void core_changed(ModelInstance *comp) {
-    comp->dirty = true;
-    comp->generation++;     /* a value changed: caches keyed on it are stale */
+    core_dirty(comp);
     comp->restart = true;
 }
 
@@ -455,14 +459,13 @@ static Status restore(ModelInstance *comp, const char *fn, const FmuState *s) {
     if (model_restored(comp) > Warning) {
         comp->v = *old;
         layer_free(comp, old);
-        comp->dirty = comp->restart = comp->forget = true;
-        comp->generation++;     /* a value changed: caches keyed on it are stale */
+        comp->restart = comp->forget = true;
+        core_dirty(comp);
         return log_error(comp, "%s: the state could not be restored", fn);
     }
     layer_free(comp, old);
     comp->restart = comp->forget = true;
-    comp->dirty = true;
-    comp->generation++;     /* a value changed: caches keyed on it are stale */
+    core_dirty(comp);
     log_event(comp, "%s: state restored at t = %g", fn, comp->v.time);
     return OK;
 }
@@ -631,8 +634,7 @@ Status core_set_time(ModelInstance *comp, const char *fn, double time) {
         return leave(comp, log_error(comp, "%s: time = %g is not finite", fn, time));
     if (comp->v.time != time) {
         comp->v.time = time;
-        comp->dirty = true;
-        comp->generation++;     /* a value changed: caches keyed on it are stale */
+        core_dirty(comp);
     }
     return OK;
 }
@@ -644,8 +646,7 @@ Status core_set_x(ModelInstance *comp, const char *fn, const double x[], size_t 
             return leave(comp, log_error(comp, "%s: x[%zu] (%s) = %g is not a finite number",
                                          fn, i, X_NAME[i], x[i]));
     model_set_x(comp, x);
-    comp->dirty = true;
-    comp->generation++;     /* a value changed: caches keyed on it are stale */
+    core_dirty(comp);
     return OK;
 }
 

@@ -52,6 +52,11 @@ void *core_field(ModelInstance *comp, const VarInfo *v);
 Status core_settable(ModelInstance *comp, const char *fn, const VarInfo *v);
 Status core_check_range(ModelInstance *comp, const char *fn, const VarInfo *v, double x);
 void core_changed(ModelInstance *comp);
+
+/* the instance's values changed (a set, a restored state, a new mode, the time, the
+   states): its outputs are recalculated before the next get (dirty), and a model's
+   cache of a derived quantity keyed on the generation is stale */
+void core_dirty(ModelInstance *comp);
 Status core_set_string(ModelInstance *comp, const char *fn, const VarInfo *v, const char *value);
 
 /* FMU state: an opaque block the layer hands out */

@@ -152,12 +152,11 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
         clocks = _schedule(fmu, path) if event_mode else None
         if me:                           # CVODE's method; no input changes: CVODE steps freely
             fmu.calls.facade.use_method(me_method)
-            if me_jacobian and not fmu.calls.facade.jacobian_available:
-                raise ArtibusError(f"{path}: --me-jacobian: {fmu.md.modelName} provides no directional "
-                                   "derivatives of its state derivatives by its states "
-                                   "(providesDirectionalDerivative is not true)")
-            if me_jacobian:
-                fmu.calls.facade.use_jacobian()
+            if me_jacobian:              # refused by the facade where the FMU provides none: named here
+                try:
+                    fmu.calls.facade.use_jacobian()
+                except ArtibusError as e:
+                    raise ArtibusError(f"{path}: --me-jacobian: {e}") from None
             if not inputs:
                 fmu.calls.facade.free_running()
         try:

@@ -384,9 +384,12 @@ def _read(bench, variants, sets):
     return path, b, overrides
 
 
-def open_bench(bench, variants=(), sets=None, exclude=()):
+def open_bench(bench, variants=(), sets=None, exclude=(), at=None):
     """The bench (a name or an .ssp) opened at its start values, variants and ``sets``
-    ({"Component.variable": value}) applied: an Opened (close it)."""
+    ({"Component.variable": value}) applied, or (``at``) at that time of its run (open_run): an
+    Opened (close it)."""
+    if at is not None:
+        return open_run(bench, at, variants, sets, exclude)
     path, b, overrides = _read(bench, variants, sets)
     return Opened(b, str(path), tuple(exclude), overrides)
 
@@ -463,8 +466,7 @@ def linearize_bench(bench, variants=(), sets=None, exclude=(), steady=False, inp
     and plant outputs (default all)."""
     if at is not None and steady:
         raise ArtibusError("linearize: --at TIME or --steady, not both")
-    opened = open_bench(bench, variants, sets, exclude) if at is None else open_run(bench, at, variants, sets,
-                                                                                    exclude)
+    opened = open_bench(bench, variants, sets, exclude, at)
     try:
         return linear_of(opened, steady, inputs, outputs, step, derivatives, steady_limit)
     finally:

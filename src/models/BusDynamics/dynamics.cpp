@@ -22,8 +22,8 @@
 
 /* The equations are templated on the scalar type T as well: double for the
  * simulation, artibus::Dual (src/models/common/dual.hpp) for a directional
- * derivative (dyn_eval_tangent) and artibus::DualN<2 nq> for the Jacobian of
- * every state at once (dyn_eval_jacobian): forward-mode differentiation
+ * derivative (dyn_eval_tangent) and artibus::DualN<2 nq - 2> for the Jacobian
+ * of the equations of motion by every state at once (dyn_eval_jacobian): forward-mode differentiation
  * through the one source of the equations. Eigen takes them as custom scalars. */
 namespace Eigen {
 template <int K> struct NumTraits<artibus::DualN<K>> : NumTraits<double> {
