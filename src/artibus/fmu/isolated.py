@@ -6,7 +6,8 @@ whole program, no message, no result. ``simulate`` here runs artibus.fmu.simulat
 forked child (the FMU loaded and called only there) and the parent waits on it:
 
 - each row the child records goes at once to a file of the run's own temporary directory, raw
-  float64s, one unbuffered write a row (and a String column's texts a JSON line a row): what a
+  float64s, one unbuffered write a row (and a String column's texts and a 64-bit integer column's
+  exact values a JSON line a row): what a
   crash cannot lose, as the kernel holds what was written; the child's temporary files (the
   unpacked FMU) go to that directory too, removed by the parent however the child ended;
 - its end comes back over a pipe: the Result, or the error (its message, partial Result, FMU
@@ -163,18 +164,20 @@ def _with_rows(result, tmp):
     if n is None:                     # (rows of its own: a Result made before the first row)
         return result
     full = Result.from_array(result.names, _table(tmp, len(result.names))[:n])
-    full.strings, full.units, full.descriptions = result.strings, result.units, result.descriptions
+    full.strings, full.integers = result.strings, result.integers
+    full.units, full.descriptions = result.units, result.descriptions
     full.terminated = result.terminated
     return full
 
 
 def _rows_written(head, tmp):
-    """The Result of the rows the child wrote (whole rows, and for String columns whole lines)."""
-    names = head["names"]
+    """The Result of the rows the child wrote (whole rows, and for String and 64-bit integer
+    columns whole lines)."""
+    names, strings, integers = head["names"], head["strings"], head["integers"]
     table = _table(tmp, len(names))
     n = len(table)
     texts = []
-    if head["strings"]:
+    if strings or integers:
         try:
             with open(os.path.join(tmp, "strings.jsonl"), encoding="utf-8") as f:
                 for line in f:
@@ -186,27 +189,29 @@ def _rows_written(head, tmp):
         n = min(n, len(texts))
     result = Result(names, [list(r) for r in table[:n]])
     result.units, result.descriptions = head["units"], head["descriptions"]
-    result.strings = {c: [t[k] for t in texts[:n]] for k, c in enumerate(head["strings"])}
+    result.strings = {c: [t[k] for t in texts[:n]] for k, c in enumerate(strings)}
+    result.integers = {c: [t[k] for t in texts[:n]] for k, c in enumerate(integers, len(strings))}
     return result
 
 
 class _Written(list):
-    """Result.rows in the child: each row appended also written to rows.f64 at once (the
-    previous row's texts to strings.jsonl: record() adds them after the row)."""
+    """Result.rows in the child: each row appended also written to rows.f64 at once, its
+    texts and exact integers first to strings.jsonl (record() adds them before the row)."""
 
     def __init__(self, result, tmp):
         super().__init__()
         self.result = result
         self.fd = os.open(os.path.join(tmp, "rows.f64"), os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o600)
         self.text_fd = (os.open(os.path.join(tmp, "strings.jsonl"), os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o600)
-                        if result.strings else None)
+                        if result.strings or result.integers else None)
         import struct
         self.pack = struct.Struct(f"={len(result.names)}d").pack      # (native float64s, as numpy reads them)
 
     def append(self, row):
-        if self.text_fd is not None and len(self):
-            k = len(self) - 1
-            line = json.dumps([c[k] if k < len(c) else "" for c in self.result.strings.values()])
+        if self.text_fd is not None:
+            k = len(self)
+            line = json.dumps([c[k] if k < len(c) else "" for c in self.result.strings.values()]
+                              + [c[k] if k < len(c) else None for c in self.result.integers.values()])
             os.write(self.text_fd, (line + "\n").encode())
         super().append(row)
         os.write(self.fd, self.pack(*row))
@@ -230,7 +235,8 @@ def _child(writer, back, tmp, path, keep_messages, kwargs):
     def started(result, model):
         result.rows = _Written(result, tmp)
         writer.send(("head", {"names": result.names, "units": result.units, "descriptions": result.descriptions,
-                              "strings": list(result.strings), "model": model}))
+                              "strings": list(result.strings), "integers": list(result.integers),
+                              "model": model}))
     try:
         result = run(path, messages=messages, on_result=started, **kwargs)
         end = ("done", _plain(result), messages, None)

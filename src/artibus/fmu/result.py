@@ -66,12 +66,15 @@ class Result:
         """A result from a filled table (a row per time), kept as its array;
         its rows a view of the table's (no list of a row object per time)."""
         result = cls.__new__(cls)           # (the fields' defaults without __init__'s calls)
-        result.__dict__.update(names=list(names), rows=_ArrayRows(table), strings={}, units={}, descriptions={}, terminated=None,
-                               _array=table)
+        result.__dict__.update(names=list(names), rows=_ArrayRows(table), strings={}, integers={}, units={},
+                               descriptions={}, terminated=None, _array=table)
         return result
 
     #: String columns: {name: [text per row]} (their column in the array is NaN)
     strings: dict = field(default_factory=dict)
+    #: 64-bit integer columns (FMI 3.0 Int64, UInt64): {name: [int per row, None where not
+    #: read]}, exact; their column in the array holds the nearest float64 (exact up to 2**53)
+    integers: dict = field(default_factory=dict)
     #: {name: unit} of the columns, from the FMUs' model descriptions (the variable's
     #: unit, else its declaredType's; "" for none; "s" for time)
     units: dict = field(default_factory=dict)
@@ -84,7 +87,19 @@ class Result:
     def __getitem__(self, name):
         if name in self.strings:
             return np.array(self.strings[name], dtype=object)
+        exact = self.exact_integers(name)
+        if exact is not None:
+            return exact
         return self.array()[:, self.names.index(name)]
+
+    def exact_integers(self, name):
+        """A 64-bit integer column as exact integers (numpy int64, or uint64 where a value is
+        above 2**63 - 1), or None: not such a column, or a row without its value (then the
+        float column, NaN there)."""
+        values = self.integers.get(name)
+        if values is None or any(x is None for x in values):
+            return None
+        return np.array(values, dtype=np.uint64 if values and max(values) > INT64_MAX else np.int64)
 
     @property
     def time(self):
@@ -98,16 +113,35 @@ class Result:
 
     def to_csv(self, path):
         header = ",".join(f'"{n}"' for n in self.names)
-        if not self.strings:
+        if not self.strings and not self.integers:
             np.savetxt(path, self.array(), delimiter=",", header=header, comments="", fmt="%.12g")
             return
-        # a String column as quoted text (CSV's quoting: "" for a quote)
-        cols = [self.strings.get(n) for n in self.names]
+        # a String column as quoted text (CSV's quoting: "" for a quote), a 64-bit integer
+        # column's cells with all their digits
+        cells = [_quoted if n in self.strings else _integer if n in self.integers else _number
+                 for n in self.names]
+        cols = [self.strings.get(n, self.integers.get(n)) for n in self.names]
         with open(path, "w") as f:
             f.write(header + "\n")
             for i, row in enumerate(self.array()):
-                f.write(",".join('"' + c[i].replace('"', '""') + '"' if c is not None else f"{x:.12g}"
-                                 for x, c in zip(row, cols)) + "\n")
+                f.write(",".join(cell(x, c[i] if c is not None else None)
+                                 for x, c, cell in zip(row, cols, cells)) + "\n")
+
+
+#: the largest FMI 3.0 Int64 (a larger integer column is a UInt64's)
+INT64_MAX = 2**63 - 1
+
+
+def _number(x, _):
+    return f"{x:.12g}"
+
+
+def _quoted(_, text):
+    return '"' + text.replace('"', '""') + '"'
+
+
+def _integer(x, exact):
+    return f"{x:.12g}" if exact is None else str(exact)
 
 
 class _ArrayRows(Sequence):

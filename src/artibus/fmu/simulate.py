@@ -84,6 +84,9 @@ def needs_event_mode(path):
 
 #: the kinds recorded as text (Result.strings): a String as it is, a Binary as hex digits
 TEXTS = ("String", "Binary")
+#: the types whose values a float64 does not hold exactly (FMI 3.0's 64-bit integers): recorded
+#: also as integers (Result.integers), as FMPy's simulate_fmu keeps them (an int64/uint64 field)
+WIDE = ("Int64", "UInt64")
 
 
 def _row(values, kinds):
@@ -174,9 +177,10 @@ def simulate(path, parameters=None, inputs=None, stop_time=None, step=None,
             _steps(fmu, n, start_time, step, inputs, record, result, every, [e for e in cut if e < stop_time],
                    clocks)
         except KeyboardInterrupt as e:   # Ctrl-C or SIGTERM (artibus.cli): the rows so far go with it
-            n_rows = min([len(result.rows)] + [len(c) for c in result.strings.values()])
-            del result.rows[n_rows:]     # (a row whose texts were not all taken)
-            for c in result.strings.values():
+            side = [*result.strings.values(), *result.integers.values()]
+            n_rows = min([len(result.rows)] + [len(c) for c in side])
+            del result.rows[n_rows:]     # (a row whose texts or integers were not all taken)
+            for c in side:
                 del c[n_rows:]
             e.result = result
             raise
@@ -242,13 +246,15 @@ def columns(v):
 
 def _recorder(fmu, variables):
     """(the Result, record(t, active): a row of the variables' values at t, an array's elements
-    in columns of their own, Strings and Binaries in Result.strings; a clocked variable read
+    in columns of their own, Strings and Binaries in Result.strings, an Int64's or UInt64's exact
+    value also in Result.integers (a float64 holds 53 bits); a clocked variable read
     only while one of its Clocks is among the ``active`` ones (FMI 3.0 2.2, "Model Partitions
     and Clocked Variables": "can be queried only when their Clock is active"), else NaN/"")."""
     names = [c for v in variables for c in columns(v)]
     result = Result(["time"] + names)
     strings = [c for v in variables if v.kind in TEXTS for c in columns(v)]
     result.strings = {c: [] for c in strings}
+    result.integers = {c: [] for v in variables if v.type in WIDE for c in columns(v)}
     result.units = {"time": "s", **{c: unit_of(v) for v in variables for c in columns(v)}}
     result.descriptions = {"time": "simulation time",
                            **{c: getattr(v, "description", None) or "" for v in variables for c in columns(v)}}
@@ -261,10 +267,12 @@ def _recorder(fmu, variables):
         values = [got.get(id(v)) for v in variables]
         flat = [x for v, x in zip(variables, values)
                 for x in ((x if x is not None else [None] * v.size) if v.shape else [x])]
-        result.rows.append([t] + _row(flat, kinds))
-        for c, x, kind in zip(names, flat, kinds):
-            if kind in TEXTS:
+        for c, x, kind in zip(names, flat, kinds):      # (before the row: artibus.fmu.isolated
+            if kind in TEXTS:                           # writes them with it)
                 result.strings[c].append(_text(x, kind))
+            elif c in result.integers:
+                result.integers[c].append(None if x is None else int(x))
+        result.rows.append([t] + _row(flat, kinds))
     return result, record
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from artibus.base import ArtibusError
+from artibus.fmu.result import INT64_MAX
 
 #: the extensions -o accepts, what each is (for the messages and the help)
 FORMATS = {
@@ -40,6 +41,13 @@ def write(result, path, tmp):
     {".csv": _csv, ".parquet": _parquet, ".mf4": _mf4, ".mat": _mat}[suffix](result, tmp)
 
 
+def _numbers(result, name):
+    """A numeric column: a 64-bit integer one exact (Result.exact_integers) where every row
+    has its value, else float64."""
+    exact = result.exact_integers(name) if hasattr(result, "exact_integers") else None
+    return exact if exact is not None else np.asarray(result.array()[:, result.names.index(name)], dtype=float)
+
+
 def _meta(result):
     return getattr(result, "units", None) or {}, getattr(result, "descriptions", None) or {}
 
@@ -49,15 +57,23 @@ def _csv(result, tmp):
 
 
 def _parquet(result, tmp):
-    """One column per signal (a String signal as text); each field's metadata
-    holds its ``unit`` and ``description`` (Arrow's field metadata, which
-    pyarrow.parquet.read_schema gives back; pandas.read_parquet reads the table)."""
+    """One column per signal (a String signal as text, a 64-bit integer one as int64 or
+    uint64, null where not read); each field's metadata holds its ``unit`` and
+    ``description`` (Arrow's field metadata, which pyarrow.parquet.read_schema gives
+    back; pandas.read_parquet reads the table)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
     units, descriptions = _meta(result)
+    integers = getattr(result, "integers", None) or {}
     columns, fields = [], []
     for n in result.names:
-        col = pa.array(result.strings[n], pa.string()) if n in result.strings else pa.array(result[n], pa.float64())
+        if n in result.strings:
+            col = pa.array(result.strings[n], pa.string())
+        elif n in integers:
+            wide = any(x is not None and x > INT64_MAX for x in integers[n])
+            col = pa.array(integers[n], pa.uint64() if wide else pa.int64())
+        else:
+            col = pa.array(result[n], pa.float64())
         columns.append(col)
         fields.append(pa.field(n, col.type, metadata={"unit": units.get(n, ""),
                                                       "description": descriptions.get(n, "")}))
@@ -68,14 +84,15 @@ def _mf4(result, tmp):
     """ASAM MDF 4.10 through asammdf: one channel group whose master is the
     run's time (MDF 4 5.10: the time master channel, in s), a channel per
     signal with its name, unit and description (the channel's comment); a
-    String signal as bytes (UTF-8)."""
+    String signal as bytes (UTF-8), a 64-bit integer one as int64 or uint64 where
+    every row has its value (else as float64, NaN where not read)."""
     from asammdf import MDF, Signal
     units, descriptions = _meta(result)
     t = np.asarray(result.time, dtype=float)
     signals = []
     for n in result.names[1:]:
         samples = (np.array([s.encode("utf-8") for s in result.strings[n]]) if n in result.strings
-                   else np.asarray(result[n], dtype=float))
+                   else _numbers(result, n))
         signals.append(Signal(samples=samples, timestamps=t, name=n, unit=units.get(n, ""),
                               comment=descriptions.get(n, "")))
     mdf = MDF(version="4.10")
@@ -110,14 +127,14 @@ def _mat(result, tmp):
     """MATLAB 5 .mat: a variable per signal (matlab_names; a String signal a
     cell array of its texts) and three structs with a field per variable: the
     signal's ``names`` (as in the CSV), ``units`` and ``descriptions``. Struct
-    fields up to 63 characters (scipy's long_field_names, MATLAB 7.6 on)."""
+    fields up to 63 characters (scipy's long_field_names, MATLAB 7.6 on). A 64-bit
+    integer signal as int64 or uint64 where every row has its value."""
     from scipy.io import savemat
     units, descriptions = _meta(result)
-    data = result.array()
     keys = matlab_names(result.names)
     out = {}
-    for i, (k, n) in enumerate(zip(keys, result.names)):
-        out[k] = np.array(result.strings[n], dtype=object) if n in result.strings else data[:, i]
+    for k, n in zip(keys, result.names):
+        out[k] = np.array(result.strings[n], dtype=object) if n in result.strings else _numbers(result, n)
     out["names"] = dict(zip(keys, result.names))
     out["units"] = {k: units.get(n, "") for k, n in zip(keys, result.names)}
     out["descriptions"] = {k: descriptions.get(n, "") for k, n in zip(keys, result.names)}
