@@ -81,7 +81,7 @@ def test_bench_linearize_cli_matches_the_plant_with_the_steering_gains(tmp_path)
     from scipy.io import loadmat
 
     from artibus.fmu.instance import Fmu
-    from artibus.linearize import linearize
+    from artibus.linear import linearize
     mat = tmp_path / "cl.mat"
     r = run_cli("linearize", "MultiAxle_StepSteer", "--inputs", "Steering.delta1", "-o", mat)
     assert r.returncode == 0, r.stderr

@@ -1,6 +1,6 @@
 """`artibus linearize` (issue 43, its first part): A, B, C, D of one Model Exchange FMU by finite
 differences or the FMU's directional derivatives, the modes, the frequency response; each checked
-against what is derived here independently of artibus.linearize:
+against what is derived here independently of artibus.linear.fmu:
 
 - MultiAxle3DOF: seed 004's balances (eq. 2, roll rate p = dphi/dt) linearised by hand from the
   bench's parameter set (the .ssv read here with lxml); eq. 5 as printed against them (the
@@ -113,7 +113,7 @@ STATES = ["w_r", "v", "p", "phi"]
 
 
 def linear_multiaxle(**kw):
-    from artibus.linearize import linearize
+    from artibus.linear import linearize
     p, n, *_ = vehicle()
     params = {**p, "u": U}
     inputs = [f"delta[{i}]" for i in range(1, n + 1)] + ["M_d"]
@@ -213,7 +213,7 @@ def test_seed_004_eq_5_as_printed_disagrees_with_eq_2():
 def test_steady_state_of_a_front_step_steer_is_eq_2s_equilibrium():
     """--steady: integrated until w_r, v, p, phi rest (psi, x, y move on: free states), the point
     equal to x_ss = -A^-1 B u of eq. 2 with delta_1 = 0.02 rad."""
-    from artibus.linearize import linearize
+    from artibus.linear import linearize
     p, n, *_ = vehicle()
     lin = linearize(fmu("MultiAxle3DOF"), steady=True, parameters={**p, "u": U, "delta[1]": 0.02},
                     inputs=["delta[1]"], outputs=["beta"])
@@ -228,7 +228,7 @@ def test_steady_state_of_a_front_step_steer_is_eq_2s_equilibrium():
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_dahlquist_A_is_minus_k(version):
-    from artibus.linearize import linearize
+    from artibus.linear import linearize
     lin = linearize(reference("Dahlquist", version), parameters={"k": 2.5}, at=0.3)
     assert [s.name for s in lin.states] == ["x"]
     assert lin.A[0, 0] == pytest.approx(-2.5, rel=1e-9)
@@ -262,7 +262,7 @@ def with_directional_derivatives(path, tmp_path):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_van_der_pol_jacobian_by_finite_differences_and_directional_derivatives(version, tmp_path):
-    from artibus.linearize import linearize
+    from artibus.linear import linearize
     mu = 1.5
     lin = linearize(reference("VanDerPol", version), parameters={"mu": mu})      # at x = (2, 0)
     assert [s.name for s in lin.states] == ["x0", "x1"]
@@ -280,7 +280,7 @@ def test_van_der_pol_jacobian_by_finite_differences_and_directional_derivatives(
 # --- seed 001: the Scania 18 m's rear-sway mode ------------------------------------------------------
 
 def scania_linear():
-    from artibus.linearize import linearize
+    from artibus.linear import linearize
     params = {**ssv("Scania18m"), "tyreModel": "linearSaturated", "vx_start": 100 / 3.6}
     return linearize(fmu("BusDynamics"), parameters=params, inputs=["delta[1]"], outputs=["artAngle[1]"])
 
@@ -370,7 +370,7 @@ def test_bad_input_is_one_line_naming_the_fmu_and_the_variable(args, words):
 def test_never_steady_says_so():
     """A constant articulation torque on the Scania 18 m: the bus turns for ever (world-frame
     velocities rotate), no rest of its dynamic states: the error names the state still moving."""
-    from artibus.linearize import linearize
+    from artibus.linear import linearize
     params = {**ssv("Scania18m"), "tyreModel": "linearSaturated", "vx_start": 10.0, "delta[1]": 0.02}
     with pytest.raises(ArtibusError, match=r"BusDynamics is not steady after 5 s: the derivative of zd\[\d\]"):
         linearize(fmu("BusDynamics"), steady=True, steady_limit=5.0, parameters=params, inputs=["delta[1]"])

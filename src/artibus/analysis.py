@@ -37,9 +37,9 @@ def cmd_bode(args):
 
 
 def cmd_linearize(args):
-    """One ME FMU linearised at an operating point (artibus.linearize): the modes printed,
+    """One ME FMU linearised at an operating point (artibus.linear.fmu): the modes printed,
     the matrices to -o FILE.mat|.csv, a Bode plot of --bode IN:OUT to --plot FILE.png."""
-    from artibus import linearize as lz
+    from artibus.linear import fmu as lz
     from artibus.bench import ssp
     from artibus.bench.parameters import parse_set, read_parameters
     if (Path(args.fmu).suffix.lower() in (".ssp", ".ssd") or Path(args.fmu).is_dir()
@@ -77,7 +77,7 @@ def _linearize_bench(args):
     """`artibus linearize BENCH`: its ME plants with the rest in the loop (artibus.linear.bench) at its
     start, at --at TIME of its run or --steady; with --amplitude C.V=A the loop's describing function
     there (artibus.linear.describing)."""
-    from artibus import linearize as lz
+    from artibus.linear import fmu as lz
     from artibus.base import parse_real
     from artibus.bench.parameters import parse_set
     from artibus.linear import bench as lb, describing

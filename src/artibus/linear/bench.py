@@ -1,5 +1,5 @@
 """The linear model of a bench (`artibus linearize BENCH`, issue 43): its Model Exchange plants
-linearised (artibus.linearize: directional derivatives where the FMU provides them, else central
+linearised (artibus.linear.fmu: directional derivatives where the FMU provides them, else central
 differences) with everything else in the loop as the linear map it is at the operating point:
 
     plants:      der(x) = A x + B u_p,    y_p = C x + D u_p
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from artibus import linearize as lz
+from artibus.linear import fmu as lz
 from artibus.base import ArtibusError
 
 #: the loop's central differences: each plant output and open input moved by +-STEP x its nominal
@@ -269,7 +269,7 @@ def _plant_linear(el, step, derivatives, t0, states_only=False):
 
 @dataclass
 class BenchLinear:
-    """The closed loop (``closed``: an artibus.linearize.Linear over the plants' states, the open
+    """The closed loop (``closed``: an artibus.linear.fmu.Linear over the plants' states, the open
     inputs, the plants' outputs), the plants' own (``plants``: name -> Linear), the loop's gains
     K_y (plant inputs by plant outputs) and K_r (by open inputs) and how each component was
     treated (``treated``: name -> a sentence)."""
@@ -338,7 +338,7 @@ def _save_controllers(opened):
 
 def _settle(opened, limit):
     """--steady for a bench: each plant integrated with its inputs held until its dynamic states
-    rest (artibus.linearize), the loop's values updated, twice."""
+    rest (artibus.linear.fmu), the loop's values updated, twice."""
     times = {}
     for _ in range(2):
         for el in opened.plants():
@@ -533,6 +533,6 @@ def _select(lin, inputs, outputs):
 
 def report(bl):
     """The lines `artibus linearize BENCH` prints: how each component was treated, then the
-    closed loop's report (artibus.linearize.report)."""
+    closed loop's report (artibus.linear.fmu.report)."""
     lines = [f"{n}: {t}" for n, t in bl.treated.items()]
     return lines + lz.report(bl.closed)

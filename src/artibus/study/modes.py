@@ -90,7 +90,7 @@ def scania_friction(mus, dampings=("none", "option2", "baseline"), speed_kmh=100
 def multiaxle(mode, speed, sets=None, derivatives="auto"):
     """The closed-loop Linear of MultiAxle_StepSteer at ``speed`` (m/s), ``mode`` "FWS" (the tag
     axle unsteered: the plant ignores its angle) or "MAS" (zero side-slip steering), from the front
-    angle Steering.delta1 to the plant's outputs (``derivatives``: as artibus.linearize's)."""
+    angle Steering.delta1 to the plant's outputs (``derivatives``: as artibus.linear.fmu's)."""
     values = {"Vehicle.u": speed, "Steering.u": speed, "Steering.delta1": 0.0, **(sets or {})}
     if mode == "FWS":
         values["Vehicle.steerable[3]"] = False

@@ -18,8 +18,7 @@ states are steady. The matrices come
 ``Linear.modes()``: each eigenvalue of A as a mode (natural and damped frequency, damping ratio,
 time constant, the state that dominates its eigenvector scaled by the nominals);
 ``Linear.frequency_response(input, output, w)``: C (jwI - A)^-1 B + D.
-The bench-level linearisation (ME plants with their controllers) and exact derivatives in the
-plants are to come (issue 43)."""
+A bench's ME plants with their controllers in the loop: artibus.linear.bench (on ``linear_at``)."""
 import math
 from dataclasses import dataclass, field
 
