@@ -45,7 +45,23 @@ def wheel(tmp_path_factory):
     """The wheel `pip wheel <clone> --no-deps -w DIR` makes from the clone as the set-up left it."""
     if not (FMUS / "BusDynamics.fmu").is_file():
         pytest.skip("the FMUs are not built (the set-up)")
-    out = tmp_path_factory.mktemp("dist")
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    if run is None:
+        return _wheel_into(tmp_path_factory.mktemp("dist"))
+    # pytest-xdist: each worker running this module's tests has the fixture, and two `pip wheel`
+    # of the clone at once collide in its one scratch folder, build-wheel/ ("File exists:
+    # 'build-wheel/bdist.linux-x86_64/wheel/artibus-0.1.0.dist-info'"): the first worker makes
+    # the run's wheel, under a lock, and the others take it
+    import fcntl
+    shared = tmp_path_factory.getbasetemp().parent / f"wheel-{run}"
+    shared.mkdir(exist_ok=True)
+    with open(shared / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        made = sorted(shared.glob("artibus-*.whl"))
+        return made[0] if made else _wheel_into(shared)
+
+
+def _wheel_into(out):
     code, text = _run(PIP + ["wheel", ROOT, "--no-deps", "--no-build-isolation", "--no-index", "-q", "-w", out],
                       cwd=out, timeout=240)
     assert code == 0, text
