@@ -63,12 +63,13 @@ def input_file(model, version, path):
     return f if all(h.strip('" ') in inputs for h in header) else None
 
 
-@pytest.mark.parametrize("model, version", cases())
-def test_reference_fmu_as_the_cross_check_runs_it(model, version, tmp_path):
-    path = fmu_of(model, version)
+def simulated(path, model, version, tmp_path, *args):
+    """`artibus simulate` of the FMU with ``args`` and the cross-check's options for the model
+    (<model>_ref.opt: start, stop, output interval) and input file: (our CSV, its table as
+    numpy reads it, the input file or None)."""
     opt = options(model)
     out = tmp_path / "ours.csv"
-    args = ["--start-time", opt["StartTime"], "--stop-time", opt["StopTime"], "--relative-tolerance", opt["RelTol"]]
+    args = [*args, "--start-time", opt["StartTime"], "--stop-time", opt["StopTime"]]
     if opt.get("StepSize"):
         args += ["--output-interval", opt["StepSize"]]
     inp = input_file(model, version, path)
@@ -77,7 +78,29 @@ def test_reference_fmu_as_the_cross_check_runs_it(model, version, tmp_path):
     p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(path), *map(str, args), "-o", str(out)],
                        capture_output=True, text=True)
     assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
-    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    return out, np.genfromtxt(out, delimiter=",", names=True, deletechars=""), inp
+
+
+def assert_64_bit_as_the_input_file(out, inp, name):
+    """Feedthrough's 64-bit integer output ``name`` (output = input) in our CSV against the input
+    file's own integers, exact, at the first and the last row (the file's two rows, 0 and 1 s).
+    FMPy is no reference here: it reads an input file as float64, so 2**63 - 1 becomes 2**63 and
+    wraps to -2**63 in an Int64."""
+    import csv
+    with open(out, newline="") as f:
+        ours = list(csv.reader(f))
+    with open(inp, newline="") as f:
+        given = list(csv.reader(f))
+    k, j = ours[0].index(name), given[0].index(name.replace("_output", "_input"))
+    assert int(ours[1][k]) == int(given[1][j]), name
+    assert int(ours[-1][k]) == int(given[-1][j]), name
+
+
+@pytest.mark.parametrize("model, version", cases())
+def test_reference_fmu_as_the_cross_check_runs_it(model, version, tmp_path):
+    path = fmu_of(model, version)
+    opt = options(model)
+    out, ours, inp = simulated(path, model, version, tmp_path, "--relative-tolerance", opt["RelTol"])
     # FMPy on the same FMU with the same options
     kw = dict(start_time=opt["StartTime"], stop_time=opt["StopTime"], relative_tolerance=opt["RelTol"],
               fmi_type="CoSimulation")
@@ -89,12 +112,7 @@ def test_reference_fmu_as_the_cross_check_runs_it(model, version, tmp_path):
     np.testing.assert_allclose(ours["time"], theirs["time"], rtol=1e-9, atol=1e-12)
     for name in theirs.dtype.names[1:]:
         if inp is not None and theirs[name].dtype in (np.int64, np.uint64):
-            # FMPy reads an input file as float64: 2**63 - 1 becomes 2**63 and wraps to -2**63 in
-            # an Int64; the file's own integers are the reference (Feedthrough: output = input)
-            rows = [line.split(",") for line in Path(inp).read_text().splitlines()]
-            col = rows[0].index(name.replace("_output", "_input"))
-            assert ours[name][0] == pytest.approx(int(rows[1][col]), rel=1e-9)      # (the CSV: 12 digits)
-            assert ours[name][-1] == pytest.approx(int(rows[-1][col]), rel=1e-9)
+            assert_64_bit_as_the_input_file(out, inp, name)
             continue
         y = np.asarray(theirs[name], dtype=float).reshape(len(theirs), -1)
         cols = [name] if y.shape[1] == 1 else [f"{name}[{k + 1}]" for k in range(y.shape[1])]
@@ -159,18 +177,7 @@ def test_reference_fmu_in_model_exchange_as_fmpy_integrates_it(model, version, t
     ours the event's own: that last row is held against the reference results only."""
     path = fmu_of(model, version)
     opt = options(model)
-    out = tmp_path / "ours.csv"
-    args = ["--fmi-type", "me", "--start-time", opt["StartTime"], "--stop-time", opt["StopTime"],
-            "--relative-tolerance", 1e-8]
-    if opt.get("StepSize"):
-        args += ["--output-interval", opt["StepSize"]]
-    inp = input_file(model, version, path)
-    if inp is not None:
-        args += ["--input-file", inp]
-    p = subprocess.run([sys.executable, "-m", "artibus", "simulate", str(path), *map(str, args), "-o", str(out)],
-                       capture_output=True, text=True)
-    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
-    ours = np.genfromtxt(out, delimiter=",", names=True, deletechars="")
+    out, ours, inp = simulated(path, model, version, tmp_path, "--fmi-type", "me", "--relative-tolerance", 1e-8)
     table = read_csv(str(inp)) if inp is not None else None
     theirs = fmpy.simulate_fmu(str(path), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-8,
                                start_time=opt["StartTime"], stop_time=opt["StopTime"], input=table,
@@ -183,11 +190,7 @@ def test_reference_fmu_in_model_exchange_as_fmpy_integrates_it(model, version, t
     for name in theirs.dtype.names[1:]:
         y = np.asarray(theirs[name], dtype=float).reshape(len(theirs), -1)[rows]
         if table is not None and theirs[name].dtype in (np.int64, np.uint64):
-            # FMPy's float64 input file wraps 2**63 - 1 (as in the CS test): the file's own integers
-            rows_in = [line.split(",") for line in Path(inp).read_text().splitlines()]
-            col = rows_in[0].index(name.replace("_output", "_input"))
-            assert ours[name][0] == pytest.approx(int(rows_in[1][col]), rel=1e-9)
-            assert ours[name][-1] == pytest.approx(int(rows_in[-1][col]), rel=1e-9)
+            assert_64_bit_as_the_input_file(out, inp, name)
             continue
         cols = [name] if y.shape[1] == 1 else [f"{name}[{k + 1}]" for k in range(y.shape[1])]
         for k, c in enumerate(cols):
