@@ -25,6 +25,8 @@ import numpy as np
 import pytest
 from fmpy.util import read_csv, validate_signal
 
+from artibus.testing import make_ssp
+
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT / ".tools" / "reference-fmus"
 MODELS = ["BouncingBall", "Dahlquist", "Feedthrough", "LinearTransform", "Resource", "Stair", "VanDerPol"]
@@ -207,27 +209,18 @@ def test_a_discrete_input_of_an_me_fmu_in_a_bench_is_set_in_event_mode(tmp_path)
     Feedthrough run as Model Exchange: a discrete input changes in Event Mode only (FMI 3.0
     3.2.1, "State: Continuous-Time Mode": there only continuous-time inputs are set; the
     Reference-FMUs refuse it, "Illegal call sequence"): Int32_output = count = k at every point"""
-    import zipfile
 
     from artibus.base import fmu_dir
     feed, types = REFERENCE / "fmi3" / "Feedthrough.fmu", fmu_dir() / "TypesTest.fmu"
     if not feed.is_file() or not types.is_file():
         pytest.skip(f"{feed} or {types} not built")
-    ns = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
-          'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"')
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {ns} version="1.0" name="me">'
-           '<ssd:System name="me"><ssd:Elements><ssd:Component name="T" source="resources/TypesTest.fmu">'
-           '<ssd:Connectors><ssd:Connector name="count" kind="output"/></ssd:Connectors></ssd:Component>'
-           '<ssd:Component name="F" source="resources/Feedthrough.fmu"><ssd:Connectors>'
-           '<ssd:Connector name="Int32_input" kind="input"/><ssd:Connector name="Int32_output" kind="output"/>'
-           '</ssd:Connectors></ssd:Component></ssd:Elements><ssd:Connections><ssd:Connection startElement="T" '
-           'startConnector="count" endElement="F" endConnector="Int32_input"/></ssd:Connections></ssd:System>'
-           '<ssd:DefaultExperiment startTime="0" stopTime="1"/></ssd:SystemStructureDescription>')
-    bench = tmp_path / "me.ssp"
-    with zipfile.ZipFile(bench, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.write(feed, "resources/Feedthrough.fmu")
-        z.write(types, "resources/TypesTest.fmu")
+    elements = ('<ssd:Component name="T" source="resources/TypesTest.fmu"><ssd:Connectors>'
+                '<ssd:Connector name="count" kind="output"/></ssd:Connectors></ssd:Component>'
+                '<ssd:Component name="F" source="resources/Feedthrough.fmu"><ssd:Connectors>'
+                '<ssd:Connector name="Int32_input" kind="input"/><ssd:Connector name="Int32_output" kind="output"/>'
+                '</ssd:Connectors></ssd:Component>')
+    bench = make_ssp(tmp_path, elements, '<ssd:Connection startElement="T" startConnector="count" endElement="F" '
+                     'endConnector="Int32_input"/>', 1, name="me", fmu=False, fmus=[feed, types], system_name="me")
     out = tmp_path / "me.csv"
     p = subprocess.run([sys.executable, "-m", "artibus", "run", str(bench), "--fmi-type", "me", "--step", "0.25",
                         "-o", str(out)], capture_output=True, text=True)
@@ -328,18 +321,10 @@ def test_a_pythonfmu3_fmu_with_an_array_output_as_fmpy_runs_it(python_fmu, tmp_p
 
 
 def test_a_pythonfmu3_fmu_in_a_bench_driven_by_an_input_file(python_fmu, tmp_path):
-    import zipfile
-    ns = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
-          'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"')
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {ns} version="1.0" name="py">'
-           '<ssd:System name="py"><ssd:Elements><ssd:Component name="P" source="resources/Scaled.fmu">'
-           '<ssd:Connectors><ssd:Connector name="u" kind="input"/><ssd:Connector name="x" kind="output"/>'
-           '<ssd:Connector name="n" kind="output"/></ssd:Connectors></ssd:Component></ssd:Elements></ssd:System>'
-           '<ssd:DefaultExperiment startTime="0" stopTime="1"/></ssd:SystemStructureDescription>')
-    bench = tmp_path / "py.ssp"
-    with zipfile.ZipFile(bench, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.write(python_fmu, "resources/Scaled.fmu")
+    scaled = ('<ssd:Component name="P" source="resources/Scaled.fmu"><ssd:Connectors>'
+              '<ssd:Connector name="u" kind="input"/><ssd:Connector name="x" kind="output"/>'
+              '<ssd:Connector name="n" kind="output"/></ssd:Connectors></ssd:Component>')
+    bench = make_ssp(tmp_path, scaled, None, 1, name="py", fmu=False, fmus=[python_fmu], system_name="py")
     inp = tmp_path / "in.csv"
     inp.write_text("time,P.u\n" + "".join(f"{a},{b}\n" for a, b in zip(U_T, U)))
     out = tmp_path / "bench.csv"
@@ -357,7 +342,6 @@ def test_a_pythonfmu3_array_output_drives_linear_transform_in_a_bench(python_fmu
     """Scaled's y (4 elements, gain u) connected whole to LinearTransform's u, its n = 4 set in
     the bench (an .ssv: a structural parameter, FMI 3.0 2.3 Configuration Mode): L.y = A (gain u)
     element by element (u = 2 held; Scaled's y is its start value 0 until its first step)."""
-    import zipfile
     lt = REFERENCE / "fmi3" / "LinearTransform.fmu"
     if not lt.is_file():
         pytest.skip(f"{lt} not built")
@@ -366,21 +350,15 @@ def test_a_pythonfmu3_array_output_drives_linear_transform_in_a_bench(python_fmu
           'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"')
     ssv = (f'<?xml version="1.0" encoding="UTF-8"?><ssv:ParameterSet {ns} version="1.0" name="n"><ssv:Parameters>'
            '<ssv:Parameter name="n"><ssv:Integer value="4"/></ssv:Parameter></ssv:Parameters></ssv:ParameterSet>')
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {ns} version="1.0" name="py">'
-           '<ssd:System name="py"><ssd:Elements><ssd:Component name="P" source="resources/Scaled.fmu">'
-           '<ssd:Connectors><ssd:Connector name="y" kind="output"/></ssd:Connectors></ssd:Component>'
-           '<ssd:Component name="L" source="resources/LinearTransform.fmu"><ssd:Connectors>'
-           '<ssd:Connector name="u" kind="input"/><ssd:Connector name="y" kind="output"/></ssd:Connectors>'
-           '<ssd:ParameterBindings><ssd:ParameterBinding source="resources/n.ssv"/></ssd:ParameterBindings>'
-           '</ssd:Component></ssd:Elements><ssd:Connections><ssd:Connection startElement="P" startConnector="y" '
-           'endElement="L" endConnector="u"/></ssd:Connections></ssd:System>'
-           '<ssd:DefaultExperiment startTime="0" stopTime="0.5"/></ssd:SystemStructureDescription>')
-    bench = tmp_path / "py.ssp"
-    with zipfile.ZipFile(bench, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.writestr("resources/n.ssv", ssv)
-        z.write(python_fmu, "resources/Scaled.fmu")
-        z.write(lt, "resources/LinearTransform.fmu")
+    elements = ('<ssd:Component name="P" source="resources/Scaled.fmu"><ssd:Connectors>'
+                '<ssd:Connector name="y" kind="output"/></ssd:Connectors></ssd:Component>'
+                '<ssd:Component name="L" source="resources/LinearTransform.fmu"><ssd:Connectors>'
+                '<ssd:Connector name="u" kind="input"/><ssd:Connector name="y" kind="output"/></ssd:Connectors>'
+                '<ssd:ParameterBindings><ssd:ParameterBinding source="resources/n.ssv"/></ssd:ParameterBindings>'
+                '</ssd:Component>')
+    bench = make_ssp(tmp_path, elements, '<ssd:Connection startElement="P" startConnector="y" endElement="L" '
+                     'endConnector="u"/>', 0.5, ssv={"n.ssv": ssv}, name="py", fmu=False, fmus=[python_fmu, lt],
+                     system_name="py")
     a = np.array([[1.0, 0.0, 2.0, -1.0], [0.5, 1.0, 0.0, 3.0]])
     out = tmp_path / "bench.csv"
     p = subprocess.run([sys.executable, "-m", "artibus", "run", str(bench), "--step", str(H), "--set", "P.u=2",

@@ -15,6 +15,7 @@ import pytest
 from artibus import ArtibusError, fmu_dir
 from artibus.fmu import simulate
 from artibus.runner import Simulation
+from artibus.testing import pack_ssp, ssd_text
 
 NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
       'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"')
@@ -38,16 +39,11 @@ def with_version(tmp_path, version):
 
 def one_fmu_bench(tmp_path, fmu):
     """an SSP 1.0 bench of the one FMU (outputs x[0], y[0] recorded), 10 s"""
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="one">'
-           f'<ssd:System name="one"><ssd:Elements><ssd:Component name="Bus" source="resources/fmi3/{SOURCE}.fmu">'
-           f'<ssd:Connectors><ssd:Connector name="x[0]" kind="output"/><ssd:Connector name="y[0]" kind="output"/>'
-           f'</ssd:Connectors></ssd:Component></ssd:Elements></ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="10"/></ssd:SystemStructureDescription>')
-    path = tmp_path / f"one-{fmu.stem}.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.write(fmu, f"resources/fmi3/{SOURCE}.fmu")
-    return path
+    bus = (f'<ssd:Component name="Bus" source="resources/fmi3/{SOURCE}.fmu"><ssd:Connectors>'
+           '<ssd:Connector name="x[0]" kind="output"/><ssd:Connector name="y[0]" kind="output"/>'
+           '</ssd:Connectors></ssd:Component>')
+    return pack_ssp(tmp_path / f"one-{fmu.stem}.ssp", ssd_text(bus, None, 10, "one", system_name="one"),
+                    {f"resources/fmi3/{SOURCE}.fmu": fmu})
 
 
 @pytest.mark.parametrize("version", ["3.0.1", "3.0.2", "3.1"])

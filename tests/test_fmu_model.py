@@ -126,15 +126,8 @@ NS = ('xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
 
 
 def _ssp(path, elements, connections, files):
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" '
-           f'name="{path.stem}"><ssd:System name="{path.stem}"><ssd:Elements>{elements}</ssd:Elements>'
-           f'{f"<ssd:Connections>{connections}</ssd:Connections>" if connections else ""}</ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="1"/></ssd:SystemStructureDescription>')
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        for arcname, f in files.items():
-            z.write(f, arcname)
-    return path
+    from artibus.testing import pack_ssp, ssd_text
+    return pack_ssp(path, ssd_text(elements, connections or None, 1, path.stem, system_name=path.stem), files)
 
 
 def _component(name, fmu, connectors):

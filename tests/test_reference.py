@@ -21,7 +21,6 @@ from artibus.base import ArtibusError
 from artibus.bench import script, ssp
 from artibus.fmu import Result, SimulationError
 from artibus.runner.simulation import Simulation
-from artibus.testing import NS, fmu_path
 
 H = 0.01                 # the benches' default base step
 FLOOR_PCT = 0.05         # below this a KPI's error is the plants' integration error, not the stepping's
@@ -111,17 +110,8 @@ def test_stated_timing_by_hand():
 # --- bad input ---------------------------------------------------------------------------------
 
 def _ssp(tmp_path, elements, connections, fmus):
-    import zipfile
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="b">'
-           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements>'
-           + (f'<ssd:Connections>{connections}</ssd:Connections>' if connections else '') + '</ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="0.1"/></ssd:SystemStructureDescription>')
-    path = tmp_path / "b.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        for f in fmus:
-            z.write(fmu_path(f), f"resources/{f}.fmu")
-    return path
+    from artibus.testing import make_ssp
+    return make_ssp(tmp_path, elements, connections or None, 0.1, name="b", fmu=False, fmus=fmus)
 
 
 def _component(name, fmu, connectors):

@@ -13,7 +13,6 @@ FMI 3.0's terminateSimulation is checked on an FMU of ours whose fmi3DoStep is m
 say it. FMI 3.0 Feedthrough has every variable type: each width is set at its bounds and
 read back, a value outside them refused."""
 import math
-import zipfile
 from pathlib import Path
 
 import fmpy
@@ -149,15 +148,9 @@ def stair_bench(tmp_path, connect_feedthrough):
 def bench_ssp(path, elements, connections, files):
     """an .ssp at path: an SSP 1.0 System of the elements and connections (SSD text), stopping
     at 10 s, with files {name in the archive: the file}"""
-    name = path.stem
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
-           f'<ssd:System name="{name}"><ssd:Elements>{elements}</ssd:Elements>{connections}</ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="10"/></ssd:SystemStructureDescription>')
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        for arcname, f in files.items():
-            z.write(f, arcname)
-    return path
+    from artibus.testing import pack_ssp, ssd_text
+    name = path.stem      # (``connections``: the Connections element itself, or "")
+    return pack_ssp(path, ssd_text(elements, None, 10, name, system_name=name, after=connections), files)
 
 
 def test_a_bench_holding_stair_ends_at_9_s(tmp_path):

@@ -25,19 +25,19 @@ artibus.runner.core; issues 13, 37), held to references that share no code with 
   off) named in Simulation.stepping; a core library not built an error naming it.
 """
 import math
-import zipfile
 
 import fmpy
 import numpy as np
 import pytest
 
-from artibus import ArtibusError, ROOT, fmu_dir, fmu_path
+from artibus import ArtibusError, ROOT, fmu_dir
 from artibus.bench import ssp
 from artibus.fmu import Result
 from artibus.runner import Simulation, core_library_path
 from artibus.runner.lsbus_bench import read_spec
+from artibus.testing import pack_ssp, ssd_text
 
-from test_runner import L0, LEAD_FOLLOW, NS, QUIET, component, connection, make_ssp, nested_bench
+from test_runner import L0, LEAD_FOLLOW, QUIET, component, connection, make_ssp, nested_bench
 
 pytestmark = pytest.mark.skipif(not core_library_path().is_file(),
                                 reason=f"{core_library_path()} not built (cmake target artibus_core)")
@@ -117,15 +117,10 @@ def alone_bench(tmp_path, fmu, stop):
             if v.causality == "output" and _connector_type(v)]
     conns = "".join(f'<ssd:Connector name="{n}" kind="output">{t}</ssd:Connector>' for n, t in outs)
     name = md.modelName
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="alone">'
-           f'<ssd:System name="root"><ssd:Elements><ssd:Component name="{name}" source="resources/{fmu.name}" '
-           f'type="application/x-fmu-sharedlibrary"><ssd:Connectors>{conns}</ssd:Connectors></ssd:Component>'
-           f'</ssd:Elements></ssd:System><ssd:DefaultExperiment startTime="0" stopTime="{stop}"/>'
-           f'</ssd:SystemStructureDescription>')
-    path = tmp_path / f"{fmu.stem}.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.write(fmu, f"resources/{fmu.name}")
+    component = (f'<ssd:Component name="{name}" source="resources/{fmu.name}" type="application/x-fmu-sharedlibrary">'
+                 f'<ssd:Connectors>{conns}</ssd:Connectors></ssd:Component>')
+    path = pack_ssp(tmp_path / f"{fmu.stem}.ssp", ssd_text(component, None, stop, "alone"),
+                    {f"resources/{fmu.name}": fmu})
     return path, name, [n for n, _ in outs]
 
 
@@ -276,16 +271,7 @@ def test_progress_bar_runs_in_pieces_the_same(tmp_path, capsys):
 # --- a failing FMU midway ------------------------------------------------------------
 
 def bench_with(tmp_path, elements, connections, fmus, stop=10.0):
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="fail">'
-           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements>'
-           f'<ssd:Connections>{connections}</ssd:Connections></ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="{stop}"/></ssd:SystemStructureDescription>')
-    path = tmp_path / "fail.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        for name in fmus:
-            z.write(fmu_path(name), f"resources/{name}.fmu")
-    return path
+    return make_ssp(tmp_path, elements, connections, stop, name="fail", fmu=False, fmus=fmus)
 
 
 def failure(path, algorithm, component, **kw):

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from artibus import ArtibusError, fmu_path
+from artibus import testing
 from artibus.fmu import DEFAULT_STEPS, simulate
 from artibus.runner import Simulation, SimulationError
 
@@ -37,18 +38,8 @@ def conn(a, ca, b, cb, body=""):
 
 
 def make_ssp(tmp_path, elements, connections, stop=1.0, files=None, fmus=("TypesTest",), name="types"):
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
-           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements>'
-           + (f'<ssd:Connections>{connections}</ssd:Connections>' if connections else "") + '</ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="{stop}"/></ssd:SystemStructureDescription>')
-    path = tmp_path / f"{name}.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        for f in fmus:
-            z.write(fmu_path(f), f"resources/{f}.fmu")
-        for fname, data in (files or {}).items():
-            z.writestr(f"resources/{fname}", data)
-    return path
+    return testing.make_ssp(tmp_path, elements, connections or None, stop, ssv=files, name=name, fmu=False,
+                            fmus=fmus)
 
 
 def outs(*names):

@@ -7,15 +7,15 @@ checks are the FMUs' own kinematics (BusKinematics, seed 003 eq. 19: kappa0 =
 tan(gammaF) / L0), independent of the runner. What the runner does not apply
 is one warning naming the file and the element; `artibus check BENCH` lists it
 with what is artibus-specific."""
-import zipfile
 
 import numpy as np
 import pytest
 
-from artibus import ArtibusError, fmu_path
+from artibus import ArtibusError
 from artibus.bench import portability
 from artibus.bench.check import main as check_main
 from artibus.runner import run
+from artibus.testing import make_ssp
 from test_runner import NS, QUIET, component, connection, mapping_entries, VEHICLE_SSV
 
 
@@ -34,17 +34,7 @@ def bindings(*items):
 
 def bench(tmp_path, name, elements, connections, system="", files=None, stop=6.0, after=""):
     """A .ssp whose root System carries ``system`` (its Connectors, ParameterBindings) before its Elements."""
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
-           f'<ssd:System name="root">{system}<ssd:Elements>{elements}</ssd:Elements>'
-           f'<ssd:Connections>{connections}</ssd:Connections>{after}</ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="{stop}"/></ssd:SystemStructureDescription>')
-    path = tmp_path / f"{name}.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.write(fmu_path("BusKinematics"), "resources/BusKinematics.fmu")
-        for fname, text in (files or {}).items():
-            z.writestr(f"resources/{fname}", text)
-    return path
+    return make_ssp(tmp_path, elements, connections, stop, ssv=files, name=name, system=system, after=after)
 
 
 FILES = {"four.ssv": ssv("four", L0=4.0), "eight.ssv": ssv("eight", L0=8.0),

@@ -8,7 +8,6 @@ mapping. An unknown unit, or one of another dimension, is an error naming the
 file, the parameter and both units. Our own sets (SI, the FMUs' own unit
 names) are applied unchanged."""
 import re
-import zipfile
 
 import numpy as np
 import pytest
@@ -18,6 +17,7 @@ from artibus.bench import check, ssp
 from artibus.bench.parameters import PARAMETER_DIR, read_parameters
 from artibus.fmu import simulate
 from artibus.runner import run
+from artibus.testing import make_ssp
 from test_runner import NS, QUIET, component, connection
 
 SI = PARAMETER_DIR / "Scania18m.ssv"
@@ -62,17 +62,10 @@ def test_mm_and_t_m2_give_the_si_results_through_simulate(tmp_path):
 
 
 def _bus_bench(tmp_path, ssv_path, name):
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
-           f'<ssd:System name="root"><ssd:Elements><ssd:Component name="Bus" source="resources/BusDynamics.fmu">'
-           f'<ssd:ParameterBindings><ssd:ParameterBinding source="resources/vehicle.ssv"/></ssd:ParameterBindings>'
-           f'</ssd:Component></ssd:Elements></ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="1"/></ssd:SystemStructureDescription>')
-    path = tmp_path / f"{name}.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.write(fmu_path("BusDynamics"), "resources/BusDynamics.fmu")
-        z.write(ssv_path, "resources/vehicle.ssv")
-    return path
+    bus = ('<ssd:Component name="Bus" source="resources/BusDynamics.fmu"><ssd:ParameterBindings>'
+           '<ssd:ParameterBinding source="resources/vehicle.ssv"/></ssd:ParameterBindings></ssd:Component>')
+    return make_ssp(tmp_path, bus, None, 1, ssv={"vehicle.ssv": ssv_path}, name=name, fmu=False,
+                    fmus=["BusDynamics"])
 
 
 def test_mm_and_t_m2_give_the_si_results_bound_in_a_bench(tmp_path):
@@ -121,15 +114,8 @@ def test_a_unit_through_a_parameter_mapping(tmp_path):
                    '</ssd:ParameterBinding></ssd:ParameterBindings>')
         elements = (component("Lead", [("beta[1]", "output")])
                     + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")], binding))
-        ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="m">'
-               f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements><ssd:Connections>'
-               f'{connection("Lead", "beta[1]", "Follow", "gammaF")}</ssd:Connections></ssd:System>'
-               f'<ssd:DefaultExperiment startTime="0" stopTime="5"/></ssd:SystemStructureDescription>')
-        path = tmp_path / "m.ssp"
-        with zipfile.ZipFile(path, "w") as z:
-            z.writestr("SystemStructure.ssd", ssd)
-            z.write(fmu_path("BusKinematics"), "resources/BusKinematics.fmu")
-            z.writestr("resources/v.ssv", vehicle)
+        path = make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"), 5,
+                        ssv={"v.ssv": vehicle}, name="m")
         assert ssp.read(path).components["Follow"].parameters["L0"] == 4.0
         r = run(path, step=0.05, overrides=QUIET)
         np.testing.assert_allclose(r["Follow.kappa[0]"], np.tan(r["Lead.beta[1]"]) / 4.0, rtol=1e-12)
@@ -153,15 +139,8 @@ def test_our_benches_read_with_their_units():
 def _follow_bench(tmp_path, binding="", units=""):
     elements = (component("Lead", [("beta[1]", "output")])
                 + component("Follow", [("gammaF", "input"), ("kappa[0]", "output")], binding))
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="f">'
-           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements><ssd:Connections>'
-           f'{connection("Lead", "beta[1]", "Follow", "gammaF")}</ssd:Connections></ssd:System>{units}'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="5"/></ssd:SystemStructureDescription>')
-    path = tmp_path / "f.ssp"
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("SystemStructure.ssd", ssd)
-        z.write(fmu_path("BusKinematics"), "resources/BusKinematics.fmu")
-    return path
+    return make_ssp(tmp_path, elements, connection("Lead", "beta[1]", "Follow", "gammaF"), 5, name="f",
+                    outer=units)
 
 
 def test_an_inline_ssd_value_with_a_unit_of_the_ssds_units(tmp_path):

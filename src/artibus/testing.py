@@ -29,19 +29,40 @@ def connection(a, ca, b, cb, tr=""):
     return f'<ssd:Connection {sa}startConnector="{ca}" {eb}endConnector="{cb}">{body}</ssd:Connection>'
 
 
-def make_ssp(tmp_path, elements, connections, stop=10.0, ssv=None, name="bench", fmu=True):
-    """<tmp_path>/<name>.ssp: one system of ``elements`` and ``connections``, its default
-    experiment to ``stop``, with resources/BusKinematics.fmu (unless fmu=False) and ssv's
-    {file name: text} in resources/."""
-    ssd = (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="1.0" name="{name}">'
-           f'<ssd:System name="root"><ssd:Elements>{elements}</ssd:Elements>'
-           f'<ssd:Connections>{connections}</ssd:Connections></ssd:System>'
-           f'<ssd:DefaultExperiment startTime="0" stopTime="{stop}"/></ssd:SystemStructureDescription>')
-    path = tmp_path / f"{name}.ssp"
+def ssd_text(elements, connections="", stop=10.0, name="bench", *, version="1.0", system="", after="",
+             system_name="root", outer=""):
+    """A SystemStructure.ssd: one system ``system_name`` holding ``system`` (its Connectors,
+    ParameterBindings) before its ``elements``, then its ``connections`` (None: no Connections
+    element) and ``after`` them (its SystemGeometry, Annotations...); ``outer`` after the system
+    (the description's Enumerations, Units); a default experiment from 0 to ``stop``; SSP
+    ``version`` (SSP 2.0 keeps SSP 1.0's namespaces)."""
+    conns = "" if connections is None else f"<ssd:Connections>{connections}</ssd:Connections>"
+    return (f'<?xml version="1.0" encoding="UTF-8"?><ssd:SystemStructureDescription {NS} version="{version}" '
+            f'name="{name}"><ssd:System name="{system_name}">{system}<ssd:Elements>{elements}</ssd:Elements>'
+            f'{conns}{after}</ssd:System>{outer}<ssd:DefaultExperiment startTime="0" stopTime="{stop}"/>'
+            f'</ssd:SystemStructureDescription>')
+
+
+def make_ssp(tmp_path, elements, connections="", stop=10.0, ssv=None, name="bench", fmu=True, *, fmus=(), **ssd):
+    """<tmp_path>/<name>.ssp: ssd_text(elements, connections, stop, name, **ssd) with, in
+    resources/, BusKinematics.fmu (unless fmu=False), the FMUs ``fmus`` (a built FMU's name, or a
+    path: under its file name) and ``ssv``'s files ({file name: text or bytes, or the path of a file})."""
+    files = {}
+    for f in (["BusKinematics"] if fmu else []) + list(fmus):
+        f = fmu_path(f) if isinstance(f, str) else f
+        files[f"resources/{f.name}"] = f
+    files.update({f"resources/{fname}": content for fname, content in (ssv or {}).items()})
+    return pack_ssp(tmp_path / f"{name}.ssp", ssd_text(elements, connections, stop, name, **ssd), files)
+
+
+def pack_ssp(path, ssd, files=None):
+    """An .ssp at ``path``: its SystemStructure.ssd ``ssd`` (text) and ``files`` {name in the
+    archive: text or bytes, or the path of a file}."""
     with zipfile.ZipFile(path, "w") as z:
         z.writestr("SystemStructure.ssd", ssd)
-        if fmu:
-            z.write(fmu_path("BusKinematics"), "resources/BusKinematics.fmu")
-        for fname, text in (ssv or {}).items():
-            z.writestr(f"resources/{fname}", text)
+        for arcname, content in (files or {}).items():
+            if isinstance(content, (str, bytes)):
+                z.writestr(arcname, content)
+            else:
+                z.write(content, arcname)
     return path
