@@ -7,9 +7,9 @@ forked child (the FMU loaded and called only there) and the parent waits on it:
 
 - each row the child records goes at once to a file of the run's own temporary directory, raw
   float64s, one unbuffered write a row (and a String column's texts and a 64-bit integer column's
-  exact values a JSON line a row): what a
-  crash cannot lose, as the kernel holds what was written; the child's temporary files (the
-  unpacked FMU) go to that directory too, removed by the parent however the child ended;
+  exact values a JSON line a row, written before it): what a crash cannot lose, as the kernel
+  holds what was written; the child's temporary files (the unpacked FMU) go to that directory
+  too, removed by the parent however the child ended;
 - its end comes back over a pipe: the Result, or the error (its message, partial Result, FMU
   log), or the interrupt's partial Result; the parent raises them as the run in-process would;
 - a child ended by a signal (SIGSEGV, SIGBUS, SIGABRT...) or an exit without a word: a
