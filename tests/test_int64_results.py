@@ -78,33 +78,35 @@ def test_every_results_format_holds_them_exactly(suffix, tmp_path):
 
 WIDE_FMU = '''
 import ctypes
-from pythonfmu3 import Fmi3Causality, Fmi3Slave, Fmi3Variability, Float64, Int64, UInt64
+from pythonfmu3 import Fmi3Causality, Fmi3Slave, Fmi3Variability, Float64, Int64, String, UInt64
 
 
 class Wide(Fmi3Slave):
-    """after step k: n = 2**62 + 2 k + 1, u = 2**64 - 1 - 2 k (odd, beyond 2**53); a read of
-    address 0 on the step past 0.45 s"""
+    """after step k: n = 2**62 + 2 k + 1, u = 2**64 - 1 - 2 k (odd, beyond 2**53), s = "step k";
+    a read of address 0 on the step past 0.45 s"""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.time, self.n, self.u, self.k = 0.0, 2**62 + 1, 2**64 - 1, 0
+        self.time, self.n, self.u, self.s, self.k = 0.0, 2**62 + 1, 2**64 - 1, "step 0", 0
         self.register_variable(Float64("time", causality=Fmi3Causality.independent,
                                        variability=Fmi3Variability.continuous))
         self.register_variable(Int64("n", causality=Fmi3Causality.output, variability=Fmi3Variability.discrete))
         self.register_variable(UInt64("u", causality=Fmi3Causality.output, variability=Fmi3Variability.discrete))
+        self.register_variable(String("s", causality=Fmi3Causality.output, variability=Fmi3Variability.discrete))
 
     def do_step(self, current_time, step_size):
         if current_time + step_size > 0.45:
             ctypes.string_at(0)
         self.k += 1
-        self.n, self.u = 2**62 + 2 * self.k + 1, 2**64 - 1 - 2 * self.k
+        self.n, self.u, self.s = 2**62 + 2 * self.k + 1, 2**64 - 1 - 2 * self.k, f"step {self.k}"
         return True
 '''
 
 
 def test_a_crashing_fmus_kept_rows_hold_them_exactly(tmp_path):
-    """An FMU made another way (pythonfmu3) with Int64 and UInt64 outputs that crashes after
-    t = 0.4 s: OUT.partial.csv has every row up to 0.4 s, each value exact"""
+    """An FMU made another way (pythonfmu3) with Int64, UInt64 and String outputs that crashes
+    after t = 0.4 s: OUT.partial.csv has every row up to 0.4 s, each value exact, each text (the
+    row at 0.4 s was lost with a String output before: its texts were written with the next row)"""
     pytest.importorskip("pythonfmu3", reason="pythonfmu3 (pyproject's test extra) is not installed")
     (tmp_path / "Wide.py").write_text(WIDE_FMU)
     p = subprocess.run([sys.executable, "-m", "pythonfmu3", "build", "-f", "Wide.py", "-d", "."],
@@ -116,3 +118,6 @@ def test_a_crashing_fmus_kept_rows_hold_them_exactly(tmp_path):
     partial = tmp_path / "w.partial.csv"
     assert _read(partial, "n") == [2**62 + 2 * k + 1 for k in range(5)]
     assert _read(partial, "u") == [2**64 - 1 - 2 * k for k in range(5)]
+    with open(partial, newline="") as f:
+        rows = list(csv.reader(f))
+    assert [r[rows[0].index("s")] for r in rows[1:]] == [f"step {k}" for k in range(5)]
