@@ -16,6 +16,7 @@ Debian's source package, build-win64/win64/<Name>.dll, packed into binaries/win6
 Skipped with the reason where the win64 build or Wine is missing (scripts/setup_test.sh
 installs both and builds it: ./test.sh runs it).
 """
+import contextlib
 import os
 import re
 import shutil
@@ -91,7 +92,8 @@ def _wine_run(args):
     again: three runs, and what the last one prints is asserted."""
     import time
     for _ in range(3):
-        p = subprocess.run(args, capture_output=True, text=True, env=_wine_env(), timeout=300)
+        with _one_wine_program():
+            p = subprocess.run(args, capture_output=True, text=True, env=_wine_env(), timeout=300)
         silent = not p.stdout.strip() and not p.stderr.strip()
         lost = ((p.returncode == 0 and not p.stdout.strip()) or "wine client error" in p.stderr
                 or silent)
@@ -99,6 +101,20 @@ def _wine_run(args):
             return p
         time.sleep(1.0)           # the wineserver of the run before shuts down; a new one starts
     return p
+
+
+@contextlib.contextmanager
+def _one_wine_program():
+    """One Wine program at a time on the prefix, whichever pytest-xdist worker runs it (an
+    exclusive lock on build-win64/wineprefix.lock): Wine's hiccups seen in CI (a program's output
+    lost, its wineserver gone under it) came with two workers starting Wine side by side. (pytest
+    9.2 with pytest-xdist 3.8 does not keep an xdist_group on one worker under --dist loadgroup:
+    tried.) A program takes 0.2 s once the server runs."""
+    import fcntl
+    WIN.mkdir(parents=True, exist_ok=True)
+    with open(WIN / "wineprefix.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -119,8 +135,9 @@ def wineserver():
         return
     quiet = dict(stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                  stderr=subprocess.DEVNULL, env=_wine_env(), check=False)
-    subprocess.run([server, "-p10"], **quiet)
-    subprocess.run([wine, str(exes[0])], timeout=300, **quiet)   # prints its usage
+    with _one_wine_program():
+        subprocess.run([server, "-p10"], **quiet)
+        subprocess.run([wine, str(exes[0])], timeout=300, **quiet)   # prints its usage
     yield
 
 
