@@ -41,6 +41,7 @@ from artibus.console import path_error, quiet_exit, stdout_gone
 from artibus.base import ArtibusError, __version__, arg_integer, arg_real, arg_seconds
 from artibus import files
 from artibus.files import atomic_dir, bench_inputs, given as _given, make_dir, report_said
+from artibus.bench.fmi import add_fmi_option
 from artibus.analysis import cmd_bode, cmd_calibrate, cmd_linearize, cmd_modes
 from artibus.inventory import cmd_info, cmd_list, fmu_arg, wrong_kind
 from artibus.options import Parser
@@ -300,10 +301,30 @@ def cmd_sweep(args):
 
 
 def build_parser():
-    from artibus.bench.fmi import add_fmi_option
+    """The command line: a sub-command a verb (``_verb_<name>``: its arguments)."""
     p = Parser(prog="artibus", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"artibus {__version__}")
     sub = p.add_subparsers(dest="verb", required=True)
+    _verb_run(sub)
+    _verb_plot(sub)
+    _verb_can(sub)
+    _verb_replay(sub)
+    _verb_bode(sub)
+    _verb_linearize(sub)
+    _verb_modes(sub)
+    _verb_calibrate(sub)
+    _verb_list(sub)
+    _verb_pack(sub)
+    _verb_info(sub)
+    _verb_simulate(sub)
+    _verb_check(sub)
+    _verb_demo(sub)
+    _verb_sweep(sub)
+    return p
+
+
+def _verb_run(sub):
+    """`artibus run`: a bench (or every bench), its report, results, CAN, Model Exchange and reference options"""
     s = sub.add_parser("run", help="run an SSP bench")
     s.add_argument("bench", nargs="?", help="a bench name (see `artibus list`) or the path of an .ssp")
     s.add_argument("--all", action="store_true", help="run every bench")
@@ -356,12 +377,20 @@ def build_parser():
                         "COMPONENT.VARIABLE (as simulate's --input-file)")
     add_fmi_option(s, "run")
     s.set_defaults(func=cmd_run)
+
+
+def _verb_plot(sub):
+    """`artibus plot`: signals of a results file as a PNG"""
     s = sub.add_parser("plot", help="a PNG of signals of a results CSV, a panel per unit")
     s.add_argument("results", metavar="RESULTS.csv", help="a results file of artibus run or simulate")
     s.add_argument("signal", nargs="+", metavar="SIGNAL",
                    help="a column name, e.g. Bus.artAngle[1]; '*' matches any text (Bus.artAngle[*])")
     s.add_argument("-o", "--output", metavar="FILE.png", help="default: RESULTS with .png")
     s.set_defaults(func=cmd_plot)
+
+
+def _verb_can(sub):
+    """`artibus can decode|plot`: a CAN log's signals"""
     s = sub.add_parser("can", help="CAN tools: decode or plot a log")
     can_sub = s.add_subparsers(dest="can_verb", required=True)
     c = can_sub.add_parser("decode", help="print or export (CSV) the signals of a .blf/.asc log")
@@ -376,6 +405,10 @@ def build_parser():
     c.add_argument("--dbc", help="default: ssp/can/Bus36m.dbc")
     c.add_argument("-o", "--output", metavar="FILE.png", help="default: LOG with .png")
     c.set_defaults(func=cmd_can_plot)
+
+
+def _verb_replay(sub):
+    """`artibus replay`: a bench driven by a recorded log"""
     s = sub.add_parser("replay", help="drive a bench from a recorded log, compare with measured responses")
     s.add_argument("log", help="a .csv (time_s and signal columns) or a CAN log (.blf, .asc)")
     s.add_argument("--bench", required=True,
@@ -394,6 +427,10 @@ def build_parser():
     s.add_argument("--report", metavar="DIR", help="plots of model against measured and errors.csv")
     add_fmi_option(s, "replay")
     s.set_defaults(func=cmd_replay)
+
+
+def _verb_bode(sub):
+    """`artibus bode`: a frequency response through the co-simulation"""
     s = sub.add_parser("bode", help="frequency response through the co-simulation (sine tests)")
     s.add_argument("bench", help="a bench name or the path of an .ssp")
     s.add_argument("--input", required=True, metavar="COMP.VAR", help="the input the sine is added to")
@@ -412,6 +449,10 @@ def build_parser():
     s.add_argument("--plot", metavar="FILE.png", help="PNG with gain and phase")
     add_fmi_option(s, "bode")
     s.set_defaults(func=cmd_bode)
+
+
+def _verb_linearize(sub):
+    """`artibus linearize`: the linear model of an FMU or a bench at an operating point"""
     s = sub.add_parser("linearize", help="A, B, C, D of one Model Exchange FMU at an operating point, "
                                          "its modes (frequency, damping ratio, dominant state)")
     s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU (it needs Model Exchange), "
@@ -437,6 +478,10 @@ def build_parser():
     s.add_argument("--bode", metavar="IN:OUT", help="the linear model's Bode plot from IN to OUT (with --plot)")
     s.add_argument("--plot", metavar="FILE.png", help="where the Bode plot goes")
     s.set_defaults(func=cmd_linearize)
+
+
+def _verb_modes(sub):
+    """`artibus modes`: the stability maps"""
     s = sub.add_parser("modes", help="stability maps: seed 001's sway mode with each damping function and "
                                      "seed 004's FWS/MAS over speed, a page with plots")
     s.add_argument("-o", "--output", required=True, metavar="DIR", help="where the page and its PNGs go")
@@ -447,6 +492,10 @@ def build_parser():
     s.add_argument("--no-friction", action="store_true",
                    help="leave out the map over rear friction at 100 km/h (30 linearisations)")
     s.set_defaults(func=cmd_modes)
+
+
+def _verb_calibrate(sub):
+    """`artibus calibrate`: the damping controller's gains"""
     s = sub.add_parser("calibrate", help="the damping controller's gains (seed 001, 5.2.2), printed; "
                                          "-o FILE.ssv writes them")
     s.add_argument("--target", type=arg_real, default=13.5, help="peak damping on the 200 m / 100 km/h case, %%")
@@ -454,9 +503,17 @@ def build_parser():
                    help="write the gains as a parameter set (the benches': ssp/parameters/DampingGains.ssv)")
     s.add_argument("--dry-run", action="store_true", help="print the gains, write nothing (also without -o)")
     s.set_defaults(func=cmd_calibrate)
+
+
+def _verb_list(sub):
+    """`artibus list`"""
     s = sub.add_parser("list", help="the benches and FMUs, one line each")
     s.add_argument("--parameters", action="store_true", help="every bench's bound parameter values too")
     s.set_defaults(func=cmd_list)
+
+
+def _verb_pack(sub):
+    """`artibus pack`: self-contained and portable .ssp files"""
     s = sub.add_parser("pack", help="pack benches into self-contained .ssp files")
     s.add_argument("bench", nargs="*", help="default: every bench in ssp/benches (with --portable: every CAN-free one)")
     s.add_argument("--portable", action="store_true",
@@ -470,25 +527,45 @@ def build_parser():
                         "(scripts/setup.sh --all-platforms, a few minutes the first time)")
     add_fmi_option(s, "pack")
     s.set_defaults(func=cmd_pack)
+
+
+def _verb_info(sub):
+    """`artibus info`"""
     s = sub.add_parser("info", help="show an FMU's variables or a bench's structure")
     s.add_argument("fmu", metavar="BENCH|FMU", help="a bench name, the name of a built FMU, or the path of an .ssp or .fmu")
     s.set_defaults(func=cmd_info)
+
+
+def _verb_simulate(sub):
+    """`artibus simulate`: one FMU alone (FMPy's and fmusim's option names too)"""
     s = sub.add_parser("simulate", help="run one FMU alone")
     s.add_argument("fmu", help="path of an .fmu, or the name of a built FMU")
     from artibus.options import add_simulate_options      # (with FMPy's and fmusim's names)
     add_simulate_options(s)
     add_fmi_option(s, "simulate")
     s.set_defaults(func=cmd_simulate)
+
+
+def _verb_check(sub):
+    """`artibus check`: a parameter set's consistency, or a bench's portability"""
     s = sub.add_parser("check", help="check a vehicle parameter set's consistency (axles, hinges, loads, inertia), "
                                      "or what of a bench other SSP masters run differently")
     s.add_argument("ssv", nargs="+", help="a parameter set (path of an .ssv or a name in ssp/parameters) "
                                           "or a bench (a name or an .ssp)")
     s.add_argument("--model", choices=["BusDynamics", "BusKinematics"], help="default: from the names in the set")
     s.set_defaults(func=cmd_check)
+
+
+def _verb_demo(sub):
+    """`artibus demo`"""
     s = sub.add_parser("demo", help="the kinematic demo (Urbino 18 on an S-curve): results, plots and a page")
     s.add_argument("--report", metavar="DIR", default="out", help="directory of results and plots (default: out)")
     s.add_argument("-o", "--output", metavar="FILE", help="results CSV (default: DIR/BusKinematics_Urbino18_SCurve.csv)")
     s.set_defaults(func=cmd_demo)
+
+
+def _verb_sweep(sub):
+    """`artibus sweep`: many cases of a bench on Dask"""
     s = sub.add_parser("sweep", help="run many cases of a bench on Dask (grid, design file), resumable")
     s.add_argument("bench", help="a bench name (see `artibus list`) or the path of an .ssp")
     s.add_argument("--grid", nargs="+", action="extend", metavar="COMP.VAR=VALUES",
@@ -511,7 +588,6 @@ def build_parser():
                         "co-simulation error, a column 'KPI [unit] cosim error' (issue 44; default 0: none)")
     add_fmi_option(s, "sweep")
     s.set_defaults(func=cmd_sweep)
-    return p
 
 
 def main(argv=None):
