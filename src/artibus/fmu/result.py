@@ -99,7 +99,7 @@ class Result:
         values = self.integers.get(name)
         if values is None or any(x is None for x in values):
             return None
-        return np.array(values, dtype=np.uint64 if values and max(values) > INT64_MAX else np.int64)
+        return np.array(values, dtype=integer_type(values))
 
     @property
     def time(self):
@@ -130,6 +130,12 @@ class Result:
 
 #: the largest FMI 3.0 Int64 (a larger integer column is a UInt64's)
 INT64_MAX = 2**63 - 1
+
+
+def integer_type(values):
+    """numpy's type of a 64-bit integer column (ints, None where not read): uint64 where a
+    value is above 2**63 - 1 (only a UInt64 has one), else int64."""
+    return np.uint64 if any(x is not None and x > INT64_MAX for x in values) else np.int64
 
 
 def _number(x, _):

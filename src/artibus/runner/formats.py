@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from artibus.base import ArtibusError
-from artibus.fmu.result import INT64_MAX
+from artibus.fmu.result import integer_type
 
 #: the extensions -o accepts, what each is (for the messages and the help)
 FORMATS = {
@@ -41,13 +41,6 @@ def write(result, path, tmp):
     {".csv": _csv, ".parquet": _parquet, ".mf4": _mf4, ".mat": _mat}[suffix](result, tmp)
 
 
-def _numbers(result, name):
-    """A numeric column: a 64-bit integer one exact (Result.exact_integers) where every row
-    has its value, else float64."""
-    exact = result.exact_integers(name) if hasattr(result, "exact_integers") else None
-    return exact if exact is not None else np.asarray(result.array()[:, result.names.index(name)], dtype=float)
-
-
 def _meta(result):
     return getattr(result, "units", None) or {}, getattr(result, "descriptions", None) or {}
 
@@ -64,14 +57,12 @@ def _parquet(result, tmp):
     import pyarrow as pa
     import pyarrow.parquet as pq
     units, descriptions = _meta(result)
-    integers = getattr(result, "integers", None) or {}
     columns, fields = [], []
     for n in result.names:
         if n in result.strings:
             col = pa.array(result.strings[n], pa.string())
-        elif n in integers:
-            wide = any(x is not None and x > INT64_MAX for x in integers[n])
-            col = pa.array(integers[n], pa.uint64() if wide else pa.int64())
+        elif n in result.integers:
+            col = pa.array(result.integers[n], pa.from_numpy_dtype(integer_type(result.integers[n])))
         else:
             col = pa.array(result[n], pa.float64())
         columns.append(col)
@@ -92,7 +83,7 @@ def _mf4(result, tmp):
     signals = []
     for n in result.names[1:]:
         samples = (np.array([s.encode("utf-8") for s in result.strings[n]]) if n in result.strings
-                   else _numbers(result, n))
+                   else result[n])
         signals.append(Signal(samples=samples, timestamps=t, name=n, unit=units.get(n, ""),
                               comment=descriptions.get(n, "")))
     mdf = MDF(version="4.10")
@@ -134,7 +125,7 @@ def _mat(result, tmp):
     keys = matlab_names(result.names)
     out = {}
     for k, n in zip(keys, result.names):
-        out[k] = np.array(result.strings[n], dtype=object) if n in result.strings else _numbers(result, n)
+        out[k] = np.array(result.strings[n], dtype=object) if n in result.strings else result[n]
     out["names"] = dict(zip(keys, result.names))
     out["units"] = {k: units.get(n, "") for k, n in zip(keys, result.names)}
     out["descriptions"] = {k: descriptions.get(n, "") for k, n in zip(keys, result.names)}
