@@ -1,3 +1,4 @@
+import contextlib
 import math
 import subprocess
 import sys
@@ -64,6 +65,17 @@ def need_fmus(*names):
     for n in names:
         if not (fmu_dir() / f"{n}.fmu").is_file():
             pytest.skip(f"{n}.fmu not built")
+
+
+@contextlib.contextmanager
+def exclusive(lock_file):
+    """Held while no other process holds it (an exclusive flock on ``lock_file``, waited for):
+    what pytest-xdist's workers must not do side by side (one `pip wheel` of the clone, one
+    Wine program on the prefix)."""
+    import fcntl
+    with open(lock_file, "w") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        yield
 
 
 def run_artibus(*args):

@@ -26,6 +26,7 @@ import pytest
 from lxml import etree
 
 from artibus.base import ROOT
+from conftest import exclusive
 
 pytestmark = pytest.mark.slow
 
@@ -52,11 +53,9 @@ def wheel(tmp_path_factory):
     # of the clone at once collide in its one scratch folder, build-wheel/ ("File exists:
     # 'build-wheel/bdist.linux-x86_64/wheel/artibus-0.1.0.dist-info'"): the first worker makes
     # the run's wheel, under a lock, and the others take it
-    import fcntl
     shared = tmp_path_factory.getbasetemp().parent / f"wheel-{run}"
     shared.mkdir(exist_ok=True)
-    with open(shared / "lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    with exclusive(shared / "lock"):
         made = sorted(shared.glob("artibus-*.whl"))
         return made[0] if made else _wheel_into(shared)
 

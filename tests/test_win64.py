@@ -16,7 +16,6 @@ Debian's source package, build-win64/win64/<Name>.dll, packed into binaries/win6
 Skipped with the reason where the win64 build or Wine is missing (scripts/setup_test.sh
 installs both and builds it: ./test.sh runs it).
 """
-import contextlib
 import os
 import re
 import shutil
@@ -30,6 +29,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from artibus import fmu_dir
+from conftest import exclusive
 
 ROOT = Path(__file__).resolve().parents[1]
 WIN = Path(os.environ.get("ARTIBUS_WIN64_BUILD", ROOT / "build-win64"))
@@ -103,18 +103,14 @@ def _wine_run(args):
     return p
 
 
-@contextlib.contextmanager
 def _one_wine_program():
     """One Wine program at a time on the prefix, whichever pytest-xdist worker runs it (an
     exclusive lock on build-win64/wineprefix.lock): Wine's hiccups seen in CI (a program's output
     lost, its wineserver gone under it) came with two workers starting Wine side by side. (pytest
     9.2 with pytest-xdist 3.8 does not keep an xdist_group on one worker under --dist loadgroup:
     tried.) A program takes 0.2 s once the server runs."""
-    import fcntl
     WIN.mkdir(parents=True, exist_ok=True)
-    with open(WIN / "wineprefix.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        yield
+    return exclusive(WIN / "wineprefix.lock")
 
 
 @pytest.fixture(scope="module", autouse=True)
